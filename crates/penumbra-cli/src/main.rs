@@ -1,0 +1,363 @@
+//! The `penumbra` command: parse flags, load, build, render, write. The only place where errors
+//! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 130 interrupted.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use penumbra::light::Light;
+use penumbra::{
+    render, write_image, OutputFormat, Overrides, PixelBounds, RenderError, RenderOptions, Sampler,
+    Scene, SceneFile,
+};
+use serde_json::json;
+
+#[derive(Parser)]
+#[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
+    Render(RenderArgs),
+    /// Validate a scene file and print a summary.
+    Check {
+        /// The scene file (.toml or .json).
+        scene: PathBuf,
+        /// Print the summary as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SamplerArg {
+    Center,
+    Grid,
+    Rgss,
+    Jittered,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// The scene file (.toml or .json).
+    scene: PathBuf,
+    /// Output image; the extension picks the format. Default: film.output, else
+    /// <scene stem>.png next to the scene.
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Film width in pixels.
+    #[arg(long, value_name = "W")]
+    width: Option<u32>,
+    /// Film height in pixels.
+    #[arg(long, value_name = "H")]
+    height: Option<u32>,
+    /// Pixel sampler (center means 1 sample unless --spp is given).
+    #[arg(long, value_enum, value_name = "S")]
+    sampler: Option<SamplerArg>,
+    /// Samples per pixel, a perfect square.
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// N for every area light (N×N samples), overriding the scene's values.
+    #[arg(long, value_name = "N")]
+    light_samples: Option<u32>,
+    /// Render the camera with this name.
+    #[arg(long, value_name = "NAME")]
+    camera: Option<String>,
+    /// Worker threads (0: all cores).
+    #[arg(short, long, value_name = "N", default_value_t = 0)]
+    threads: usize,
+    /// Seed for every random choice.
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+    /// Render only the pixels [x0, x1) × [y0, y1) of the full film.
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_bounds)]
+    pixelbounds: Option<PixelBounds>,
+    /// Print the summary as one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// No progress bar and no summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_bounds(s: &str) -> Result<PixelBounds, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| "expected four non-negative integers x0,x1,y0,y1".to_owned())?;
+    match v[..] {
+        [x0, x1, y0, y1] if x0 < x1 && y0 < y1 => Ok(PixelBounds { x0, x1, y0, y1 }),
+        [_, _, _, _] => Err("the region is empty (need x0 < x1 and y0 < y1)".to_owned()),
+        _ => Err("expected four non-negative integers x0,x1,y0,y1".to_owned()),
+    }
+}
+
+/// An error and the exit code it ends with.
+struct Failure {
+    code: u8,
+    message: String,
+}
+
+fn invalid(e: impl std::fmt::Display) -> Failure {
+    Failure {
+        code: 2,
+        message: e.to_string(),
+    }
+}
+
+fn runtime(e: impl std::fmt::Display) -> Failure {
+    Failure {
+        code: 1,
+        message: e.to_string(),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => run_render(args),
+        Command::Check { scene, json } => run_check(&scene, json),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            if !f.message.is_empty() {
+                eprintln!("error: {}", f.message);
+            }
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn overrides(args: &RenderArgs) -> Overrides {
+    Overrides {
+        width: args.width,
+        height: args.height,
+        sampler: args.sampler.map(|s| match s {
+            SamplerArg::Center => Sampler::Center,
+            SamplerArg::Grid => Sampler::Grid,
+            SamplerArg::Rgss => Sampler::Rgss,
+            SamplerArg::Jittered => Sampler::Jittered,
+        }),
+        spp: args.spp,
+        light_samples: args.light_samples,
+        seed: args.seed,
+        camera: args.camera.clone(),
+    }
+}
+
+/// Where the image goes: `-o`, else `film.output`, else `<scene stem>.png` beside the scene.
+fn output_path(args: &RenderArgs, scene: &Scene) -> PathBuf {
+    if let Some(o) = &args.output {
+        return o.clone();
+    }
+    if let Some(o) = &scene.film.output {
+        return o.clone();
+    }
+    let stem = args.scene.file_stem().unwrap_or_default();
+    args.scene
+        .with_file_name(Path::new(stem).with_extension("png"))
+}
+
+fn light_samples(scene: &Scene) -> u32 {
+    scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Area(a) => a.sample_count(),
+            Light::Point(_) => 1,
+        })
+        .sum()
+}
+
+fn run_render(args: RenderArgs) -> Result<(), Failure> {
+    let load_start = Instant::now();
+    let file = SceneFile::load(&args.scene).map_err(invalid)?;
+    let scene = file.build(&overrides(&args)).map_err(invalid)?;
+    let load_time = load_start.elapsed();
+
+    let out = output_path(&args, &scene);
+    if OutputFormat::from_path(&out).is_none() {
+        return Err(invalid(format!(
+            "{}: unknown image format (use .png, .jpg, .exr or .pfm)",
+            out.display()
+        )));
+    }
+    let out_dir = out.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = out_dir {
+        if !dir.is_dir() {
+            return Err(runtime(format!(
+                "{}: cannot write image: folder {} does not exist",
+                out.display(),
+                dir.display()
+            )));
+        }
+    }
+    if let Some(b) = args.pixelbounds {
+        if b.x1 > scene.film.width || b.y1 > scene.film.height {
+            return Err(invalid(format!(
+                "--pixelbounds {},{},{},{}: outside the {}x{} film",
+                b.x0, b.x1, b.y0, b.y1, scene.film.width, scene.film.height
+            )));
+        }
+    }
+
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // If the handler cannot be installed, Ctrl-C keeps its default effect; the output is
+        // still never half-written since it is renamed into place only when complete.
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::SeqCst));
+    }
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let bar = ProgressBar::new(100);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:40.cyan/blue} {percent:>3}% {elapsed_precise} eta {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let progress = |done: u64, total: u64| {
+        if let Some(bar) = &bar {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+    };
+    let options = RenderOptions {
+        threads: args.threads,
+        region: args.pixelbounds,
+        cancel: Some(&cancel),
+        progress: Some(&progress),
+    };
+    let result = render(&scene, &options);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let (film, stats) = match result {
+        Ok(r) => r,
+        Err(RenderError::Cancelled) => {
+            return Err(Failure {
+                code: 130,
+                message: "interrupted; no image written".into(),
+            })
+        }
+        Err(e @ RenderError::BadRegion { .. }) => return Err(invalid(e)),
+        Err(e) => return Err(runtime(e)),
+    };
+    if cancel.load(Ordering::SeqCst) {
+        return Err(Failure {
+            code: 130,
+            message: "interrupted; no image written".into(),
+        });
+    }
+    write_image(&film, &out, scene.film.gamma).map_err(runtime)?;
+
+    let spp = scene.settings.samples_per_axis.pow(2);
+    let mrays = stats.rays_per_second() / 1e6;
+    if !args.quiet {
+        eprintln!(
+            "penumbra: {}x{} ({}x{} film), {} spp {}, {} light samples, {} triangles, load {:.3} s, BVH {:.3} s, render {:.3} s, {:.2} Mrays/s on {} threads -> {}",
+            film.width,
+            film.height,
+            scene.film.width,
+            scene.film.height,
+            spp,
+            scene.settings.sampler.name(),
+            light_samples(&scene),
+            scene.stats.triangles,
+            load_time.as_secs_f64(),
+            scene.stats.bvh_build_time.as_secs_f64(),
+            stats.time.as_secs_f64(),
+            mrays,
+            stats.threads,
+            out.display()
+        );
+    }
+    if args.json {
+        let summary = json!({
+            "scene": args.scene,
+            "output": out,
+            "width": film.width,
+            "height": film.height,
+            "film_width": scene.film.width,
+            "film_height": scene.film.height,
+            "spp": spp,
+            "sampler": scene.settings.sampler.name(),
+            "light_samples": light_samples(&scene),
+            "triangles": scene.stats.triangles,
+            "load_seconds": load_time.as_secs_f64(),
+            "bvh_build_seconds": scene.stats.bvh_build_time.as_secs_f64(),
+            "render_seconds": stats.time.as_secs_f64(),
+            "camera_rays": stats.camera_rays,
+            "shadow_rays": stats.shadow_rays,
+            "rays_per_second": stats.rays_per_second(),
+            "threads": stats.threads,
+        });
+        println!("{summary}");
+    }
+    Ok(())
+}
+
+fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
+    let file = SceneFile::load(path).map_err(invalid)?;
+    let scene = file.build(&Overrides::default()).map_err(invalid)?;
+    let bounds = scene.bvh.bounds();
+    let (min, max) = if bounds.is_empty() {
+        ([0.0; 3], [0.0; 3])
+    } else {
+        (bounds.min.to_array(), bounds.max.to_array())
+    };
+    let s = &scene.stats;
+    if json {
+        let summary = json!({
+            "scene": path,
+            "width": scene.film.width,
+            "height": scene.film.height,
+            "spp": scene.settings.samples_per_axis.pow(2),
+            "sampler": scene.settings.sampler.name(),
+            "triangles": s.triangles,
+            "lights": s.lights,
+            "light_samples": light_samples(&scene),
+            "materials": s.materials,
+            "textures": s.textures,
+            "cameras": s.cameras,
+            "bounds": { "min": min, "max": max },
+        });
+        println!("{summary}");
+    } else {
+        println!("{}: ok", path.display());
+        println!(
+            "  film       {}x{}, {} spp {}",
+            scene.film.width,
+            scene.film.height,
+            scene.settings.samples_per_axis.pow(2),
+            scene.settings.sampler.name()
+        );
+        println!("  triangles  {}", s.triangles);
+        println!(
+            "  lights     {} ({} light samples per shading point)",
+            s.lights,
+            light_samples(&scene)
+        );
+        println!("  materials  {}", s.materials);
+        println!("  textures   {}", s.textures);
+        println!("  cameras    {}", s.cameras.join(", "));
+        println!(
+            "  bounds     [{:.4}, {:.4}, {:.4}] to [{:.4}, {:.4}, {:.4}]",
+            min[0], min[1], min[2], max[0], max[1], max[2]
+        );
+    }
+    Ok(())
+}

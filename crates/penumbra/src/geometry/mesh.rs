@@ -1,0 +1,115 @@
+//! Indexed triangle storage: per-object meshes as shapes and OBJ files produce them, and the
+//! scene-wide [`Geometry`] they are transformed into.
+
+use glam::{Vec2, Vec3};
+
+use crate::math::{Aabb, Transform};
+
+/// An indexed triangle mesh in its own (object) space, as a shape or an OBJ file makes it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, or empty for flat (geometric-normal) shading.
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates; empty means (0, 0) everywhere.
+    pub uvs: Vec<Vec2>,
+    /// Vertex index triples, one per triangle.
+    pub indices: Vec<[u32; 3]>,
+    /// Per-triangle material slot, local to the mesh (an index into the object's material
+    /// list); empty means slot 0 for every triangle.
+    pub material_slots: Vec<u32>,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// True when the mesh has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+}
+
+/// One triangle of the built scene: three indices into [`Geometry`]'s vertex buffers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Triangle {
+    /// Indices of the three vertices.
+    pub vertices: [u32; 3],
+    /// Index into the scene's material table.
+    pub material: u32,
+    /// True when the vertices carry shading normals to interpolate.
+    pub smooth: bool,
+}
+
+/// Every triangle of a scene, in world space, with shared vertex buffers. Immutable once built.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// World-space vertex positions.
+    pub positions: Vec<Vec3>,
+    /// World-space unit normals, one per vertex (zero where a vertex has none).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates, one per vertex.
+    pub uvs: Vec<Vec2>,
+    /// The triangles.
+    pub triangles: Vec<Triangle>,
+}
+
+impl Geometry {
+    /// Appends `mesh` transformed to world space. Its material slot `k` becomes the scene
+    /// material `materials[k]` (slots past the end use the last entry).
+    pub fn append(&mut self, mesh: &Mesh, world: &Transform, materials: &[u32]) {
+        let base = self.positions.len() as u32;
+        let smooth = !mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len();
+        self.positions
+            .extend(mesh.positions.iter().map(|&p| world.point(p)));
+        if smooth {
+            self.normals
+                .extend(mesh.normals.iter().map(|&n| world.normal(n)));
+        } else {
+            self.normals
+                .extend(std::iter::repeat_n(Vec3::ZERO, mesh.positions.len()));
+        }
+        if mesh.uvs.len() == mesh.positions.len() {
+            self.uvs.extend_from_slice(&mesh.uvs);
+        } else {
+            self.uvs
+                .extend(std::iter::repeat_n(Vec2::ZERO, mesh.positions.len()));
+        }
+        let fallback = materials.last().copied().unwrap_or(0);
+        for (i, idx) in mesh.indices.iter().enumerate() {
+            let slot = mesh.material_slots.get(i).copied().unwrap_or(0) as usize;
+            self.triangles.push(Triangle {
+                vertices: idx.map(|v| base + v),
+                material: materials.get(slot).copied().unwrap_or(fallback),
+                smooth,
+            });
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// True when there are no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The three corner positions of triangle `i`.
+    pub fn corners(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i]
+            .vertices
+            .map(|v| self.positions[v as usize])
+    }
+
+    /// Bounds of every vertex used by a triangle.
+    pub fn bounds(&self) -> Aabb {
+        (0..self.len())
+            .flat_map(|i| self.corners(i))
+            .fold(Aabb::EMPTY, Aabb::grow)
+    }
+}

@@ -1,0 +1,118 @@
+//! Lights of SPEC §6: parallelogram area lights sampled on an N×N grid, and point lights.
+//! Lights are not geometry: camera rays do not see them and they cast no shadows.
+
+use glam::{Vec2, Vec3};
+
+use crate::math::Rgb;
+
+/// A light source.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// A parallelogram `center ± u/2 ± v/2`.
+    Area(AreaLight),
+    /// A point emitting equally in all directions.
+    Point(PointLight),
+}
+
+/// A parallelogram light sampled on an `n × n` grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLight {
+    /// Center of the parallelogram.
+    pub center: Vec3,
+    /// First edge.
+    pub u: Vec3,
+    /// Second edge.
+    pub v: Vec3,
+    /// color · intensity.
+    pub radiance: Rgb,
+    /// Grid resolution N (N² samples).
+    pub n: u32,
+    /// True: one random point per cell; false: the cell centers.
+    pub jitter: bool,
+}
+
+/// A point light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLight {
+    /// Where it is.
+    pub position: Vec3,
+    /// color · intensity.
+    pub intensity: Rgb,
+}
+
+impl AreaLight {
+    /// The unit normal `normalize(u × v)`, the side a physical area light emits toward.
+    pub fn normal(&self) -> Vec3 {
+        self.u.cross(self.v).normalize_or_zero()
+    }
+
+    /// The area `|u × v|`.
+    pub fn area(&self) -> f32 {
+        self.u.cross(self.v).length()
+    }
+
+    /// Number of samples, N².
+    pub fn sample_count(&self) -> u32 {
+        self.n * self.n
+    }
+
+    /// The point of cell `(k, l)` at position `xi` in `[0, 1)²` inside the cell
+    /// (`(½, ½)` is the cell center).
+    pub fn sample_point(&self, k: u32, l: u32, xi: Vec2) -> Vec3 {
+        let n = self.n as f32;
+        let a = (k as f32 + xi.x) / n - 0.5;
+        let b = (l as f32 + xi.y) / n - 0.5;
+        self.center + a * self.u + b * self.v
+    }
+
+    /// The cell-center sample points, in the order `(k, l)` k-major.
+    pub fn grid_points(&self) -> Vec<Vec3> {
+        (0..self.n)
+            .flat_map(|k| (0..self.n).map(move |l| (k, l)))
+            .map(|(k, l)| self.sample_point(k, l, Vec2::splat(0.5)))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn light(n: u32) -> AreaLight {
+        AreaLight {
+            center: Vec3::new(0.0, 5.0, 0.0),
+            u: Vec3::new(2.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 0.0, 2.0),
+            radiance: Vec3::ONE,
+            n,
+            jitter: false,
+        }
+    }
+
+    #[test]
+    fn grid_points_are_the_cell_centers() {
+        let pts = light(5).grid_points();
+        assert_eq!(pts.len(), 25);
+        // Cell size 0.4: centers at -0.8, -0.4, 0, 0.4, 0.8 along each edge.
+        assert!((pts[0] - Vec3::new(-0.8, 5.0, -0.8)).length() < 1e-6);
+        assert!((pts[12] - Vec3::new(0.0, 5.0, 0.0)).length() < 1e-6);
+        assert!((pts[24] - Vec3::new(0.8, 5.0, 0.8)).length() < 1e-6);
+        let mean = pts.iter().sum::<Vec3>() / 25.0;
+        assert!((mean - Vec3::new(0.0, 5.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn jittered_points_stay_in_their_cell() {
+        let l = light(2);
+        let p = l.sample_point(1, 0, Vec2::new(0.999, 0.0));
+        assert!(p.x < 1.0 && p.x > 0.99 && (p.z - -1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn normal_and_area() {
+        let l = light(1);
+        assert_eq!(l.area(), 4.0);
+        // u × v = x × z = −y: this light faces down.
+        assert_eq!(l.normal(), -Vec3::Y);
+    }
+}

@@ -1,0 +1,254 @@
+//! Renders a built scene into a [`Film`]: tiles over a local rayon pool, each pixel the box-
+//! filtered mean of its samples. A pixel's value depends only on its coordinates in the full
+//! film, so any thread count, scheduling or region gives the same bits.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::Vec2;
+use rayon::prelude::*;
+use thiserror::Error;
+
+use crate::film::Film;
+use crate::integrator::{shade, CAMERA_T_MIN};
+use crate::math::Rgb;
+use crate::sampling::{fixed_offsets, jittered_offset, Rng};
+use crate::scene::Scene;
+
+/// A half-open pixel rectangle `[x0, x1) × [y0, y1)` of the full film (pbrt's
+/// `--pixelbounds`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelBounds {
+    /// First column.
+    pub x0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// First row (from the top).
+    pub y0: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+/// How to render (everything about *what* is in the [`Scene`]).
+#[derive(Clone, Copy, Default)]
+pub struct RenderOptions<'a> {
+    /// Worker threads; 0 means all available cores.
+    pub threads: usize,
+    /// Render only this region of the film (default: all of it).
+    pub region: Option<PixelBounds>,
+    /// Checked between tiles: when set, rendering stops with [`RenderError::Cancelled`].
+    pub cancel: Option<&'a AtomicBool>,
+    /// Called from worker threads after each tile with (pixels done, pixels in all).
+    pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
+}
+
+/// Counts and timings of a render.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Camera rays traced.
+    pub camera_rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Wall-clock time of the render.
+    pub time: Duration,
+    /// Threads used.
+    pub threads: usize,
+}
+
+impl RenderStats {
+    /// All rays per second of wall-clock time.
+    pub fn rays_per_second(&self) -> f64 {
+        (self.camera_rays + self.shadow_rays) as f64 / self.time.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Why a render did not finish.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// The cancel flag was set.
+    #[error("interrupted")]
+    Cancelled,
+    /// The region is empty or reaches past the film.
+    #[error(
+        "pixel bounds {x0},{x1},{y0},{y1} are not a non-empty region of the {width}x{height} film"
+    )]
+    BadRegion {
+        /// Requested bounds.
+        x0: u32,
+        /// See x0.
+        x1: u32,
+        /// See x0.
+        y0: u32,
+        /// See x0.
+        y1: u32,
+        /// Film width.
+        width: u32,
+        /// Film height.
+        height: u32,
+    },
+    /// The image does not fit in memory.
+    #[error("not enough memory for a {width}x{height} image")]
+    OutOfMemory {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+    },
+    /// The worker threads could not be started.
+    #[error("cannot start {threads} render threads: {message}")]
+    Threads {
+        /// Requested count.
+        threads: usize,
+        /// The system's reason.
+        message: String,
+    },
+}
+
+const TILE: u32 = 16;
+
+/// Renders `scene` (or a region of it) with the given options.
+pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderStats), RenderError> {
+    let (width, height) = (scene.film.width, scene.film.height);
+    let region = options.region.unwrap_or(PixelBounds {
+        x0: 0,
+        x1: width,
+        y0: 0,
+        y1: height,
+    });
+    if region.x0 >= region.x1 || region.y0 >= region.y1 || region.x1 > width || region.y1 > height {
+        let PixelBounds { x0, x1, y0, y1 } = region;
+        return Err(RenderError::BadRegion {
+            x0,
+            x1,
+            y0,
+            y1,
+            width,
+            height,
+        });
+    }
+    let (rw, rh) = (region.x1 - region.x0, region.y1 - region.y0);
+    let mut pixels: Vec<Rgb> = Vec::new();
+    pixels
+        .try_reserve_exact(rw as usize * rh as usize)
+        .map_err(|_| RenderError::OutOfMemory {
+            width: rw,
+            height: rh,
+        })?;
+    pixels.resize(rw as usize * rh as usize, Rgb::ZERO);
+
+    let threads = if options.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        options.threads
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| RenderError::Threads {
+            threads,
+            message: e.to_string(),
+        })?;
+
+    let tiles: Vec<PixelBounds> = (region.y0..region.y1)
+        .step_by(TILE as usize)
+        .flat_map(|y0| {
+            (region.x0..region.x1)
+                .step_by(TILE as usize)
+                .map(move |x0| PixelBounds {
+                    x0,
+                    x1: (x0 + TILE).min(region.x1),
+                    y0,
+                    y1: (y0 + TILE).min(region.y1),
+                })
+        })
+        .collect();
+    let offsets = fixed_offsets(scene.settings.sampler, scene.settings.samples_per_axis);
+    let total = rw as u64 * rh as u64;
+    let done = AtomicU64::new(0);
+    let start = Instant::now();
+    let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+
+    let results: Vec<Option<(Vec<Rgb>, u64)>> = pool.install(|| {
+        tiles
+            .par_iter()
+            .map(|tile| {
+                if cancelled() {
+                    return None;
+                }
+                let mut out =
+                    Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+                let mut shadow = 0;
+                for y in tile.y0..tile.y1 {
+                    for x in tile.x0..tile.x1 {
+                        let (c, s) = render_pixel(scene, offsets.as_deref(), x, y);
+                        out.push(c);
+                        shadow += s;
+                    }
+                }
+                let n = out.len() as u64;
+                let d = done.fetch_add(n, Ordering::Relaxed) + n;
+                if let Some(progress) = options.progress {
+                    progress(d, total);
+                }
+                Some((out, shadow))
+            })
+            .collect()
+    });
+    if cancelled() {
+        return Err(RenderError::Cancelled);
+    }
+
+    let mut shadow_rays = 0;
+    for (tile, result) in tiles.iter().zip(results) {
+        let (values, shadow) = result.ok_or(RenderError::Cancelled)?;
+        shadow_rays += shadow;
+        let tw = (tile.x1 - tile.x0) as usize;
+        for (row, chunk) in values.chunks(tw).enumerate() {
+            let y = (tile.y0 - region.y0) as usize + row;
+            let x = (tile.x0 - region.x0) as usize;
+            let at = y * rw as usize + x;
+            pixels[at..at + tw].copy_from_slice(chunk);
+        }
+    }
+    let spp = scene.settings.samples_per_axis as u64 * scene.settings.samples_per_axis as u64;
+    let stats = RenderStats {
+        camera_rays: total * spp,
+        shadow_rays,
+        time: start.elapsed(),
+        threads,
+    };
+    let film = Film {
+        width: rw,
+        height: rh,
+        pixels,
+    };
+    Ok((film, stats))
+}
+
+/// The value of pixel `(x, y)` of the full film and the shadow rays it took.
+fn render_pixel(scene: &Scene, offsets: Option<&[Vec2]>, x: u32, y: u32) -> (Rgb, u64) {
+    let settings = &scene.settings;
+    let n = settings.samples_per_axis;
+    let pixel_index = y as u64 * scene.film.width as u64 + x as u64;
+    let mut sum = Rgb::ZERO;
+    let mut shadow = 0;
+    for s in 0..n * n {
+        let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
+        let offset = match offsets {
+            Some(o) => o[s as usize],
+            None => jittered_offset(n, s / n, s % n, rng.uniform2()),
+        };
+        let ray = scene
+            .camera
+            .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+        match scene.bvh.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) {
+            Some(hit) => {
+                let (c, rays) = shade(scene, &ray, &hit, &mut rng);
+                sum += c;
+                shadow += rays;
+            }
+            None => sum += settings.background,
+        }
+    }
+    (sum / (n * n) as f32, shadow)
+}

@@ -1,0 +1,716 @@
+//! SceneDesc → Scene: checks every value, resolves names, loads meshes and textures, turns
+//! every object into world-space triangles and builds the BVH.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+
+use super::desc::*;
+use super::error::{KeyPath, SceneError};
+use super::obj::load_obj;
+use super::{FilmSettings, Overrides, Scene, SceneFile, SceneStats};
+use crate::bvh::Bvh;
+use crate::camera::{CameraError, PinholeCamera};
+use crate::geometry::{self, Geometry};
+use crate::image_io::load_texture_image;
+use crate::integrator::{LightModel, Settings, Shading};
+use crate::light::{AreaLight, Light, PointLight};
+use crate::material::Material;
+use crate::math::{Rgb, Transform};
+use crate::sampling::{perfect_square_root, Sampler};
+use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
+
+/// Largest film accepted: 2^28 pixels (16384 × 16384), 3 GiB of float RGB.
+pub const MAX_PIXELS: u64 = 1 << 28;
+/// Largest area-light grid resolution N.
+pub const MAX_LIGHT_SAMPLES: u32 = 1024;
+/// Largest samples per pixel.
+pub const MAX_SPP: u32 = 1 << 16;
+const DEFAULT_LIGHT_SAMPLES: u32 = 5;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+fn v3(v: Vec3Desc) -> Vec3 {
+    Vec3::new(v.0[0] as f32, v.0[1] as f32, v.0[2] as f32)
+}
+
+fn v2(v: Vec2Desc) -> Vec2 {
+    Vec2::new(v.0[0] as f32, v.0[1] as f32)
+}
+
+fn rgb(c: ColorDesc) -> Rgb {
+    Vec3::new(c.0[0] as f32, c.0[1] as f32, c.0[2] as f32)
+}
+
+/// Builder state: the file for locating errors, and caches shared across objects.
+struct Builder<'a> {
+    file: &'a SceneFile,
+    images: HashMap<(PathBuf, bool), Arc<Image>>,
+    textures: Vec<Texture>,
+    materials: Vec<Material>,
+}
+
+pub(super) fn build(file: &SceneFile, ov: &Overrides) -> Result<Scene> {
+    let desc = &file.desc;
+    let mut b = Builder {
+        file,
+        images: HashMap::new(),
+        textures: Vec::new(),
+        materials: Vec::new(),
+    };
+    let film = b.film(ov)?;
+    let (camera, cameras) = b.camera(ov, film.width, film.height)?;
+    let (settings, default_light_samples) = b.settings(ov)?;
+
+    for (i, (name, tex)) in desc.textures.0.iter().enumerate() {
+        let t = b.texture(&KeyPath::root("textures").key(name), tex)?;
+        debug_assert_eq!(b.textures.len(), i);
+        b.textures.push(t);
+    }
+    // Material 0 is the format's default; named materials follow in file order.
+    b.materials.push(Material::default());
+    for (name, m) in &desc.materials.0 {
+        let mat = b.material(&KeyPath::root("materials").key(name), m)?;
+        b.materials.push(mat);
+    }
+
+    let mut lights = Vec::with_capacity(desc.lights.len());
+    for (i, l) in desc.lights.iter().enumerate() {
+        lights.push(b.light(
+            &KeyPath::root("lights").index(i),
+            l,
+            ov,
+            default_light_samples,
+        )?);
+    }
+
+    let mut geometry = Geometry::default();
+    for (i, o) in desc.objects.iter().enumerate() {
+        b.object(&KeyPath::root("objects").index(i), o, &mut geometry)?;
+    }
+
+    let start = Instant::now();
+    let bvh = Bvh::build(&geometry);
+    let bvh_build_time = start.elapsed();
+    let stats = SceneStats {
+        triangles: geometry.len(),
+        lights: lights.len(),
+        materials: b.materials.len() - 1,
+        textures: b.textures.len(),
+        cameras,
+        bvh_build_time,
+        bvh_nodes: bvh.node_count(),
+    };
+    Ok(Scene {
+        geometry,
+        bvh,
+        materials: b.materials,
+        textures: b.textures,
+        lights,
+        camera,
+        film,
+        settings,
+        stats,
+    })
+}
+
+impl Builder<'_> {
+    fn err(&self, path: &KeyPath, message: impl Into<String>) -> SceneError {
+        self.file.error(path, message)
+    }
+
+    fn require<T: Copy>(&self, path: &KeyPath, key: &str, value: Option<T>) -> Result<T> {
+        value.ok_or_else(|| self.err(path, format!("missing key `{key}`")))
+    }
+
+    /// Rejects keys that are present but mean nothing for this kind of entry.
+    fn only_keys(
+        &self,
+        path: &KeyPath,
+        kind: &str,
+        present: &[(&str, bool)],
+        allowed: &[&str],
+    ) -> Result<()> {
+        for (key, is_present) in present {
+            if *is_present && !allowed.contains(key) {
+                return Err(self.err(
+                    &path.key(key),
+                    format!(
+                        "unknown key `{key}` for {kind} (it takes: {})",
+                        allowed.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn film(&self, ov: &Overrides) -> Result<FilmSettings> {
+        let d = &self.file.desc.film;
+        let path = KeyPath::root("film");
+        let dim = |key: &str, v: i64| -> Result<u32> {
+            if v < 1 {
+                return Err(self.err(
+                    &path.key(key),
+                    format!("{key} must be at least 1 pixel, not {v}"),
+                ));
+            }
+            u32::try_from(v)
+                .map_err(|_| self.err(&path.key(key), format!("{key} {v} is too large")))
+        };
+        let width = dim("width", d.width)?;
+        let height = dim("height", d.height)?;
+        for (flag, v) in [("--width", ov.width), ("--height", ov.height)] {
+            if v == Some(0) {
+                return Err(SceneError::Override {
+                    option: flag,
+                    message: "must be at least 1 pixel".into(),
+                });
+            }
+        }
+        let (width, height) = (ov.width.unwrap_or(width), ov.height.unwrap_or(height));
+        if width as u64 * height as u64 > MAX_PIXELS {
+            let message = format!(
+                "a {width}x{height} image is too large for memory (at most {MAX_PIXELS} pixels)"
+            );
+            return Err(if ov.width.is_some() || ov.height.is_some() {
+                SceneError::Override {
+                    option: "--width/--height",
+                    message,
+                }
+            } else {
+                self.err(&path.key("width"), message)
+            });
+        }
+        let gamma = match d.gamma {
+            Some(Num(g)) if g <= 0.0 => {
+                return Err(self.err(
+                    &path.key("gamma"),
+                    format!("gamma must be positive, not {g}"),
+                ))
+            }
+            g => g.map(|g| g.0 as f32),
+        };
+        Ok(FilmSettings {
+            width,
+            height,
+            output: d.output.as_deref().map(|o| self.file.resolve(o)),
+            gamma,
+        })
+    }
+
+    fn camera(
+        &self,
+        ov: &Overrides,
+        width: u32,
+        height: u32,
+    ) -> Result<(PinholeCamera, Vec<String>)> {
+        let desc = &self.file.desc;
+        let named: Vec<(String, &CameraDesc, KeyPath)> =
+            match (&desc.camera, desc.cameras.0.is_empty()) {
+                (Some(_), false) => {
+                    return Err(self.err(
+                        &KeyPath::root("cameras"),
+                        "a scene has either [camera] or [cameras.NAME] tables, not both",
+                    ))
+                }
+                (None, true) => {
+                    return Err(self.err(
+                        &KeyPath::default(),
+                        "missing key `camera` (a [camera] table or [cameras.NAME] tables)",
+                    ))
+                }
+                (Some(c), true) => vec![("camera".to_owned(), c, KeyPath::root("camera"))],
+                (None, false) => desc
+                    .cameras
+                    .0
+                    .iter()
+                    .map(|(n, c)| (n.clone(), c, KeyPath::root("cameras").key(n)))
+                    .collect(),
+            };
+        // Check every camera, not only the one rendered: the file is wrong either way.
+        let mut built = Vec::with_capacity(named.len());
+        for (_, c, path) in &named {
+            let cam = PinholeCamera::new(
+                v3(c.position),
+                v3(c.look_at),
+                c.up.map_or(Vec3::Y, v3),
+                c.fov.0 as f32,
+                width,
+                height,
+            )
+            .map_err(|e| match e {
+                CameraError::FovOutOfRange => self.err(
+                    &path.key("fov"),
+                    format!("fov must be between 0 and 180 degrees, not {}", c.fov.0),
+                ),
+                CameraError::Degenerate => self.err(
+                    &path.key("look_at"),
+                    "degenerate camera: look_at equals position or the view direction is parallel to up",
+                ),
+                CameraError::EmptyFilm => self.err(&KeyPath::root("film"), "empty film"),
+            })?;
+            built.push(cam);
+        }
+        let index = match &ov.camera {
+            None => 0,
+            Some(name) => named
+                .iter()
+                .position(|(n, _, _)| n == name)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = named.iter().map(|(n, _, _)| n.as_str()).collect();
+                    SceneError::Override {
+                        option: "--camera",
+                        message: format!(
+                            "no camera named \"{name}\" (the scene has: {})",
+                            names.join(", ")
+                        ),
+                    }
+                })?,
+        };
+        let mut names: Vec<String> = named.iter().map(|(n, _, _)| n.clone()).collect();
+        names.swap(0, index);
+        Ok((built[index], names))
+    }
+
+    fn settings(&self, ov: &Overrides) -> Result<(Settings, u32)> {
+        let r = &self.file.desc.render;
+        let path = KeyPath::root("render");
+        let file_sampler = match &r.sampler {
+            None => None,
+            Some(s) => Some(Sampler::from_name(s).ok_or_else(|| {
+                self.err(
+                    &path.key("sampler"),
+                    format!("unknown sampler \"{s}\" (use center, grid, rgss or jittered)"),
+                )
+            })?),
+        };
+        let file_samples = match r.samples {
+            None => None,
+            Some(s) => {
+                let n = u32::try_from(s)
+                    .ok()
+                    .filter(|&s| s <= MAX_SPP)
+                    .and_then(perfect_square_root)
+                    .ok_or_else(|| {
+                        self.err(&path.key("samples"), format!("samples must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {s}"))
+                    })?;
+                if file_sampler == Some(Sampler::Center) && n != 1 {
+                    return Err(self.err(
+                        &path.key("samples"),
+                        "the center sampler takes exactly 1 sample",
+                    ));
+                }
+                Some(n)
+            }
+        };
+        let sampler = ov.sampler.or(file_sampler).unwrap_or(Sampler::Rgss);
+        let samples_per_axis = if let Some(spp) = ov.spp {
+            let n = perfect_square_root(spp).filter(|_| spp <= MAX_SPP).ok_or_else(|| SceneError::Override {
+                option: "--spp",
+                message: format!("samples per pixel must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {spp}"),
+            })?;
+            if sampler == Sampler::Center && n != 1 {
+                return Err(SceneError::Override {
+                    option: "--spp",
+                    message: "the center sampler takes exactly 1 sample".into(),
+                });
+            }
+            n
+        } else if sampler == Sampler::Center {
+            1
+        } else {
+            file_samples.unwrap_or(2)
+        };
+
+        let light_samples = match r.light_samples {
+            None => DEFAULT_LIGHT_SAMPLES,
+            Some(n) => self.light_n(&path.key("light_samples"), n)?,
+        };
+        if let Some(n) = ov.light_samples {
+            if !(1..=MAX_LIGHT_SAMPLES).contains(&n) {
+                return Err(SceneError::Override {
+                    option: "--light-samples",
+                    message: format!("must be between 1 and {MAX_LIGHT_SAMPLES}, not {n}"),
+                });
+            }
+        }
+        let shading = match r.shading.as_deref() {
+            None | Some("phong") => Shading::Phong,
+            Some("blinn-phong") => Shading::BlinnPhong,
+            Some(s) => {
+                return Err(self.err(
+                    &path.key("shading"),
+                    format!("unknown shading \"{s}\" (use phong or blinn-phong)"),
+                ))
+            }
+        };
+        let light_model = match r.light_model.as_deref() {
+            None | Some("phong") => LightModel::Phong,
+            Some("physical") => LightModel::Physical,
+            Some(s) => {
+                return Err(self.err(
+                    &path.key("light_model"),
+                    format!("unknown light model \"{s}\" (use phong or physical)"),
+                ))
+            }
+        };
+        let settings = Settings {
+            sampler,
+            samples_per_axis,
+            shading,
+            light_model,
+            ambient: r.ambient.map_or(Rgb::splat(0.1), rgb),
+            background: r.background.map_or(Rgb::ZERO, rgb),
+            seed: ov.seed.or(r.seed).unwrap_or(0),
+        };
+        Ok((settings, light_samples))
+    }
+
+    fn light_n(&self, path: &KeyPath, n: i64) -> Result<u32> {
+        u32::try_from(n)
+            .ok()
+            .filter(|&n| (1..=MAX_LIGHT_SAMPLES).contains(&n))
+            .ok_or_else(|| {
+                self.err(
+                    path,
+                    format!("light samples N must be between 1 and {MAX_LIGHT_SAMPLES}, not {n}"),
+                )
+            })
+    }
+
+    fn image(
+        &mut self,
+        path: &KeyPath,
+        file: PathBuf,
+        srgb: bool,
+        what: &str,
+    ) -> Result<Arc<Image>> {
+        let key = (std::fs::canonicalize(&file).unwrap_or(file.clone()), srgb);
+        if let Some(img) = self.images.get(&key) {
+            return Ok(img.clone());
+        }
+        let img = load_texture_image(&file, srgb).map_err(|e| {
+            self.err(
+                path,
+                format!("cannot load {what} \"{}\": {e}", file.display()),
+            )
+        })?;
+        let img = Arc::new(img);
+        self.images.insert(key, img.clone());
+        Ok(img)
+    }
+
+    fn texture(&mut self, path: &KeyPath, t: &TextureDesc) -> Result<Texture> {
+        let present = [
+            ("file", t.file.is_some()),
+            ("filter", t.filter.is_some()),
+            ("wrap", t.wrap.is_some()),
+            ("colorspace", t.colorspace.is_some()),
+            ("even", t.even.is_some()),
+            ("odd", t.odd.is_some()),
+            ("checks", t.checks.is_some()),
+        ];
+        let kind = match t.kind {
+            TextureType::Image => {
+                self.only_keys(
+                    path,
+                    "an image texture",
+                    &present,
+                    &["file", "filter", "wrap", "colorspace"],
+                )?;
+                let file = t
+                    .file
+                    .as_deref()
+                    .ok_or_else(|| self.err(path, "missing key `file`"))?;
+                let filter = match t.filter.as_deref() {
+                    None | Some("bilinear") => Filter::Bilinear,
+                    Some("nearest") => Filter::Nearest,
+                    Some(s) => {
+                        return Err(self.err(
+                            &path.key("filter"),
+                            format!("unknown filter \"{s}\" (use bilinear or nearest)"),
+                        ))
+                    }
+                };
+                let wrap = match t.wrap.as_deref() {
+                    None | Some("repeat") => Wrap::Repeat,
+                    Some("clamp") => Wrap::Clamp,
+                    Some(s) => {
+                        return Err(self.err(
+                            &path.key("wrap"),
+                            format!("unknown wrap \"{s}\" (use repeat or clamp)"),
+                        ))
+                    }
+                };
+                let srgb = match t.colorspace.as_deref() {
+                    None | Some("srgb") => true,
+                    Some("linear") => false,
+                    Some(s) => {
+                        return Err(self.err(
+                            &path.key("colorspace"),
+                            format!("unknown colorspace \"{s}\" (use srgb or linear)"),
+                        ))
+                    }
+                };
+                let image =
+                    self.image(&path.key("file"), self.file.resolve(file), srgb, "texture")?;
+                TextureKind::Image(ImageTexture {
+                    image,
+                    filter,
+                    wrap,
+                })
+            }
+            TextureType::Checker => {
+                self.only_keys(
+                    path,
+                    "a checker texture",
+                    &present,
+                    &["even", "odd", "checks"],
+                )?;
+                TextureKind::Checker {
+                    even: t.even.map_or(Rgb::ONE, rgb),
+                    odd: t.odd.map_or(Rgb::ZERO, rgb),
+                    checks: t.checks.map_or(8.0, |c| c.0 as f32),
+                }
+            }
+        };
+        Ok(Texture {
+            kind,
+            uv_scale: t.uv_scale.map_or(Vec2::ONE, v2),
+            uv_offset: t.uv_offset.map_or(Vec2::ZERO, v2),
+        })
+    }
+
+    fn material(&self, path: &KeyPath, m: &MaterialDesc) -> Result<Material> {
+        let diffuse = m.diffuse.map_or(Rgb::splat(0.8), rgb);
+        let shininess = match m.shininess {
+            Some(Num(p)) if p < 0.0 => {
+                return Err(self.err(
+                    &path.key("shininess"),
+                    format!("shininess must be at least 0, not {p}"),
+                ))
+            }
+            p => p.map_or(16.0, |p| p.0 as f32),
+        };
+        let texture = match &m.texture {
+            None => None,
+            Some(name) => Some(
+                self.file
+                    .desc
+                    .textures
+                    .get(name)
+                    .map(|(i, _)| i as u32)
+                    .ok_or_else(|| {
+                        let known: Vec<&str> = self.file.desc.textures.names().collect();
+                        self.err(
+                            &path.key("texture"),
+                            format!("unknown texture \"{name}\"{}", list(&known)),
+                        )
+                    })?,
+            ),
+        };
+        Ok(Material {
+            ambient: m.ambient.map_or(diffuse, rgb),
+            diffuse,
+            specular: m.specular.map_or(Rgb::ZERO, rgb),
+            shininess,
+            texture,
+        })
+    }
+
+    fn light(
+        &self,
+        path: &KeyPath,
+        l: &LightDesc,
+        ov: &Overrides,
+        default_n: u32,
+    ) -> Result<Light> {
+        let present = [
+            ("center", l.center.is_some()),
+            ("u", l.u.is_some()),
+            ("v", l.v.is_some()),
+            ("position", l.position.is_some()),
+            ("samples", l.samples.is_some()),
+            ("jitter", l.jitter.is_some()),
+        ];
+        let color = l.color.map_or(Rgb::ONE, rgb) * l.intensity.map_or(1.0, |i| i.0 as f32);
+        Ok(match l.kind {
+            LightType::Area => {
+                self.only_keys(
+                    path,
+                    "an area light",
+                    &present,
+                    &["center", "u", "v", "samples", "jitter"],
+                )?;
+                let file_n = match l.samples {
+                    Some(n) => self.light_n(&path.key("samples"), n)?,
+                    None => default_n,
+                };
+                Light::Area(AreaLight {
+                    center: v3(self.require(path, "center", l.center)?),
+                    u: v3(self.require(path, "u", l.u)?),
+                    v: v3(self.require(path, "v", l.v)?),
+                    radiance: color,
+                    n: ov.light_samples.unwrap_or(file_n),
+                    jitter: l.jitter.unwrap_or(false),
+                })
+            }
+            LightType::Point => {
+                self.only_keys(path, "a point light", &present, &["position"])?;
+                Light::Point(PointLight {
+                    position: v3(self.require(path, "position", l.position)?),
+                    intensity: color,
+                })
+            }
+        })
+    }
+
+    fn material_index(&self, path: &KeyPath, name: &str) -> Result<u32> {
+        self.file
+            .desc
+            .materials
+            .get(name)
+            .map(|(i, _)| i as u32 + 1)
+            .ok_or_else(|| {
+                let known: Vec<&str> = self.file.desc.materials.names().collect();
+                self.err(path, format!("unknown material \"{name}\"{}", list(&known)))
+            })
+    }
+
+    fn object(&mut self, path: &KeyPath, o: &ObjectDesc, geometry: &mut Geometry) -> Result<()> {
+        let present = [
+            ("vertices", o.vertices.is_some()),
+            ("uvs", o.uvs.is_some()),
+            ("normals", o.normals.is_some()),
+            ("corner", o.corner.is_some()),
+            ("u", o.u.is_some()),
+            ("v", o.v.is_some()),
+            ("center", o.center.is_some()),
+            ("size", o.size.is_some()),
+            ("radius", o.radius.is_some()),
+            ("file", o.file.is_some()),
+        ];
+        let kind = format!("a {}", o.kind.name());
+        let allowed: &[&str] = match o.kind {
+            ObjectType::Triangle => &["vertices", "uvs", "normals"],
+            ObjectType::Quad => &["corner", "u", "v"],
+            ObjectType::Cube => &["center", "size"],
+            ObjectType::Sphere => &["center", "radius"],
+            ObjectType::Mesh => &["file"],
+        };
+        self.only_keys(path, &kind, &present, allowed)?;
+
+        let scale = o.scale.map_or(Vec3::ONE, rgb);
+        if scale.cmpeq(Vec3::ZERO).any() {
+            return Err(self.err(&path.key("scale"), "scale must not be zero"));
+        }
+        let mut world = Transform::from_srt(
+            scale,
+            o.rotate.map_or(Vec3::ZERO, v3),
+            o.translate.map_or(Vec3::ZERO, v3),
+        );
+        let mut materials = vec![match &o.material {
+            Some(name) => self.material_index(&path.key("material"), name)?,
+            None => 0,
+        }];
+
+        let mesh = match o.kind {
+            ObjectType::Triangle => {
+                let vertices = self.require(path, "vertices", o.vertices)?.map(v3);
+                let uvs = o.uvs.map_or([Vec2::ZERO, Vec2::X, Vec2::Y], |u| u.map(v2));
+                geometry::triangle(vertices, uvs, o.normals.map(|n| n.map(v3)))
+            }
+            ObjectType::Quad => geometry::quad(
+                v3(self.require(path, "corner", o.corner)?),
+                v3(self.require(path, "u", o.u)?),
+                v3(self.require(path, "v", o.v)?),
+            ),
+            ObjectType::Cube | ObjectType::Sphere => {
+                let center = v3(self.require(path, "center", o.center)?);
+                world = Transform::from_srt(Vec3::ONE, Vec3::ZERO, center).then_after(world);
+                if o.kind == ObjectType::Cube {
+                    let size = rgb(self.require(path, "size", o.size)?);
+                    if size.cmplt(Vec3::ZERO).any() {
+                        return Err(self.err(&path.key("size"), "size must not be negative"));
+                    }
+                    geometry::cube(size)
+                } else {
+                    let radius = self.require(path, "radius", o.radius)?.0;
+                    if radius < 0.0 {
+                        return Err(self.err(&path.key("radius"), "radius must not be negative"));
+                    }
+                    geometry::sphere(radius as f32)
+                }
+            }
+            ObjectType::Mesh => {
+                let file = o
+                    .file
+                    .as_deref()
+                    .ok_or_else(|| self.err(path, "missing key `file`"))?;
+                let obj_path = self.file.resolve(file);
+                let model = load_obj(&obj_path).map_err(|e| {
+                    self.err(
+                        &path.key("file"),
+                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
+                    )
+                })?;
+                if o.material.is_none() {
+                    // Each MTL material becomes a scene material; faces without one keep
+                    // the default (slot materials.len() → the fallback, material 0).
+                    materials.clear();
+                    for m in &model.materials {
+                        let texture = match &m.diffuse_texture {
+                            None => None,
+                            Some(t) => {
+                                let image = self.image(
+                                    &path.key("file"),
+                                    t.clone(),
+                                    true,
+                                    &format!("texture (map_Kd of material \"{}\")", m.name),
+                                )?;
+                                self.textures.push(Texture {
+                                    kind: TextureKind::Image(ImageTexture {
+                                        image,
+                                        filter: Filter::Bilinear,
+                                        wrap: Wrap::Repeat,
+                                    }),
+                                    uv_scale: Vec2::ONE,
+                                    uv_offset: Vec2::ZERO,
+                                });
+                                Some(self.textures.len() as u32 - 1)
+                            }
+                        };
+                        let diffuse = m.diffuse.map_or(Rgb::splat(0.8), Vec3::from);
+                        materials.push(self.materials.len() as u32);
+                        self.materials.push(Material {
+                            ambient: m.ambient.map_or(diffuse, Vec3::from),
+                            diffuse,
+                            specular: m.specular.map_or(Rgb::ZERO, Vec3::from),
+                            shininess: m.shininess.map_or(16.0, |s| s.max(0.0)),
+                            texture,
+                        });
+                    }
+                    materials.push(0);
+                }
+                model.mesh
+            }
+        };
+        geometry.append(&mesh, &world, &materials);
+        if geometry.positions.len() > u32::MAX as usize / 2 {
+            return Err(self.err(path, "the scene has too many vertices for memory"));
+        }
+        Ok(())
+    }
+}
+
+fn list(known: &[&str]) -> String {
+    if known.is_empty() {
+        " (none are defined)".to_owned()
+    } else {
+        format!(" (known: {})", known.join(", "))
+    }
+}

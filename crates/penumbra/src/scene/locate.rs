@@ -1,0 +1,206 @@
+//! Finds where a key path sits in a scene file's text, so that errors found after parsing
+//! (an unknown material name, a value out of range) still point at a line and column.
+
+use toml::de::{DeTable, DeValue};
+
+use super::error::{KeyPath, Segment};
+use super::SceneFormat;
+
+/// Byte offset of the value (or, for a table key, of the key) that `path` names: the deepest
+/// part of the path that exists.
+pub(crate) fn locate(text: &str, format: SceneFormat, path: &KeyPath) -> Option<usize> {
+    match format {
+        SceneFormat::Toml => locate_toml(text, path),
+        SceneFormat::Json => locate_json(text, path),
+    }
+}
+
+fn locate_toml(text: &str, path: &KeyPath) -> Option<usize> {
+    let root = DeTable::parse(text).ok()?;
+    let mut offset = None;
+    let mut table: Option<&DeTable> = Some(root.get_ref());
+    let mut value: Option<&DeValue> = None;
+    for seg in &path.0 {
+        match seg {
+            Segment::Key(k) => {
+                let t = table.take().or_else(|| value.and_then(DeValue::as_table))?;
+                let Some((key, v)) = t.iter().find(|(key, _)| key.get_ref().as_ref() == k) else {
+                    return offset;
+                };
+                offset = Some(key.span().start);
+                value = Some(v.get_ref());
+            }
+            Segment::Index(i) => {
+                let Some(v) = value.and_then(DeValue::as_array).and_then(|a| a.get(*i)) else {
+                    return offset;
+                };
+                offset = Some(v.span().start);
+                value = Some(v.get_ref());
+            }
+        }
+    }
+    offset
+}
+
+/// A scanner over JSON text that serde_json has already accepted, so it only needs to step
+/// over values, never to report syntax errors.
+struct Json<'a> {
+    b: &'a [u8],
+    i: usize,
+}
+
+impl Json<'_> {
+    fn ws(&mut self) {
+        while self.i < self.b.len() && self.b[self.i].is_ascii_whitespace() {
+            self.i += 1;
+        }
+    }
+
+    fn peek(&mut self) -> Option<u8> {
+        self.ws();
+        self.b.get(self.i).copied()
+    }
+
+    /// Steps over a string starting at `self.i` (at its quote); returns its raw contents.
+    fn string(&mut self) -> &[u8] {
+        let start = self.i + 1;
+        self.i += 1;
+        while self.i < self.b.len() && self.b[self.i] != b'"' {
+            if self.b[self.i] == b'\\' {
+                self.i += 1;
+            }
+            self.i += 1;
+        }
+        let s = &self.b[start..self.i.min(self.b.len())];
+        self.i += 1;
+        s
+    }
+
+    fn skip_value(&mut self) {
+        let mut depth = 0usize;
+        loop {
+            match self.peek() {
+                None => return,
+                Some(b'"') => {
+                    self.string();
+                }
+                Some(b'{' | b'[') => {
+                    depth += 1;
+                    self.i += 1;
+                }
+                Some(b'}' | b']') => {
+                    depth = depth.saturating_sub(1);
+                    self.i += 1;
+                }
+                Some(b',' | b':') if depth > 0 => self.i += 1,
+                Some(_) => {
+                    while self.i < self.b.len() && !b",]}: \t\r\n".contains(&self.b[self.i]) {
+                        self.i += 1;
+                    }
+                }
+            }
+            if depth == 0 {
+                return;
+            }
+        }
+    }
+}
+
+fn locate_json(text: &str, path: &KeyPath) -> Option<usize> {
+    let mut p = Json {
+        b: text.as_bytes(),
+        i: 0,
+    };
+    let mut offset = None;
+    for seg in &path.0 {
+        match seg {
+            Segment::Key(k) => {
+                if p.peek()? != b'{' {
+                    return offset;
+                }
+                p.i += 1;
+                loop {
+                    match p.peek()? {
+                        b'}' => return offset,
+                        b',' => p.i += 1,
+                        b'"' => {
+                            let start = p.i;
+                            let raw = p.string();
+                            let key: String =
+                                serde_json::from_slice(&[b"\"".as_slice(), raw, b"\""].concat())
+                                    .unwrap_or_default();
+                            p.peek();
+                            p.i += 1; // ':'
+                            if key == *k {
+                                offset = Some(start);
+                                break;
+                            }
+                            p.skip_value();
+                        }
+                        _ => return offset,
+                    }
+                }
+            }
+            Segment::Index(n) => {
+                if p.peek()? != b'[' {
+                    return offset;
+                }
+                p.i += 1;
+                for _ in 0..*n {
+                    p.skip_value();
+                    if p.peek()? != b',' {
+                        return offset;
+                    }
+                    p.i += 1;
+                }
+                if p.peek()? == b']' {
+                    return offset;
+                }
+                offset = Some(p.i);
+            }
+        }
+    }
+    offset
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::error::line_col;
+
+    fn at(text: &str, format: SceneFormat, path: KeyPath) -> (usize, usize) {
+        line_col(text, locate(text, format, &path).unwrap())
+    }
+
+    #[test]
+    fn finds_keys_in_toml_tables_and_arrays_of_tables() {
+        let text = "[film]\nwidth = 1\n\n[[objects]]\ntype = \"cube\"\n\n[[objects]]\ntype = \"quad\"\n  material = \"x\"\n";
+        let objects = KeyPath::root("objects");
+        assert_eq!(
+            at(text, SceneFormat::Toml, KeyPath::root("film").key("width")),
+            (2, 1)
+        );
+        assert_eq!(
+            at(text, SceneFormat::Toml, objects.index(1).key("material")),
+            (9, 3)
+        );
+        // A missing key points at the deepest part that exists.
+        let (line, _) = at(text, SceneFormat::Toml, objects.index(1).key("nothing"));
+        assert!(line >= 7, "line {line}");
+    }
+
+    #[test]
+    fn finds_keys_in_json() {
+        let text = "{\n  \"film\": {\"width\": 1},\n  \"objects\": [\n    {\"type\": \"cube\", \"size\": [1, {\"a\": \"]\"}]},\n    {\"type\": \"quad\",\n     \"material\": \"x\"}\n  ]\n}\n";
+        let objects = KeyPath::root("objects");
+        assert_eq!(
+            at(text, SceneFormat::Json, KeyPath::root("film").key("width")),
+            (2, 12)
+        );
+        assert_eq!(
+            at(text, SceneFormat::Json, objects.index(1).key("material")),
+            (6, 6)
+        );
+        assert_eq!(at(text, SceneFormat::Json, objects.index(1)), (5, 5));
+    }
+}
