@@ -1,0 +1,112 @@
+//! Golden images: the example scenes under `scenes/`, rendered small, compared with committed
+//! references in `tests/golden/`.
+//!
+//! Tolerance: every 8-bit channel within 2 levels and the mean absolute difference under 0.05
+//! levels. Rendering is deterministic, so on one machine the images match exactly; the slack
+//! only absorbs floating-point differences between compilers and CPUs.
+//!
+//! On a mismatch the test writes `<name>.actual.png` and `<name>.diff.png` (differences
+//! amplified ×16) under `target/golden/`. When a change is meant to alter an image, regenerate
+//! the references with
+//!
+//! ```text
+//! PENUMBRA_BLESS=1 cargo test -p penumbra --test golden
+//! ```
+//!
+//! and look at every changed PNG (for example with `git diff --stat` and an image viewer)
+//! before committing it: a reference is only as good as the human look it got.
+
+use std::path::{Path, PathBuf};
+
+use image::RgbImage;
+use penumbra::image_io::encode_8bit;
+use penumbra::{render, Overrides, RenderOptions, SceneFile};
+
+const SIZE: u32 = 96;
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn render_scene(name: &str, camera: Option<&str>) -> RgbImage {
+    let path = repo_root().join("scenes").join(format!("{name}.toml"));
+    let file = SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let overrides = Overrides {
+        width: Some(SIZE),
+        height: Some(SIZE),
+        camera: camera.map(str::to_owned),
+        ..Overrides::default()
+    };
+    let scene = file.build(&overrides).unwrap_or_else(|e| panic!("{e}"));
+    let (film, _) = render(&scene, &RenderOptions::default()).unwrap();
+    let bytes = film
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array().map(|c| encode_8bit(c, scene.film.gamma)))
+        .collect();
+    RgbImage::from_raw(film.width, film.height, bytes).unwrap()
+}
+
+fn check(name: &str, camera: Option<&str>) {
+    let id = match camera {
+        Some(c) => format!("{name}_{c}"),
+        None => name.to_owned(),
+    };
+    let actual = render_scene(name, camera);
+    let reference_path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(format!("{id}.png"));
+    if std::env::var_os("PENUMBRA_BLESS").is_some() {
+        actual.save(&reference_path).unwrap();
+        return;
+    }
+    let reference = image::open(&reference_path)
+        .unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}; run with PENUMBRA_BLESS=1 to create it",
+                reference_path.display()
+            )
+        })
+        .into_rgb8();
+    assert_eq!(reference.dimensions(), actual.dimensions(), "{id}: size");
+    let diffs: Vec<u8> = actual
+        .as_raw()
+        .iter()
+        .zip(reference.as_raw())
+        .map(|(a, b)| a.abs_diff(*b))
+        .collect();
+    let max = diffs.iter().copied().max().unwrap_or(0);
+    let mean = diffs.iter().map(|&d| d as f64).sum::<f64>() / diffs.len() as f64;
+    if max > 2 || mean > 0.05 {
+        let out = repo_root().join("target/golden");
+        std::fs::create_dir_all(&out).unwrap();
+        actual.save(out.join(format!("{id}.actual.png"))).unwrap();
+        let amplified = diffs.iter().map(|&d| d.saturating_mul(16)).collect();
+        RgbImage::from_raw(SIZE, SIZE, amplified)
+            .unwrap()
+            .save(out.join(format!("{id}.diff.png")))
+            .unwrap();
+        panic!(
+            "{id}: differs from {} (max {max} levels, mean {mean:.3}); see {}",
+            reference_path.display(),
+            out.display()
+        );
+    }
+}
+
+#[test]
+fn cornell_white_light_three_cameras() {
+    for camera in ["front", "left", "high"] {
+        check("cornell", Some(camera));
+    }
+}
+
+#[test]
+fn cornell_warm_light() {
+    check("cornell_warm", None);
+}
+
+#[test]
+fn cornell_cyan_light() {
+    check("cornell_cyan", None);
+}
