@@ -79,7 +79,13 @@ struct RenderArgs {
     #[arg(long, value_name = "N")]
     seed: Option<u64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full film.
-    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_bounds)]
+    // Hyphen values are taken so that "-1,..." is reported as a bad region, not a bad flag.
+    #[arg(
+        long,
+        value_name = "x0,x1,y0,y1",
+        value_parser = parse_bounds,
+        allow_hyphen_values = true
+    )]
     pixelbounds: Option<PixelBounds>,
     /// Print the summary as one JSON object on stdout.
     #[arg(long)]
@@ -181,10 +187,24 @@ fn light_samples(scene: &Scene) -> u32 {
 }
 
 fn run_render(args: RenderArgs) -> Result<(), Failure> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // If the handler cannot be installed, Ctrl-C keeps its default effect; the output is
+        // still never half-written since it is renamed into place only when complete.
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::SeqCst));
+    }
+    let interrupted = || Failure {
+        code: 130,
+        message: "interrupted; no image written".into(),
+    };
     let load_start = Instant::now();
     let file = SceneFile::load(&args.scene).map_err(invalid)?;
     let scene = file.build(&overrides(&args)).map_err(invalid)?;
     let load_time = load_start.elapsed();
+    if cancel.load(Ordering::SeqCst) {
+        return Err(interrupted());
+    }
 
     let out = output_path(&args, &scene);
     if OutputFormat::from_path(&out).is_none() {
@@ -212,13 +232,6 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         }
     }
 
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        // If the handler cannot be installed, Ctrl-C keeps its default effect; the output is
-        // still never half-written since it is renamed into place only when complete.
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::SeqCst));
-    }
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(100);
         bar.set_style(
@@ -247,20 +260,12 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     }
     let (film, stats) = match result {
         Ok(r) => r,
-        Err(RenderError::Cancelled) => {
-            return Err(Failure {
-                code: 130,
-                message: "interrupted; no image written".into(),
-            })
-        }
+        Err(RenderError::Cancelled) => return Err(interrupted()),
         Err(e @ RenderError::BadRegion { .. }) => return Err(invalid(e)),
         Err(e) => return Err(runtime(e)),
     };
     if cancel.load(Ordering::SeqCst) {
-        return Err(Failure {
-            code: 130,
-            message: "interrupted; no image written".into(),
-        });
+        return Err(interrupted());
     }
     write_image(&film, &out, scene.film.gamma).map_err(runtime)?;
 

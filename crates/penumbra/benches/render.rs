@@ -60,7 +60,9 @@ fn bench_intersect(c: &mut Criterion) {
         })
     });
     group.finish();
-    c.bench_function("bvh_build_18k_tris", |b| b.iter(|| Bvh::build(black_box(&g))));
+    c.bench_function("bvh_build_18k_tris", |b| {
+        b.iter(|| Bvh::build(black_box(&g)))
+    });
 }
 
 fn bench_render(c: &mut Criterion) {

@@ -2,7 +2,7 @@
 //! every object into world-space triangles and builds the BVH.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -15,7 +15,7 @@ use super::{FilmSettings, Overrides, Scene, SceneFile, SceneStats};
 use crate::bvh::Bvh;
 use crate::camera::{CameraError, PinholeCamera};
 use crate::geometry::{self, Geometry};
-use crate::image_io::load_texture_image;
+use crate::image_io::{load_texture_image, OutputFormat};
 use crate::integrator::{LightModel, Settings, Shading};
 use crate::light::{AreaLight, Light, PointLight};
 use crate::material::Material;
@@ -194,10 +194,21 @@ impl Builder<'_> {
             }
             g => g.map(|g| g.0 as f32),
         };
+        let output = match d.output.as_deref() {
+            None => None,
+            // Checked even when the command line's -o wins: the file is wrong either way.
+            Some(o) if OutputFormat::from_path(Path::new(o)).is_none() => {
+                return Err(self.err(
+                    &path.key("output"),
+                    format!("unknown image format \"{o}\" (use .png, .jpg, .exr or .pfm)"),
+                ))
+            }
+            Some(o) => Some(self.file.resolve(o)),
+        };
         Ok(FilmSettings {
             width,
             height,
-            output: d.output.as_deref().map(|o| self.file.resolve(o)),
+            output,
             gamma,
         })
     }

@@ -7,7 +7,7 @@ use super::error::{KeyPath, Segment};
 use super::SceneFormat;
 
 /// Byte offset of the value (or, for a table key, of the key) that `path` names: the deepest
-/// part of the path that exists.
+/// part of the path that exists, or the start of the file when none does.
 pub(crate) fn locate(text: &str, format: SceneFormat, path: &KeyPath) -> Option<usize> {
     match format {
         SceneFormat::Toml => locate_toml(text, path),
@@ -17,7 +17,7 @@ pub(crate) fn locate(text: &str, format: SceneFormat, path: &KeyPath) -> Option<
 
 fn locate_toml(text: &str, path: &KeyPath) -> Option<usize> {
     let root = DeTable::parse(text).ok()?;
-    let mut offset = None;
+    let mut offset = Some(0);
     let mut table: Option<&DeTable> = Some(root.get_ref());
     let mut value: Option<&DeValue> = None;
     for seg in &path.0 {
@@ -111,7 +111,8 @@ fn locate_json(text: &str, path: &KeyPath) -> Option<usize> {
         b: text.as_bytes(),
         i: 0,
     };
-    let mut offset = None;
+    p.ws();
+    let mut offset = Some(p.i);
     for seg in &path.0 {
         match seg {
             Segment::Key(k) => {

@@ -186,6 +186,8 @@ impl SceneFile {
                 let de = toml::Deserializer::parse(&self.text).map_err(|e| {
                     self.error_at_offset(e.span().map(|s| s.start), None, e.message())
                 })?;
+                // toml's `preserve_order` feature hands table keys over in file order, so the
+                // default camera is the first one written, as in JSON.
                 serde_path_to_error::deserialize(de).map_err(|e| {
                     let path = convert_path(e.path());
                     let inner = e.inner();
@@ -212,16 +214,18 @@ impl SceneFile {
         let message = full
             .rfind(" at line ")
             .map_or(full.as_str(), |i| &full[..i]);
-        let location = Location {
-            file: self.name.clone(),
-            line: (e.line() > 0).then_some(e.line()),
-            column: (e.line() > 0).then_some(e.column()),
-            key: path.filter(|p| !p.is_empty()).map(|p| p.to_string()),
-        };
-        SceneError::Invalid {
-            location,
-            message: message.to_owned(),
-        }
+        // serde_json counts columns in bytes, with column 0 just after a newline; as a byte
+        // offset, the location counts characters from 1 like every other error.
+        let offset = (e.line() > 0).then(|| {
+            let line_start: usize = self
+                .text
+                .split_inclusive('\n')
+                .take(e.line() - 1)
+                .map(str::len)
+                .sum();
+            line_start + e.column().saturating_sub(1)
+        });
+        self.error_at_offset(offset, path.as_ref(), message)
     }
 
     fn error_at_offset(
@@ -244,7 +248,7 @@ impl SceneFile {
                 column,
                 key: path.filter(|p| !p.is_empty()).map(|p| p.to_string()),
             },
-            message: message.trim().to_owned(),
+            message: plain_type_names(message.trim()),
         }
     }
 
@@ -263,6 +267,20 @@ impl SceneFile {
     pub fn resolve(&self, path: &str) -> PathBuf {
         self.base_dir.join(path)
     }
+}
+
+/// serde names Rust types in its messages ("expected i64"); users read scene files, not Rust.
+fn plain_type_names(message: &str) -> String {
+    [
+        ("expected i64", "expected an integer"),
+        ("expected u64", "expected a non-negative integer"),
+        ("expected f64", "expected a number"),
+        ("expected a string", "expected a string in quotes"),
+    ]
+    .iter()
+    .fold(message.to_owned(), |m, (rust, plain)| {
+        m.replace(rust, plain)
+    })
 }
 
 fn convert_path(path: &serde_path_to_error::Path) -> KeyPath {
