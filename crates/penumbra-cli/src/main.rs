@@ -200,7 +200,9 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     };
     let load_start = Instant::now();
     let file = SceneFile::load(&args.scene).map_err(invalid)?;
-    let scene = file.build(&overrides(&args)).map_err(invalid)?;
+    let scene = file
+        .build_with_threads(&overrides(&args), args.threads)
+        .map_err(invalid)?;
     let load_time = load_start.elapsed();
     if cancel.load(Ordering::SeqCst) {
         return Err(interrupted());

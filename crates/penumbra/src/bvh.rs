@@ -88,8 +88,18 @@ fn accel(corners: [Vec3; 3]) -> TriAccel {
 }
 
 impl Bvh {
-    /// Builds the hierarchy over every triangle of `geometry`, on the current rayon pool.
+    /// Builds the hierarchy over every triangle of `geometry` on the calling thread.
     pub fn build(geometry: &Geometry) -> Bvh {
+        Self::build_with(geometry, None)
+    }
+
+    /// Builds the hierarchy, splitting large subtrees across the threads of `pool`. The result
+    /// is the same as [`Bvh::build`]'s.
+    pub fn build_parallel(geometry: &Geometry, pool: &rayon::ThreadPool) -> Bvh {
+        Self::build_with(geometry, Some(pool))
+    }
+
+    fn build_with(geometry: &Geometry, pool: Option<&rayon::ThreadPool>) -> Bvh {
         let mut prims: Vec<BuildPrim> = (0..geometry.len())
             .map(|i| {
                 let bounds = geometry
@@ -106,7 +116,10 @@ impl Bvh {
         if prims.is_empty() {
             return Bvh::default();
         }
-        let nodes = build_subtree(&mut prims, 0);
+        let nodes = match pool {
+            Some(pool) => pool.install(|| build_subtree(&mut prims, 0, true)),
+            None => build_subtree(&mut prims, 0, false),
+        };
         let prim_ids: Vec<u32> = prims.iter().map(|p| p.index).collect();
         let tris = prim_ids
             .iter()
@@ -366,8 +379,9 @@ fn leaf(bounds: Aabb, first: usize, count: usize) -> BvhNode {
 }
 
 /// Builds the subtree over `prims` (which sit at `offset` in the final permutation), reordering
-/// them in place. The returned nodes have the subtree's root at index 0.
-fn build_subtree(prims: &mut [BuildPrim], offset: usize) -> Vec<BvhNode> {
+/// them in place, with large halves built in parallel when `parallel` (on the current rayon
+/// pool). The returned nodes have the subtree's root at index 0.
+fn build_subtree(prims: &mut [BuildPrim], offset: usize, parallel: bool) -> Vec<BvhNode> {
     let (bounds, centroids) = bounds_of(prims);
     let Some(mid) = split(prims, bounds, centroids) else {
         return vec![leaf(bounds, offset, prims.len())];
@@ -380,10 +394,10 @@ fn build_subtree(prims: &mut [BuildPrim], offset: usize) -> Vec<BvhNode> {
     };
     let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
-    if left.len().min(right.len()) >= PARALLEL_MIN {
+    if parallel && left.len().min(right.len()) >= PARALLEL_MIN {
         let (l, r) = rayon::join(
-            || build_subtree(left, offset),
-            || build_subtree(right, offset + mid),
+            || build_subtree(left, offset, true),
+            || build_subtree(right, offset + mid, true),
         );
         join_subtrees(root, l, r)
     } else {
@@ -659,8 +673,15 @@ mod tests {
             })
             .collect();
         let g = soup(&tris);
-        let bvh = Bvh::build(&g);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let bvh = Bvh::build_parallel(&g, &pool);
         bvh.validate(&g).unwrap();
+        let serial = Bvh::build(&g);
+        assert_eq!(bvh.nodes, serial.nodes);
+        assert_eq!(bvh.prim_ids, serial.prim_ids);
         for _ in 0..300 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 2.0;
             let d = Vec3::new(rnd(), rnd(), rnd());

@@ -84,6 +84,13 @@ pub fn shade(scene: &Scene, ray: &Ray, hit: &Hit, rng: &mut Rng) -> (Rgb, u64) {
         n_geom = -n_geom;
         n = -n;
     }
+    // A mirroring transform (negative scale) reverses the winding, so e1 × e2 flips while the
+    // inverse-transpose vertex normals do not; OBJ files can also carry normals that disagree
+    // with their winding. Either way the shading normal belongs on the viewer's side, as pbrt
+    // does by face-forwarding one normal to the other.
+    if n.dot(n_geom) < 0.0 {
+        n = -n;
+    }
     let material = &scene.materials[tri.material as usize];
     let tex = match material.texture {
         Some(t) => {
@@ -115,9 +122,18 @@ pub fn shade(scene: &Scene, ray: &Ray, hit: &Hit, rng: &mut Rng) -> (Rgb, u64) {
         let spec = if ks == Vec3::ZERO {
             0.0
         } else {
-            match settings.shading {
-                Shading::Phong => (2.0 * cos * n - l).dot(view).max(0.0).powf(p),
-                Shading::BlinnPhong => n.dot((l + view).normalize()).max(0.0).powf(p),
+            let base = match settings.shading {
+                Shading::Phong => (2.0 * cos * n - l).dot(view),
+                Shading::BlinnPhong => n.dot((l + view).normalize()),
+            };
+            // max(0, base)^p without a powf call for the half of directions where base ≤ 0
+            // (a NaN base, from l = −v, counts as 0); 0⁰ = 1.
+            if base > 0.0 {
+                base.powf(p)
+            } else if p == 0.0 {
+                1.0
+            } else {
+                0.0
             }
         };
         Some(if physical {

@@ -106,6 +106,24 @@ pub enum RenderError {
 
 const TILE: u32 = 16;
 
+/// A pool of `threads` workers (0: one per available core) of the library's own, never rayon's
+/// global pool, so that callers keep control of their threads.
+pub(crate) fn thread_pool(threads: usize) -> Result<(rayon::ThreadPool, usize), RenderError> {
+    let threads = if threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        threads
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| RenderError::Threads {
+            threads,
+            message: e.to_string(),
+        })?;
+    Ok((pool, threads))
+}
+
 /// Renders `scene` (or a region of it) with the given options.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderStats), RenderError> {
     let (width, height) = (scene.film.width, scene.film.height);
@@ -136,18 +154,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
         })?;
     pixels.resize(rw as usize * rh as usize, Rgb::ZERO);
 
-    let threads = if options.threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        options.threads
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| RenderError::Threads {
-            threads,
-            message: e.to_string(),
-        })?;
+    let (pool, threads) = thread_pool(options.threads)?;
 
     let tiles: Vec<PixelBounds> = (region.y0..region.y1)
         .step_by(TILE as usize)

@@ -110,3 +110,15 @@ fn cornell_warm_light() {
 fn cornell_cyan_light() {
     check("cornell_cyan", None);
 }
+
+#[test]
+fn texture_scenes() {
+    check("texture_map", None);
+    check("textured_room", None);
+}
+
+#[test]
+fn mesh_scenes() {
+    check("showcase", None);
+    check("cornell_obj", None);
+}

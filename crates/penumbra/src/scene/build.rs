@@ -20,6 +20,7 @@ use crate::integrator::{LightModel, Settings, Shading};
 use crate::light::{AreaLight, Light, PointLight};
 use crate::material::Material;
 use crate::math::{Rgb, Transform};
+use crate::render::thread_pool;
 use crate::sampling::{perfect_square_root, Sampler};
 use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 
@@ -53,7 +54,7 @@ struct Builder<'a> {
     materials: Vec<Material>,
 }
 
-pub(super) fn build(file: &SceneFile, ov: &Overrides) -> Result<Scene> {
+pub(super) fn build(file: &SceneFile, ov: &Overrides, threads: usize) -> Result<Scene> {
     let desc = &file.desc;
     let mut b = Builder {
         file,
@@ -93,7 +94,12 @@ pub(super) fn build(file: &SceneFile, ov: &Overrides) -> Result<Scene> {
     }
 
     let start = Instant::now();
-    let bvh = Bvh::build(&geometry);
+    // Without a pool of its own (the system refused threads) the build runs serially: the
+    // library never borrows rayon's global pool.
+    let bvh = match thread_pool(threads) {
+        Ok((pool, _)) => Bvh::build_parallel(&geometry, &pool),
+        Err(_) => Bvh::build(&geometry),
+    };
     let bvh_build_time = start.elapsed();
     let stats = SceneStats {
         triangles: geometry.len(),

@@ -258,9 +258,19 @@ impl SceneFile {
         self.error_at_offset(offset, Some(path), &message.into())
     }
 
-    /// Builds the scene as the file describes it, with `overrides` applied.
+    /// Builds the scene as the file describes it, with `overrides` applied, using every core
+    /// for the BVH.
     pub fn build(&self, overrides: &Overrides) -> Result<Scene, SceneError> {
-        build::build(self, overrides)
+        build::build(self, overrides, 0)
+    }
+
+    /// Like [`SceneFile::build`], with `threads` workers for the BVH (0: all cores).
+    pub fn build_with_threads(
+        &self,
+        overrides: &Overrides,
+        threads: usize,
+    ) -> Result<Scene, SceneError> {
+        build::build(self, overrides, threads)
     }
 
     /// Resolves a path written in the scene file against its folder.
