@@ -6,7 +6,7 @@
 //! `v0, e1, e2` ready for Möller–Trumbore; shading data stays in [`Geometry`] and is read once
 //! per hit through the primitive permutation.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::geometry::{intersect_triangle, Geometry};
 use crate::math::{Aabb, Ray};
@@ -147,12 +147,12 @@ impl Bvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let inv_dir = ray.direction.recip();
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), finite_recip(ray.direction));
         let mut best: Option<(usize, f32, f32)> = None;
         let mut stack = [0u32; STACK_SIZE];
         let mut sp = 0;
         let mut node = &self.nodes[0];
-        slab(node, ray.origin, inv_dir, t_min, t_max)?;
+        slab(node, origin, inv_dir, t_min, t_max)?;
         loop {
             if node.is_leaf() {
                 let first = node.first as usize;
@@ -174,8 +174,8 @@ impl Bvh {
                 }
             } else {
                 let (l, r) = (node.first as usize, node.first as usize + 1);
-                let dl = slab(&self.nodes[l], ray.origin, inv_dir, t_min, t_max);
-                let dr = slab(&self.nodes[r], ray.origin, inv_dir, t_min, t_max);
+                let dl = slab(&self.nodes[l], origin, inv_dir, t_min, t_max);
+                let dr = slab(&self.nodes[r], origin, inv_dir, t_min, t_max);
                 match (dl, dr) {
                     (Some(a), Some(b)) => {
                         let (near, far) = if a <= b { (l, r) } else { (r, l) };
@@ -207,7 +207,7 @@ impl Bvh {
                 }
                 sp -= 1;
                 let candidate = &self.nodes[stack[sp] as usize];
-                if slab(candidate, ray.origin, inv_dir, t_min, t_max).is_some() {
+                if slab(candidate, origin, inv_dir, t_min, t_max).is_some() {
                     node = candidate;
                     break;
                 }
@@ -220,14 +220,14 @@ impl Bvh {
         if self.nodes.is_empty() {
             return false;
         }
-        let inv_dir = ray.direction.recip();
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), finite_recip(ray.direction));
         let mut stack = [0u32; STACK_SIZE];
         let mut sp = 1;
         stack[0] = 0;
         while sp > 0 {
             sp -= 1;
             let node = &self.nodes[stack[sp] as usize];
-            if slab(node, ray.origin, inv_dir, t_min, t_max).is_none() {
+            if slab(node, origin, inv_dir, t_min, t_max).is_none() {
                 continue;
             }
             if node.is_leaf() {
@@ -351,15 +351,29 @@ pub fn intersect_brute_force(
     best
 }
 
+/// `1/d` per component, with zero components replaced by ±10⁻³⁰ first so that the slab test
+/// below never computes 0·∞ (NaN): plain SIMD min/max are then exact.
+#[inline(always)]
+fn finite_recip(d: Vec3) -> Vec3A {
+    let tiny = |x: f32| {
+        if x.abs() < 1e-30 {
+            1e-30f32.copysign(x)
+        } else {
+            x
+        }
+    };
+    Vec3A::new(tiny(d.x), tiny(d.y), tiny(d.z)).recip()
+}
+
 /// The entry distance of the ray into the node's box within `(t_min, t_max)`, or `None`.
 #[inline(always)]
-fn slab(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
-    let t0 = (Vec3::from(node.min) - origin) * inv_dir;
-    let t1 = (Vec3::from(node.max) - origin) * inv_dir;
-    // `min`/`max` drop a NaN operand (0·∞ for a ray in a slab's plane), keeping the test
-    // conservative.
-    let near = t0.min(t1).max_element().max(t_min);
-    let far = t0.max(t1).min_element().min(t_max);
+fn slab(node: &BvhNode, origin: Vec3A, inv_dir: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+    let t0 = (Vec3A::from(node.min) - origin) * inv_dir;
+    let t1 = (Vec3A::from(node.max) - origin) * inv_dir;
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element();
+    let near = if near > t_min { near } else { t_min };
+    let far = if far < t_max { far } else { t_max };
     (near <= far).then_some(near)
 }
 
