@@ -15,7 +15,7 @@ use penumbra::geometry::{self, Geometry};
 use penumbra::math::{Ray, Transform};
 use penumbra::{render, Overrides, RenderOptions, SceneFile};
 
-/// Two tessellated spheres and a floor: 18,434 triangles.
+/// Two tessellated spheres and a floor: 18,050 triangles.
 fn spheres() -> Geometry {
     let mut g = Geometry::default();
     let ball = geometry::sphere(1.0);

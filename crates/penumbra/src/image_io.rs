@@ -196,6 +196,67 @@ mod tests {
     }
 
     #[test]
+    fn textures_decode_8_and_16_bit_grey_rgb_and_rgba_to_linear() {
+        let dir = std::env::temp_dir().join(format!("penumbra-decode-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Each image holds one texel whose encoded value is one half (128/255 or 32768/65535).
+        let half8 = 128.0 / 255.0;
+        let half16 = 32768.0 / 65535.0;
+        let cases: Vec<(&str, image::DynamicImage, f32)> = vec![
+            (
+                "grey8.png",
+                image::GrayImage::from_pixel(1, 1, image::Luma([128])).into(),
+                half8,
+            ),
+            (
+                "grey16.png",
+                image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(1, 1, image::Luma([32768]))
+                    .into(),
+                half16,
+            ),
+            (
+                "rgb8.png",
+                image::RgbImage::from_pixel(1, 1, image::Rgb([128; 3])).into(),
+                half8,
+            ),
+            (
+                "rgba16.png",
+                image::ImageBuffer::<image::Rgba<u16>, _>::from_pixel(
+                    1,
+                    1,
+                    image::Rgba([32768, 32768, 32768, 0]),
+                )
+                .into(),
+                half16,
+            ),
+            // Alpha is ignored: a fully transparent texel keeps its color.
+            (
+                "rgba8.png",
+                image::RgbaImage::from_pixel(1, 1, image::Rgba([128, 128, 128, 0])).into(),
+                half8,
+            ),
+        ];
+        for (name, img, encoded) in cases {
+            let path = dir.join(name);
+            img.save(&path).unwrap();
+            let srgb = load_texture_image(&path, true).unwrap();
+            let linear = load_texture_image(&path, false).unwrap();
+            assert_eq!((srgb.width, srgb.height), (1, 1));
+            for c in srgb.texels[0].to_array() {
+                assert!((c - srgb_to_linear(encoded)).abs() < 1e-6, "{name}: {c}");
+            }
+            for c in linear.texels[0].to_array() {
+                assert!((c - encoded).abs() < 1e-6, "{name}: {c}");
+            }
+        }
+        let corrupt = dir.join("corrupt.png");
+        std::fs::write(&corrupt, b"not a png").unwrap();
+        assert!(load_texture_image(&corrupt, true).is_err());
+        assert!(load_texture_image(&dir.join("missing.png"), true).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn output_formats_by_extension() {
         assert_eq!(
             OutputFormat::from_path(Path::new("a.PNG")),
