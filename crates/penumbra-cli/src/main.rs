@@ -175,24 +175,34 @@ fn output_path(args: &RenderArgs, scene: &Scene) -> PathBuf {
         .with_file_name(Path::new(stem).with_extension("png"))
 }
 
-fn light_samples(scene: &Scene) -> u32 {
+fn light_samples(scene: &Scene) -> u64 {
     scene
         .lights
         .iter()
         .map(|l| match l {
-            Light::Area(a) => a.sample_count(),
+            Light::Area(a) => a.sample_count() as u64,
             Light::Point(_) => 1,
         })
         .sum()
 }
 
 fn run_render(args: RenderArgs) -> Result<(), Failure> {
+    // Ctrl-C while loading ends the process at once (nothing is written yet); while
+    // rendering it asks the renderer to stop, which then leaves no image either.
     let cancel = Arc::new(AtomicBool::new(false));
+    let rendering = Arc::new(AtomicBool::new(false));
     {
-        let cancel = cancel.clone();
+        let (cancel, rendering) = (cancel.clone(), rendering.clone());
         // If the handler cannot be installed, Ctrl-C keeps its default effect; the output is
         // still never half-written since it is renamed into place only when complete.
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::SeqCst));
+        let _ = ctrlc::set_handler(move || {
+            if rendering.load(Ordering::SeqCst) {
+                cancel.store(true, Ordering::SeqCst);
+            } else {
+                eprintln!("error: interrupted; no image written");
+                std::process::exit(130);
+            }
+        });
     }
     let interrupted = || Failure {
         code: 130,
@@ -225,14 +235,6 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             )));
         }
     }
-    if let Some(b) = args.pixelbounds {
-        if b.x1 > scene.film.width || b.y1 > scene.film.height {
-            return Err(invalid(format!(
-                "--pixelbounds {},{},{},{}: outside the {}x{} film",
-                b.x0, b.x1, b.y0, b.y1, scene.film.width, scene.film.height
-            )));
-        }
-    }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(100);
@@ -256,6 +258,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         cancel: Some(&cancel),
         progress: Some(&progress),
     };
+    rendering.store(true, Ordering::SeqCst);
     let result = render(&scene, &options);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
@@ -263,7 +266,9 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let (film, stats) = match result {
         Ok(r) => r,
         Err(RenderError::Cancelled) => return Err(interrupted()),
-        Err(e @ RenderError::BadRegion { .. }) => return Err(invalid(e)),
+        Err(e @ RenderError::BadRegion { .. }) => {
+            return Err(invalid(format!("--pixelbounds: {e}")))
+        }
         Err(e) => return Err(runtime(e)),
     };
     if cancel.load(Ordering::SeqCst) {
@@ -294,8 +299,8 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     }
     if args.json {
         let summary = json!({
-            "scene": args.scene,
-            "output": out,
+            "scene": args.scene.display().to_string(),
+            "output": out.display().to_string(),
             "width": film.width,
             "height": film.height,
             "film_width": scene.film.width,
@@ -329,7 +334,7 @@ fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
     let s = &scene.stats;
     if json {
         let summary = json!({
-            "scene": path,
+            "scene": path.display().to_string(),
             "width": scene.film.width,
             "height": scene.film.height,
             "spp": scene.settings.samples_per_axis.pow(2),

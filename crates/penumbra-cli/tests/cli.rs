@@ -633,6 +633,27 @@ fn non_finite_numbers() {
 }
 
 #[test]
+fn numbers_beyond_the_range_of_32_bit_floats() {
+    // Finite as f64 but infinite once the renderer stores them as f32.
+    let sb = Sandbox::new("f32-range");
+    let text = edit(BASE, "position = [0, 1, 5]", "position = [0, 1e39, 5]");
+    let want = Expect {
+        line: line_of(&text, "1e39"),
+        key: Some("camera.position[1]"),
+        words: &["out of range"],
+    };
+    expect_scene_error(&sb, "s.toml", &text, want);
+
+    let text = edit(BASE, "specular = 0.3", "specular = 1e300");
+    let want = Expect {
+        line: line_of(&text, "specular"),
+        key: Some("materials.red.specular"),
+        words: &["out of range"],
+    };
+    expect_scene_error(&sb, "s.toml", &text, want);
+}
+
+#[test]
 fn negative_sizes() {
     let sb = Sandbox::new("negative");
     for size in ["-1", "[1, -1, 1]"] {
@@ -1060,6 +1081,15 @@ fn spp_not_a_perfect_square() {
     let sb = Sandbox::new("spp");
     let scene = sb.write("s.toml", BASE);
     let r = render(&scene, &sb.out(), &["--spp", "3"]);
+    expect_usage_error(&sb, &r, 2, &["--spp", "perfect square"]);
+}
+
+#[test]
+fn huge_spp_is_an_error_not_a_panic() {
+    // 4294967295 rounds to a square root of 65536, whose square overflows 32 bits.
+    let sb = Sandbox::new("spp-huge");
+    let scene = sb.write("s.toml", BASE);
+    let r = render(&scene, &sb.out(), &["--spp", "4294967295"]);
     expect_usage_error(&sb, &r, 2, &["--spp", "perfect square"]);
 }
 

@@ -71,6 +71,8 @@ const MAX_LEAF: usize = 8;
 /// Subtrees with more triangles than this are built on separate threads.
 const PARALLEL_MIN: usize = 32 * 1024;
 const STACK_SIZE: usize = 64;
+/// Deepest leaf: the any-hit traversal holds at most `depth + 1` entries on its stack.
+const MAX_DEPTH: usize = STACK_SIZE - 2;
 
 #[derive(Clone, Copy)]
 struct BuildPrim {
@@ -117,8 +119,10 @@ impl Bvh {
             return Bvh::default();
         }
         let nodes = match pool {
-            Some(pool) => pool.install(|| build_subtree(&mut prims, 0, true)),
-            None => build_subtree(&mut prims, 0, false),
+            Some(pool) if prims.len() >= 2 * PARALLEL_MIN => {
+                pool.install(|| build_subtree(&mut prims, 0, 0, true))
+            }
+            _ => build_subtree(&mut prims, 0, 0, false),
         };
         let prim_ids: Vec<u32> = prims.iter().map(|p| p.index).collect();
         let tris = prim_ids
@@ -147,7 +151,7 @@ impl Bvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let (origin, inv_dir) = (Vec3A::from(ray.origin), finite_recip(ray.direction));
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
         let mut best: Option<(usize, f32, f32)> = None;
         let mut stack = [0u32; STACK_SIZE];
         let mut sp = 0;
@@ -220,7 +224,7 @@ impl Bvh {
         if self.nodes.is_empty() {
             return false;
         }
-        let (origin, inv_dir) = (Vec3A::from(ray.origin), finite_recip(ray.direction));
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
         let mut stack = [0u32; STACK_SIZE];
         let mut sp = 1;
         stack[0] = 0;
@@ -351,23 +355,11 @@ pub fn intersect_brute_force(
     best
 }
 
-/// `1/d` per component, with zero components replaced by ±10⁻³⁰ first so that the slab test
-/// below never computes 0·∞ (NaN): plain SIMD min/max are then exact.
-#[inline(always)]
-fn finite_recip(d: Vec3) -> Vec3A {
-    let tiny = |x: f32| {
-        if x.abs() < 1e-30 {
-            1e-30f32.copysign(x)
-        } else {
-            x
-        }
-    };
-    Vec3A::new(tiny(d.x), tiny(d.y), tiny(d.z)).recip()
-}
-
 /// The entry distance of the ray into the node's box within `(t_min, t_max)`, or `None`.
 #[inline(always)]
 fn slab(node: &BvhNode, origin: Vec3A, inv_dir: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+    // With padded boxes (see `node`), `bound − origin` is zero only for rays outside the true
+    // box, so a NaN from 0·∞ can only turn a miss into a miss: SIMD min/max need no NaN care.
     let t0 = (Vec3A::from(node.min) - origin) * inv_dir;
     let t1 = (Vec3A::from(node.max) - origin) * inv_dir;
     let near = t0.min(t1).max_element();
@@ -383,11 +375,16 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
     })
 }
 
-fn leaf(bounds: Aabb, first: usize, count: usize) -> BvhNode {
+/// A node whose box is `bounds` grown outward by a relative 2⁻²⁰ (and at least the smallest
+/// normal float). A ray lying exactly in a face plane of a tight box computes 0·∞ = NaN in the
+/// slab test and would skip the box; with the padding, `bound − origin` is never zero for
+/// a ray that touches the true box, and the box test stays conservative.
+fn node(bounds: Aabb, first: usize, count: usize) -> BvhNode {
+    let pad = |v: Vec3| v.abs() * (1.0 / (1 << 20) as f32) + Vec3::splat(f32::MIN_POSITIVE);
     BvhNode {
-        min: bounds.min.into(),
+        min: (bounds.min - pad(bounds.min)).into(),
         first: first as u32,
-        max: bounds.max.into(),
+        max: (bounds.max + pad(bounds.max)).into(),
         count: count as u32,
     }
 }
@@ -395,23 +392,23 @@ fn leaf(bounds: Aabb, first: usize, count: usize) -> BvhNode {
 /// Builds the subtree over `prims` (which sit at `offset` in the final permutation), reordering
 /// them in place, with large halves built in parallel when `parallel` (on the current rayon
 /// pool). The returned nodes have the subtree's root at index 0.
-fn build_subtree(prims: &mut [BuildPrim], offset: usize, parallel: bool) -> Vec<BvhNode> {
+fn build_subtree(
+    prims: &mut [BuildPrim],
+    offset: usize,
+    depth: usize,
+    parallel: bool,
+) -> Vec<BvhNode> {
     let (bounds, centroids) = bounds_of(prims);
-    let Some(mid) = split(prims, bounds, centroids) else {
-        return vec![leaf(bounds, offset, prims.len())];
+    let Some(mid) = split(prims, bounds, centroids, depth) else {
+        return vec![node(bounds, offset, prims.len())];
     };
-    let root = BvhNode {
-        min: bounds.min.into(),
-        first: 1,
-        max: bounds.max.into(),
-        count: 0,
-    };
+    let root = node(bounds, 1, 0);
     let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
     if parallel && left.len().min(right.len()) >= PARALLEL_MIN {
         let (l, r) = rayon::join(
-            || build_subtree(left, offset, true),
-            || build_subtree(right, offset + mid, true),
+            || build_subtree(left, offset, depth + 1, true),
+            || build_subtree(right, offset + mid, depth + 1, true),
         );
         join_subtrees(root, l, r)
     } else {
@@ -419,8 +416,8 @@ fn build_subtree(prims: &mut [BuildPrim], offset: usize, parallel: bool) -> Vec<
         nodes.push(root);
         nodes.push(BvhNode { count: 0, ..root });
         nodes.push(BvhNode { count: 0, ..root });
-        build_into(&mut nodes, 1, left, offset);
-        build_into(&mut nodes, 2, right, offset + mid);
+        build_into(&mut nodes, 1, left, offset, depth + 1);
+        build_into(&mut nodes, 2, right, offset + mid, depth + 1);
         nodes
     }
 }
@@ -446,31 +443,34 @@ fn join_subtrees(mut root: BvhNode, l: Vec<BvhNode>, r: Vec<BvhNode>) -> Vec<Bvh
 }
 
 /// Builds the subtree over `prims` into `nodes[index]`, appending its descendants.
-fn build_into(nodes: &mut Vec<BvhNode>, index: usize, prims: &mut [BuildPrim], offset: usize) {
+fn build_into(
+    nodes: &mut Vec<BvhNode>,
+    index: usize,
+    prims: &mut [BuildPrim],
+    offset: usize,
+    depth: usize,
+) {
     let (bounds, centroids) = bounds_of(prims);
-    let Some(mid) = split(prims, bounds, centroids) else {
-        nodes[index] = leaf(bounds, offset, prims.len());
+    let Some(mid) = split(prims, bounds, centroids, depth) else {
+        nodes[index] = node(bounds, offset, prims.len());
         return;
     };
     let first = nodes.len();
-    nodes[index] = BvhNode {
-        min: bounds.min.into(),
-        first: first as u32,
-        max: bounds.max.into(),
-        count: 0,
-    };
+    nodes[index] = node(bounds, first, 0);
     nodes.push(nodes[index]);
     nodes.push(nodes[index]);
     let (left, right) = prims.split_at_mut(mid);
-    build_into(nodes, first, left, offset);
-    build_into(nodes, first + 1, right, offset + mid);
+    build_into(nodes, first, left, offset, depth + 1);
+    build_into(nodes, first + 1, right, offset + mid, depth + 1);
 }
 
 /// Chooses a split by binned SAH over all three axes and partitions `prims` by it. Returns the
 /// size of the left part, or `None` when a leaf is cheaper.
-fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb) -> Option<usize> {
+fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb, depth: usize) -> Option<usize> {
     let n = prims.len();
-    if n <= 2 {
+    // Past MAX_DEPTH (only reached by adversarial inputs, such as triangles spread over
+    // hundreds of orders of magnitude) a leaf, however large, keeps traversal in its stack.
+    if n <= 2 || depth >= MAX_DEPTH {
         return None;
     }
     let extent = centroids.extent();
@@ -479,10 +479,7 @@ fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb) -> Option<usize
         if extent[axis] <= 0.0 {
             continue;
         }
-        let scale = BINS as f32 / extent[axis];
-        let bin_of = |p: &BuildPrim| {
-            (((p.centroid[axis] - centroids.min[axis]) * scale) as usize).min(BINS - 1)
-        };
+        let bin_of = |p: &BuildPrim| bin_index(p, axis, centroids.min[axis], extent[axis]);
         let mut bin_bounds = [Aabb::EMPTY; BINS];
         let mut bin_counts = [0usize; BINS];
         for p in prims.iter() {
@@ -516,11 +513,8 @@ fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb) -> Option<usize
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
     match best {
         Some((cost, axis, bin)) if n > MAX_LEAF || 1.0 + cost / area < leaf_cost => {
-            let scale = BINS as f32 / extent[axis];
-            let min = centroids.min[axis];
-            let mid = partition(prims, |p| {
-                (((p.centroid[axis] - min) * scale) as usize).min(BINS - 1) <= bin
-            });
+            let (min, extent) = (centroids.min[axis], extent[axis]);
+            let mid = partition(prims, |p| bin_index(p, axis, min, extent) <= bin);
             Some(mid)
         }
         Some(_) => None,
@@ -529,6 +523,11 @@ fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb) -> Option<usize
         None if n > MAX_LEAF => Some(n / 2),
         None => None,
     }
+}
+
+/// The SAH bin of `p`'s centroid along `axis`, for centroids starting at `min` over `extent`.
+fn bin_index(p: &BuildPrim, axis: usize, min: f32, extent: f32) -> usize {
+    (((p.centroid[axis] - min) * (BINS as f32 / extent)) as usize).min(BINS - 1)
 }
 
 /// Moves the elements satisfying `pred` to the front; returns how many there are.
@@ -623,6 +622,41 @@ mod tests {
         bvh.validate(&g).unwrap();
         assert!(bvh.nodes.iter().all(|n| n.count as usize <= MAX_LEAF));
         assert_agree(&g, &bvh, &Ray::new(Vec3::new(0.1, 0.1, -5.0), Vec3::Z));
+    }
+
+    #[test]
+    fn rays_in_a_box_face_plane_still_hit_edges() {
+        // The triangle's right edge lies on x = 0, the box's max x. A ray with direction x = 0
+        // travelling in that plane (the center column of an axis-aligned camera) hits the
+        // edge, which counts as inside; the box test must not skip it.
+        let g = soup(&[[[-1.0, -1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 0.0]]]);
+        let bvh = Bvh::build(&g);
+        for ray in [
+            Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z),
+            Ray::new(Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, -0.6, -1.0)),
+        ] {
+            assert!(intersect_brute_force(&g, &ray, 1e-4, f32::INFINITY).is_some());
+            assert_agree(&g, &bvh, &ray);
+        }
+    }
+
+    #[test]
+    fn depth_stays_within_the_traversal_stack() {
+        // Tiny triangles at x = 2^k for k over f32's whole range: binned SAH peels off a few
+        // per level, which without a depth cap would overflow the traversal stack.
+        let tris: Vec<_> = (-120..120)
+            .map(|k| {
+                let x = 2f32.powi(k);
+                let e = x * 1e-3;
+                [[x, 0.0, 0.0], [x + e, 0.0, 0.0], [x, e, 0.0]]
+            })
+            .collect();
+        let g = soup(&tris);
+        let bvh = Bvh::build(&g);
+        bvh.validate(&g).unwrap();
+        let ray = Ray::new(Vec3::new(-1.0, 1e-30, 0.0), Vec3::X);
+        let _ = bvh.intersect(&ray, 0.0, f32::INFINITY);
+        let _ = bvh.occluded(&ray, 0.0, f32::INFINITY);
     }
 
     fn arb_point() -> impl Strategy<Value = [f32; 3]> {

@@ -4,6 +4,7 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
@@ -83,10 +84,13 @@ pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), I
     let name = path
         .file_name()
         .ok_or_else(|| write_err("not a file name".into()))?;
+    // Unique per process and per call, so concurrent writers never share a temporary file.
+    static WRITES: AtomicU64 = AtomicU64::new(0);
     let tmp = path.with_file_name(format!(
-        ".{}.tmp-{}",
+        ".{}.tmp-{}-{}",
         name.to_string_lossy(),
-        std::process::id()
+        std::process::id(),
+        WRITES.fetch_add(1, Ordering::Relaxed)
     ));
     let result = write_to(film, &tmp, format, gamma)
         .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
@@ -146,15 +150,26 @@ fn write_to(
     file.sync_all().map_err(|e| e.to_string())
 }
 
+/// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
+pub const MAX_TEXELS: u64 = 1 << 26;
+
 /// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
 /// through the sRGB curve when `srgb` is true, else as value/max.
 pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
-    let img = image::ImageReader::open(path)
-        .map_err(|e| e.to_string())?
-        .with_guessed_format()
-        .map_err(|e| e.to_string())?
-        .decode()
-        .map_err(|e| e.to_string())?;
+    let reader = || {
+        image::ImageReader::open(path)
+            .map_err(|e| e.to_string())?
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    };
+    // Read the size from the header first: a small file can claim a huge image.
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    if w as u64 * h as u64 > MAX_TEXELS {
+        return Err(format!(
+            "the image is too large for memory ({w}x{h}; at most {MAX_TEXELS} texels)"
+        ));
+    }
+    let img = reader()?.decode().map_err(|e| e.to_string())?;
     let (width, height) = (img.width(), img.height());
     if width == 0 || height == 0 {
         return Err("the image is empty".into());

@@ -4,6 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::math::Rgb;
+use crate::sampling::jittered_offset;
 
 /// A light source.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,18 +60,9 @@ impl AreaLight {
     /// The point of cell `(k, l)` at position `xi` in `[0, 1)²` inside the cell
     /// (`(½, ½)` is the cell center).
     pub fn sample_point(&self, k: u32, l: u32, xi: Vec2) -> Vec3 {
-        let n = self.n as f32;
-        let a = (k as f32 + xi.x) / n - 0.5;
-        let b = (l as f32 + xi.y) / n - 0.5;
-        self.center + a * self.u + b * self.v
-    }
-
-    /// The cell-center sample points, in the order `(k, l)` k-major.
-    pub fn grid_points(&self) -> Vec<Vec3> {
-        (0..self.n)
-            .flat_map(|k| (0..self.n).map(move |l| (k, l)))
-            .map(|(k, l)| self.sample_point(k, l, Vec2::splat(0.5)))
-            .collect()
+        // The same stratification as jittered pixel samples, in the light's (u, v) frame.
+        let ab = jittered_offset(self.n, k, l, xi);
+        self.center + ab.x * self.u + ab.y * self.v
     }
 }
 
@@ -91,7 +83,11 @@ mod tests {
 
     #[test]
     fn grid_points_are_the_cell_centers() {
-        let pts = light(5).grid_points();
+        let l = light(5);
+        let pts: Vec<Vec3> = (0..5)
+            .flat_map(|k| (0..5).map(move |m| (k, m)))
+            .map(|(k, m)| l.sample_point(k, m, Vec2::splat(0.5)))
+            .collect();
         assert_eq!(pts.len(), 25);
         // Cell size 0.4: centers at -0.8, -0.4, 0, 0.4, 0.8 along each edge.
         assert!((pts[0] - Vec3::new(-0.8, 5.0, -0.8)).length() < 1e-6);

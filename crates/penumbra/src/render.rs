@@ -186,6 +186,10 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
                     Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
                 let mut shadow = 0;
                 for y in tile.y0..tile.y1 {
+                    // A row of a tile can take long at high sample counts: check per row.
+                    if cancelled() {
+                        return None;
+                    }
                     for x in tile.x0..tile.x1 {
                         let (c, s) = render_pixel(scene, offsets.as_deref(), x, y);
                         out.push(c);

@@ -41,14 +41,13 @@ impl Sampler {
 
 /// The integer square root of `samples` when it is a perfect square.
 pub fn perfect_square_root(samples: u32) -> Option<u32> {
-    let n = (samples as f64).sqrt().round() as u32;
-    (n >= 1 && n * n == samples).then_some(n)
+    let n = (samples as f64).sqrt().round() as u64;
+    (n >= 1 && n * n == samples as u64).then_some(n as u32)
 }
 
 /// Offset of grid cell `(k, l)` of `n × n` from the pixel center, in `[-½, ½)²`.
 pub fn grid_offset(n: u32, k: u32, l: u32) -> Vec2 {
-    let n = n as f32;
-    Vec2::new((k as f32 + 0.5) / n - 0.5, (l as f32 + 0.5) / n - 0.5)
+    jittered_offset(n, k, l, Vec2::splat(0.5))
 }
 
 /// The fixed offsets of a deterministic sampler (`center`, `grid`, `rgss`) for `n × n`
@@ -57,7 +56,7 @@ pub fn grid_offset(n: u32, k: u32, l: u32) -> Vec2 {
 pub fn fixed_offsets(sampler: Sampler, n: u32) -> Option<Vec<Vec2>> {
     let cells = (0..n).flat_map(|k| (0..n).map(move |l| grid_offset(n, k, l)));
     match sampler {
-        Sampler::Center => Some(vec![Vec2::ZERO]),
+        Sampler::Center => Some(vec![Vec2::ZERO; (n * n) as usize]),
         Sampler::Grid => Some(cells.collect()),
         Sampler::Rgss => {
             // θ = arctan(1/2): cos θ = 2/√5, sin θ = 1/√5.
@@ -226,5 +225,6 @@ mod tests {
         assert_eq!(perfect_square_root(16), Some(4));
         assert_eq!(perfect_square_root(15), None);
         assert_eq!(perfect_square_root(0), None);
+        assert_eq!(perfect_square_root(u32::MAX), None);
     }
 }

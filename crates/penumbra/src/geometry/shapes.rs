@@ -97,8 +97,9 @@ pub fn sphere(radius: f32) -> Mesh {
             let b = a + 1; // (u + du, v)
             let c = a + row + 1; // (u + du, v + dv)
             let d = a + row; // (u, v + dv)
-                             // Counter-clockwise from outside. At the bottom pole a and b coincide, at the top
-                             // c and d do, so each pole ring keeps only its one real triangle per quad.
+
+            // Counter-clockwise from outside. At the bottom pole a and b coincide, at the top
+            // c and d do, so each pole ring keeps only its one real triangle per quad.
             if j != 0 {
                 mesh.indices.push([a, b, c]);
             }

@@ -30,6 +30,8 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 pub const MAX_LIGHT_SAMPLES: u32 = 1024;
 /// Largest samples per pixel.
 pub const MAX_SPP: u32 = 1 << 16;
+/// Most triangles in a scene: about 100 bytes each with the BVH, so 2^27 need some 13 GiB.
+pub const MAX_TRIANGLES: usize = 1 << 27;
 const DEFAULT_LIGHT_SAMPLES: u32 = 5;
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -326,7 +328,7 @@ impl Builder<'_> {
         };
         let sampler = ov.sampler.or(file_sampler).unwrap_or(Sampler::Rgss);
         let samples_per_axis = if let Some(spp) = ov.spp {
-            let n = perfect_square_root(spp).filter(|_| spp <= MAX_SPP).ok_or_else(|| SceneError::Override {
+            let n = Some(spp).filter(|&s| s <= MAX_SPP).and_then(perfect_square_root).ok_or_else(|| SceneError::Override {
                 option: "--spp",
                 message: format!("samples per pixel must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {spp}"),
             })?;
@@ -621,15 +623,14 @@ impl Builder<'_> {
         };
         self.only_keys(path, &kind, &present, allowed)?;
 
-        let scale = o.scale.map_or(Vec3::ONE, rgb);
-        if scale.cmpeq(Vec3::ZERO).any() {
-            return Err(self.err(&path.key("scale"), "scale must not be zero"));
-        }
         let mut world = Transform::from_srt(
-            scale,
+            o.scale.map_or(Vec3::ONE, rgb),
             o.rotate.map_or(Vec3::ZERO, v3),
             o.translate.map_or(Vec3::ZERO, v3),
         );
+        if world.is_singular() {
+            return Err(self.err(&path.key("scale"), "scale must not be zero"));
+        }
         let mut materials = vec![match &o.material {
             Some(name) => self.material_index(&path.key("material"), name)?,
             None => 0,
@@ -716,9 +717,22 @@ impl Builder<'_> {
                 model.mesh
             }
         };
+        let first_new = geometry.positions.len();
         geometry.append(&mesh, &world, &materials);
-        if geometry.positions.len() > u32::MAX as usize / 2 {
-            return Err(self.err(path, "the scene has too many vertices for memory"));
+        if geometry.positions[first_new..]
+            .iter()
+            .any(|p| !p.is_finite())
+        {
+            return Err(self.err(
+                path,
+                "the transformed object has coordinates beyond the range of 32-bit floats",
+            ));
+        }
+        if geometry.len() > MAX_TRIANGLES {
+            return Err(self.err(
+                path,
+                format!("the scene has more than {MAX_TRIANGLES} triangles, too many for memory"),
+            ));
         }
         Ok(())
     }

@@ -34,18 +34,27 @@ use std::fmt;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
-/// A finite number.
+/// A finite number that fits in the renderer's 32-bit floats.
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
 pub struct Num(pub f64);
 
+/// `x` when the renderer can hold it: finite and within f32's range.
+fn finite<E: de::Error>(x: f64) -> Result<f64, E> {
+    if !x.is_finite() {
+        Err(E::custom(format!("{x} is not a finite number")))
+    } else if x.abs() > f32::MAX as f64 {
+        Err(E::custom(format!(
+            "{x} is out of range (at most {:e} in magnitude)",
+            f32::MAX
+        )))
+    } else {
+        Ok(x)
+    }
+}
+
 impl<'de> Deserialize<'de> for Num {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let x = f64::deserialize(d)?;
-        if x.is_finite() {
-            Ok(Num(x))
-        } else {
-            Err(de::Error::custom(format!("{x} is not a finite number")))
-        }
+        finite(f64::deserialize(d)?).map(Num)
     }
 }
 
@@ -85,17 +94,13 @@ impl<'de> Deserialize<'de> for ColorDesc {
                 f.write_str("a number or an array of three numbers")
             }
             fn visit_f64<E: de::Error>(self, x: f64) -> Result<ColorDesc, E> {
-                if x.is_finite() {
-                    Ok(ColorDesc([x; 3]))
-                } else {
-                    Err(E::custom(format!("{x} is not a finite number")))
-                }
+                finite(x).map(|x| ColorDesc([x; 3]))
             }
             fn visit_i64<E: de::Error>(self, x: i64) -> Result<ColorDesc, E> {
-                Ok(ColorDesc([x as f64; 3]))
+                self.visit_f64(x as f64)
             }
             fn visit_u64<E: de::Error>(self, x: u64) -> Result<ColorDesc, E> {
-                Ok(ColorDesc([x as f64; 3]))
+                self.visit_f64(x as f64)
             }
             fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ColorDesc, A::Error> {
                 let v = Vec3Desc::deserialize(de::value::SeqAccessDeserializer::new(seq))?;

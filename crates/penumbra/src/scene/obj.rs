@@ -51,6 +51,8 @@ pub(crate) struct ObjModel {
     pub materials: Vec<ObjMaterial>,
 }
 
+/// Largest OBJ file read: 4 GiB of text is some 100 million triangles, about what memory holds.
+const MAX_FILE_BYTES: u64 = 4 << 30;
 /// The most triangles a mesh may have: indices are 32-bit.
 const MAX_TRIANGLES: usize = (u32::MAX / 4) as usize;
 /// "No index": a corner without `vt` or `vn`, a face without `usemtl`.
@@ -92,6 +94,12 @@ struct Library {
 /// Loads `path`. Errors are messages that do not repeat the OBJ file's path (the caller adds
 /// it) but do name any other file involved.
 pub(crate) fn load_obj(path: &Path) -> Result<ObjModel, String> {
+    let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(format!(
+            "the file is too large for memory ({size} bytes; at most {MAX_FILE_BYTES})"
+        ));
+    }
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     let text = String::from_utf8_lossy(&bytes);
     let dir = path.parent().unwrap_or(Path::new(""));
