@@ -122,3 +122,29 @@ fn mesh_scenes() {
     check("showcase", None);
     check("cornell_obj", None);
 }
+
+#[test]
+fn json_and_toml_scenes_render_the_same_bits() {
+    // scenes/cornell.json is scenes/cornell.toml converted key for key (Python's tomllib and
+    // json); one schema, so the images must be identical, cameras in file order included.
+    for camera in [None, Some("high")] {
+        let toml = render_scene("cornell", camera);
+        let path = repo_root().join("scenes/cornell.json");
+        let file = SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let overrides = Overrides {
+            width: Some(SIZE),
+            height: Some(SIZE),
+            camera: camera.map(str::to_owned),
+            ..Overrides::default()
+        };
+        let scene = file.build(&overrides).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(scene.stats.cameras[0], camera.unwrap_or("front"));
+        let (film, _) = render(&scene, &RenderOptions::default()).unwrap();
+        let bytes: Vec<u8> = film
+            .pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(|c| encode_8bit(c, None)))
+            .collect();
+        assert!(bytes == toml.as_raw().as_slice(), "camera {camera:?}");
+    }
+}
