@@ -325,7 +325,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
 fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
     let file = SceneFile::load(path).map_err(invalid)?;
     let scene = file.build(&Overrides::default()).map_err(invalid)?;
-    let bounds = scene.bvh.bounds();
+    let bounds = scene.geometry.bounds();
     let (min, max) = if bounds.is_empty() {
         ([0.0; 3], [0.0; 3])
     } else {

@@ -1354,6 +1354,11 @@ fn check_prints_a_summary() {
     assert_eq!(field("materials"), "1");
     assert!(field("cameras").contains("zeta"));
     assert!(field("film").contains("16x12"));
+    // The exact bounds of the unit cube, not the BVH's conservatively padded box.
+    assert_eq!(
+        field("bounds"),
+        "[-0.5000, -0.5000, -0.5000] to [0.5000, 0.5000, 0.5000]"
+    );
     // Checking renders nothing.
     assert_eq!(std::fs::read_dir(&sb.dir).unwrap().count(), 1);
 }

@@ -141,7 +141,8 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Bounds of the whole scene (empty when there are no triangles).
+    /// A box around the whole scene, padded like every node (empty when there are no
+    /// triangles); `Geometry::bounds` gives the exact one.
     pub fn bounds(&self) -> Aabb {
         self.nodes.first().map_or(Aabb::EMPTY, BvhNode::bounds)
     }
