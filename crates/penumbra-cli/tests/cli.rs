@@ -1355,10 +1355,17 @@ fn check_prints_a_summary() {
     assert!(field("cameras").contains("zeta"));
     assert!(field("film").contains("16x12"));
     // The exact bounds of the unit cube, not the BVH's conservatively padded box.
+    let json = ok(run([
+        "check".as_ref(),
+        scene.as_os_str(),
+        "--json".as_ref(),
+    ]));
+    let summary: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
     assert_eq!(
-        field("bounds"),
-        "[-0.5000, -0.5000, -0.5000] to [0.5000, 0.5000, 0.5000]"
+        summary["bounds"]["min"],
+        serde_json::json!([-0.5, -0.5, -0.5])
     );
+    assert_eq!(summary["bounds"]["max"], serde_json::json!([0.5, 0.5, 0.5]));
     // Checking renders nothing.
     assert_eq!(std::fs::read_dir(&sb.dir).unwrap().count(), 1);
 }
