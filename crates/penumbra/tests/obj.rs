@@ -318,6 +318,33 @@ const THREE_COLORS: &str = "newmtl red\nKd 1 0 0\n\nnewmtl green\nKd 0 1 0\n\
                             newmtl blue\nKd 0 0 1\nnewmtl unused\nKd 1 1 0\n";
 
 #[test]
+fn an_obj_used_twice_is_read_once_and_shares_its_materials() {
+    let dir = TempDir::new("obj-twice");
+    dir.write("c.mtl", THREE_COLORS);
+    dir.write(
+        "u.obj",
+        format!(
+            "mtllib c.mtl\n{}usemtl green\nf 1 2 3\n",
+            v_lines(&PENTAGON)
+        ),
+    );
+    let object = |translate: &str| {
+        format!("[[objects]]\ntype = \"mesh\"\nfile = \"u.obj\"\ntranslate = {translate}\n")
+    };
+    let scene = build(dir.path(), &(object("[0, 0, 0]") + &object("[5, 0, 0]")));
+    assert_eq!(scene.stats.triangles, 2);
+    // One scene material for "green", shared by both copies.
+    assert_eq!(scene.stats.materials, 1);
+    let [a, b] = [0, 1].map(|i| scene.geometry.triangles[i].material);
+    assert_eq!(a, b);
+    assert_eq!(tri_diffuse(&scene, 1), Vec3::Y);
+    assert_eq!(
+        tri_positions(&scene, 1)[0],
+        tri_positions(&scene, 0)[0] + Vec3::X * 5.0
+    );
+}
+
+#[test]
 fn usemtl_switches_materials_per_face() {
     let dir = TempDir::new("usemtl");
     dir.write("c.mtl", THREE_COLORS);

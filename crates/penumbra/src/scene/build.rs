@@ -3,6 +3,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -10,11 +11,11 @@ use glam::{Vec2, Vec3};
 
 use super::desc::*;
 use super::error::{KeyPath, SceneError};
-use super::obj::load_obj;
+use super::obj::{load_obj, ObjMaterial};
 use super::{FilmSettings, Overrides, Scene, SceneFile, SceneStats};
 use crate::bvh::Bvh;
 use crate::camera::{CameraError, PinholeCamera};
-use crate::geometry::{self, Geometry};
+use crate::geometry::{self, Geometry, Mesh};
 use crate::image_io::{load_texture_image, OutputFormat};
 use crate::integrator::{LightModel, Settings, Shading};
 use crate::light::{AreaLight, Light, PointLight};
@@ -52,8 +53,18 @@ fn rgb(c: ColorDesc) -> Rgb {
 struct Builder<'a> {
     file: &'a SceneFile,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
+    meshes: HashMap<PathBuf, LoadedObj>,
     textures: Vec<Texture>,
     materials: Vec<Material>,
+}
+
+/// An OBJ file read once for every object that uses it.
+struct LoadedObj {
+    mesh: Rc<Mesh>,
+    mtl: Vec<ObjMaterial>,
+    /// Scene materials made from `mtl` (then the default for faces without one), made when
+    /// an object first uses the file without a `material` override.
+    scene_materials: Option<Vec<u32>>,
 }
 
 pub(super) fn build(file: &SceneFile, ov: &Overrides, threads: usize) -> Result<Scene> {
@@ -61,6 +72,7 @@ pub(super) fn build(file: &SceneFile, ov: &Overrides, threads: usize) -> Result<
     let mut b = Builder {
         file,
         images: HashMap::new(),
+        meshes: HashMap::new(),
         textures: Vec::new(),
         materials: Vec::new(),
     };
@@ -640,13 +652,17 @@ impl Builder<'_> {
             ObjectType::Triangle => {
                 let vertices = self.require(path, "vertices", o.vertices)?.map(v3);
                 let uvs = o.uvs.map_or([Vec2::ZERO, Vec2::X, Vec2::Y], |u| u.map(v2));
-                geometry::triangle(vertices, uvs, o.normals.map(|n| n.map(v3)))
+                Rc::new(geometry::triangle(
+                    vertices,
+                    uvs,
+                    o.normals.map(|n| n.map(v3)),
+                ))
             }
-            ObjectType::Quad => geometry::quad(
+            ObjectType::Quad => Rc::new(geometry::quad(
                 v3(self.require(path, "corner", o.corner)?),
                 v3(self.require(path, "u", o.u)?),
                 v3(self.require(path, "v", o.v)?),
-            ),
+            )),
             ObjectType::Cube | ObjectType::Sphere => {
                 let center = v3(self.require(path, "center", o.center)?);
                 world = Transform::from_srt(Vec3::ONE, Vec3::ZERO, center).then_after(world);
@@ -655,13 +671,13 @@ impl Builder<'_> {
                     if size.cmplt(Vec3::ZERO).any() {
                         return Err(self.err(&path.key("size"), "size must not be negative"));
                     }
-                    geometry::cube(size)
+                    Rc::new(geometry::cube(size))
                 } else {
                     let radius = self.require(path, "radius", o.radius)?.0;
                     if radius < 0.0 {
                         return Err(self.err(&path.key("radius"), "radius must not be negative"));
                     }
-                    geometry::sphere(radius as f32)
+                    Rc::new(geometry::sphere(radius as f32))
                 }
             }
             ObjectType::Mesh => {
@@ -669,52 +685,12 @@ impl Builder<'_> {
                     .file
                     .as_deref()
                     .ok_or_else(|| self.err(path, "missing key `file`"))?;
-                let obj_path = self.file.resolve(file);
-                let model = load_obj(&obj_path).map_err(|e| {
-                    self.err(
-                        &path.key("file"),
-                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
-                    )
-                })?;
-                if o.material.is_none() {
-                    // Each MTL material becomes a scene material; faces without one keep
-                    // the default (slot materials.len() → the fallback, material 0).
-                    materials.clear();
-                    for m in &model.materials {
-                        let texture = match &m.diffuse_texture {
-                            None => None,
-                            Some(t) => {
-                                let image = self.image(
-                                    &path.key("file"),
-                                    t.clone(),
-                                    true,
-                                    &format!("texture (map_Kd of material \"{}\")", m.name),
-                                )?;
-                                self.textures.push(Texture {
-                                    kind: TextureKind::Image(ImageTexture {
-                                        image,
-                                        filter: Filter::Bilinear,
-                                        wrap: Wrap::Repeat,
-                                    }),
-                                    uv_scale: Vec2::ONE,
-                                    uv_offset: Vec2::ZERO,
-                                });
-                                Some(self.textures.len() as u32 - 1)
-                            }
-                        };
-                        let diffuse = m.diffuse.map_or(Rgb::splat(0.8), Vec3::from);
-                        materials.push(self.materials.len() as u32);
-                        self.materials.push(Material {
-                            ambient: m.ambient.map_or(diffuse, Vec3::from),
-                            diffuse,
-                            specular: m.specular.map_or(Rgb::ZERO, Vec3::from),
-                            shininess: m.shininess.map_or(16.0, |s| s.max(0.0)),
-                            texture,
-                        });
-                    }
-                    materials.push(0);
+                let (mesh, mtl_materials) =
+                    self.obj(&path.key("file"), file, o.material.is_none())?;
+                if let Some(m) = mtl_materials {
+                    materials = m;
                 }
-                model.mesh
+                mesh
             }
         };
         let first_new = geometry.positions.len();
@@ -735,6 +711,80 @@ impl Builder<'_> {
             ));
         }
         Ok(())
+    }
+}
+
+impl Builder<'_> {
+    /// The mesh of the OBJ `file` (read once per scene) and, when `with_mtl`, the scene
+    /// materials of its MTL materials followed by the default (made once per file).
+    fn obj(
+        &mut self,
+        path: &KeyPath,
+        file: &str,
+        with_mtl: bool,
+    ) -> Result<(Rc<Mesh>, Option<Vec<u32>>)> {
+        let obj_path = self.file.resolve(file);
+        let key = std::fs::canonicalize(&obj_path).unwrap_or_else(|_| obj_path.clone());
+        let loaded = match self.meshes.get(&key) {
+            Some(loaded) => loaded,
+            None => {
+                let model = load_obj(&obj_path).map_err(|e| {
+                    self.err(
+                        path,
+                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
+                    )
+                })?;
+                let loaded = LoadedObj {
+                    mesh: Rc::new(model.mesh),
+                    mtl: model.materials,
+                    scene_materials: None,
+                };
+                self.meshes.entry(key.clone()).or_insert(loaded)
+            }
+        };
+        let mesh = loaded.mesh.clone();
+        if !with_mtl {
+            return Ok((mesh, None));
+        }
+        if let Some(ids) = &loaded.scene_materials {
+            return Ok((mesh, Some(ids.clone())));
+        }
+        let mtl = loaded.mtl.clone();
+        let mut ids = Vec::with_capacity(mtl.len() + 1);
+        for m in &mtl {
+            let texture = match &m.diffuse_texture {
+                None => None,
+                Some(t) => {
+                    let what = format!("texture (map_Kd of material \"{}\")", m.name);
+                    let image = self.image(path, t.clone(), true, &what)?;
+                    self.textures.push(Texture {
+                        kind: TextureKind::Image(ImageTexture {
+                            image,
+                            filter: Filter::Bilinear,
+                            wrap: Wrap::Repeat,
+                        }),
+                        uv_scale: Vec2::ONE,
+                        uv_offset: Vec2::ZERO,
+                    });
+                    Some(self.textures.len() as u32 - 1)
+                }
+            };
+            let diffuse = m.diffuse.map_or(Rgb::splat(0.8), Vec3::from);
+            ids.push(self.materials.len() as u32);
+            self.materials.push(Material {
+                ambient: m.ambient.map_or(diffuse, Vec3::from),
+                diffuse,
+                specular: m.specular.map_or(Rgb::ZERO, Vec3::from),
+                shininess: m.shininess.map_or(16.0, |s| s.max(0.0)),
+                texture,
+            });
+        }
+        // Faces without an MTL material use slot `mtl.len()`: the default material.
+        ids.push(0);
+        if let Some(loaded) = self.meshes.get_mut(&key) {
+            loaded.scene_materials = Some(ids.clone());
+        }
+        Ok((mesh, Some(ids)))
     }
 }
 
