@@ -71,7 +71,8 @@ pub fn shade(scene: &Scene, ray: &Ray, hit: &Hit, rng: &mut Rng) -> (Rgb, u64) {
     );
     let b0 = 1.0 - hit.b1 - hit.b2;
     let x = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
-    let mut n_geom = (p1 - p0).cross(p2 - p0).normalize();
+    // Zero only for a sliver whose cross product underflows: it then reflects only ambient.
+    let mut n_geom = (p1 - p0).cross(p2 - p0).normalize_or_zero();
     let mut n = if tri.smooth {
         let ns = b0 * geometry.normals[i0]
             + hit.b1 * geometry.normals[i1]
@@ -116,7 +117,8 @@ pub fn shade(scene: &Scene, ray: &Ray, hit: &Hit, rng: &mut Rng) -> (Rgb, u64) {
     // The BRDF term B_s for a unit direction `l` toward the light (zero below the surface).
     let brdf = |l: Vec3| -> Option<Rgb> {
         let cos = n.dot(l);
-        if cos <= 0.0 {
+        // NaN when the light sample sits exactly on the shaded point (l = 0/0): no light.
+        if cos.is_nan() || cos <= 0.0 {
             return None;
         }
         let spec = if ks == Vec3::ZERO {
@@ -195,7 +197,7 @@ pub fn shade(scene: &Scene, ray: &Ray, hit: &Hit, rng: &mut Rng) -> (Rgb, u64) {
                         let Some(b) = brdf(l) else { continue };
                         let e = if physical {
                             let cos_light = -n_light.dot(l);
-                            if cos_light <= 0.0 {
+                            if cos_light.is_nan() || cos_light <= 0.0 {
                                 continue;
                             }
                             weight * (cos_light / d2)

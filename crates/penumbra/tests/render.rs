@@ -2034,3 +2034,23 @@ fn output_files_encode_as_the_spec_says() {
         assert_eq!(img.get_pixel(x, y).0, *c, "exr pixel ({x}, {y})");
     }
 }
+
+#[test]
+fn a_light_sample_on_the_shaded_point_gives_no_nan() {
+    // SPEC §5 leaves light samples lying exactly on a surface implementation-defined; whatever
+    // the value, it must be a number, or EXR and PFM outputs would carry NaN.
+    // The center pixel's ray (9×9, center sampler) hits the floor exactly at the light.
+    let cam = Cam::new(rgb(0.0, 0.0, 2.0), DVec3::ZERO, 40.0, 9, 9);
+    let text = cam.toml()
+        + &render_section("ambient = 0.1")
+        + &point_light_toml(DVec3::ZERO, DVec3::ONE, 1.0)
+        + &floor_toml("");
+    let film = render_text(&text);
+    for (i, j) in cam.pixels() {
+        assert!(
+            film.get(i, j).is_finite(),
+            "pixel ({i}, {j}): {}",
+            film.get(i, j)
+        );
+    }
+}
