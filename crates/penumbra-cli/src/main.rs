@@ -279,20 +279,23 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let spp = scene.settings.samples_per_axis.pow(2);
     let mrays = stats.rays_per_second() / 1e6;
     if !args.quiet {
+        // "640x480", or "64x48 of 640x480" for a --pixelbounds region.
+        let size = if (film.width, film.height) == (scene.film.width, scene.film.height) {
+            format!("{}x{}", film.width, film.height)
+        } else {
+            format!(
+                "{}x{} of {}x{}",
+                film.width, film.height, scene.film.width, scene.film.height
+            )
+        };
         eprintln!(
-            "penumbra: {}x{} ({}x{} film), {} spp {}, {} light samples, {} triangles, load {:.3} s, BVH {:.3} s, render {:.3} s, {:.2} Mrays/s on {} threads -> {}",
-            film.width,
-            film.height,
-            scene.film.width,
-            scene.film.height,
-            spp,
+            "penumbra: {size}, {spp} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {mrays:.2} Mrays/s, {} threads -> {}",
             scene.settings.sampler.name(),
             light_samples(&scene),
             scene.stats.triangles,
             load_time.as_secs_f64(),
             scene.stats.bvh_build_time.as_secs_f64(),
             stats.time.as_secs_f64(),
-            mrays,
             stats.threads,
             out.display()
         );
