@@ -141,12 +141,6 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// A box around the whole scene, padded like every node (empty when there are no
-    /// triangles); `Geometry::bounds` gives the exact one.
-    pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, BvhNode::bounds)
-    }
-
     /// The closest hit with `t` in `(t_min, t_max)`, if any.
     pub fn intersect(&self, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<Hit> {
         if self.nodes.is_empty() {

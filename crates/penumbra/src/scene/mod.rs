@@ -49,10 +49,16 @@ impl SceneFormat {
 pub struct SceneFile {
     /// The description, as written.
     pub desc: SceneDesc,
-    /// The name used in messages (the path as given).
-    pub name: PathBuf,
     /// Folder that relative paths in the file are relative to.
     pub base_dir: PathBuf,
+    source: Source,
+}
+
+/// A scene file's text, its syntax and the name messages use for it: all an error needs to
+/// say where it is.
+#[derive(Clone, Debug)]
+struct Source {
+    name: PathBuf,
     text: String,
     format: SceneFormat,
 }
@@ -155,31 +161,50 @@ impl SceneFile {
         name: impl Into<PathBuf>,
         base_dir: impl Into<PathBuf>,
     ) -> Result<SceneFile, SceneError> {
-        let mut file = SceneFile {
-            desc: SceneDesc {
-                film: desc::FilmDesc {
-                    width: 0,
-                    height: 0,
-                    output: None,
-                    gamma: None,
-                },
-                camera: None,
-                cameras: Default::default(),
-                render: Default::default(),
-                materials: Default::default(),
-                textures: Default::default(),
-                lights: Vec::new(),
-                objects: Vec::new(),
-            },
+        let source = Source {
             name: name.into(),
-            base_dir: base_dir.into(),
             text: text.to_owned(),
             format,
         };
-        file.desc = file.parse()?;
-        Ok(file)
+        Ok(SceneFile {
+            desc: source.parse()?,
+            base_dir: base_dir.into(),
+            source,
+        })
     }
 
+    /// The name used in messages (the path as given).
+    pub fn name(&self) -> &Path {
+        &self.source.name
+    }
+
+    /// An error about the value at `path`, located in the file.
+    pub(crate) fn error(&self, path: &KeyPath, message: impl Into<String>) -> SceneError {
+        self.source.error(path, message)
+    }
+
+    /// Builds the scene as the file describes it, with `overrides` applied, using every core
+    /// for the BVH.
+    pub fn build(&self, overrides: &Overrides) -> Result<Scene, SceneError> {
+        build::build(self, overrides, 0)
+    }
+
+    /// Like [`SceneFile::build`], with `threads` workers for the BVH (0: all cores).
+    pub fn build_with_threads(
+        &self,
+        overrides: &Overrides,
+        threads: usize,
+    ) -> Result<Scene, SceneError> {
+        build::build(self, overrides, threads)
+    }
+
+    /// Resolves a path written in the scene file against its folder.
+    pub fn resolve(&self, path: &str) -> PathBuf {
+        self.base_dir.join(path)
+    }
+}
+
+impl Source {
     fn parse(&self) -> Result<SceneDesc, SceneError> {
         match self.format {
             SceneFormat::Toml => {
@@ -256,26 +281,6 @@ impl SceneFile {
     pub(crate) fn error(&self, path: &KeyPath, message: impl Into<String>) -> SceneError {
         let offset = locate::locate(&self.text, self.format, path);
         self.error_at_offset(offset, Some(path), &message.into())
-    }
-
-    /// Builds the scene as the file describes it, with `overrides` applied, using every core
-    /// for the BVH.
-    pub fn build(&self, overrides: &Overrides) -> Result<Scene, SceneError> {
-        build::build(self, overrides, 0)
-    }
-
-    /// Like [`SceneFile::build`], with `threads` workers for the BVH (0: all cores).
-    pub fn build_with_threads(
-        &self,
-        overrides: &Overrides,
-        threads: usize,
-    ) -> Result<Scene, SceneError> {
-        build::build(self, overrides, threads)
-    }
-
-    /// Resolves a path written in the scene file against its folder.
-    pub fn resolve(&self, path: &str) -> PathBuf {
-        self.base_dir.join(path)
     }
 }
 
