@@ -10,7 +10,7 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::bvh::{intersect_brute_force, Bvh};
+use penumbra::accel::{intersect_brute_force, Bvh};
 use penumbra::geometry::{self, Geometry};
 use penumbra::math::{Ray, Transform};
 use penumbra::{render, Overrides, RenderOptions, SceneFile};
@@ -21,10 +21,10 @@ fn spheres() -> Geometry {
     let ball = geometry::sphere(1.0);
     for x in [-1.2f32, 1.2] {
         let t = Transform::from_srt(Vec3::ONE, Vec3::ZERO, Vec3::new(x, 1.0, 0.0));
-        g.append(&ball, &t, &[0]);
+        g.append(&ball, &t, &[0], 0);
     }
     let floor = geometry::quad(Vec3::new(-5.0, 0.0, 5.0), Vec3::X * 10.0, Vec3::Z * -10.0);
-    g.append(&floor, &Transform::IDENTITY, &[0]);
+    g.append(&floor, &Transform::IDENTITY, &[0], 1);
     g
 }
 

@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::bvh::Hit;
+use crate::geometry::Hit;
 use crate::light::Light;
 use crate::math::{Ray, Rgb};
 use crate::sampling::{Rng, Sampler};

@@ -36,7 +36,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod bvh;
+pub mod accel;
 pub mod camera;
 pub mod film;
 pub mod geometry;

@@ -40,6 +40,8 @@ pub struct Triangle {
     pub vertices: [u32; 3],
     /// Index into the scene's material table.
     pub material: u32,
+    /// Index of the object (scene-file entry or mesh added to a world) it came from.
+    pub object: u32,
     /// True when the vertices carry shading normals to interpolate.
     pub smooth: bool,
 }
@@ -58,9 +60,9 @@ pub struct Geometry {
 }
 
 impl Geometry {
-    /// Appends `mesh` transformed to world space. Its material slot `k` becomes the scene
-    /// material `materials[k]` (slots past the end use the last entry).
-    pub fn append(&mut self, mesh: &Mesh, world: &Transform, materials: &[u32]) {
+    /// Appends `mesh` transformed to world space as object `object`. Its material slot `k`
+    /// becomes the scene material `materials[k]` (slots past the end use the last entry).
+    pub fn append(&mut self, mesh: &Mesh, world: &Transform, materials: &[u32], object: u32) {
         let base = self.positions.len() as u32;
         let smooth = !mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len();
         self.positions
@@ -84,6 +86,7 @@ impl Geometry {
             self.triangles.push(Triangle {
                 vertices: idx.map(|v| base + v),
                 material: materials.get(slot).copied().unwrap_or(fallback),
+                object,
                 smooth,
             });
         }

@@ -7,4 +7,4 @@ mod triangle;
 
 pub use mesh::{Geometry, Mesh, Triangle};
 pub use shapes::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
-pub use triangle::{intersect_triangle, TriangleHit};
+pub use triangle::{intersect_triangle, Hit, TriangleHit};

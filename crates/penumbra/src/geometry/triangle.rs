@@ -57,6 +57,20 @@ pub fn intersect_triangle(
     }
 }
 
+/// The closest hit of a ray: distance, barycentrics and the index of the triangle in
+/// [`Geometry::triangles`](super::Geometry::triangles).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Barycentric weight of the triangle's second vertex.
+    pub b1: f32,
+    /// Barycentric weight of the triangle's third vertex.
+    pub b2: f32,
+    /// Index of the triangle hit.
+    pub triangle: u32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,7 +13,7 @@ use super::desc::*;
 use super::error::{KeyPath, SceneError};
 use super::obj::{load_obj, ObjMaterial};
 use super::{FilmSettings, Overrides, Scene, SceneFile, SceneStats};
-use crate::bvh::Bvh;
+use crate::accel::Bvh;
 use crate::camera::{CameraError, PinholeCamera};
 use crate::geometry::{self, Geometry, Mesh};
 use crate::image_io::{load_texture_image, OutputFormat};
@@ -104,7 +104,7 @@ pub(super) fn build(file: &SceneFile, ov: &Overrides, threads: usize) -> Result<
 
     let mut geometry = Geometry::default();
     for (i, o) in desc.objects.iter().enumerate() {
-        b.object(&KeyPath::root("objects").index(i), o, &mut geometry)?;
+        b.object(&KeyPath::root("objects").index(i), o, i, &mut geometry)?;
     }
 
     let start = Instant::now();
@@ -612,7 +612,13 @@ impl Builder<'_> {
             })
     }
 
-    fn object(&mut self, path: &KeyPath, o: &ObjectDesc, geometry: &mut Geometry) -> Result<()> {
+    fn object(
+        &mut self,
+        path: &KeyPath,
+        o: &ObjectDesc,
+        index: usize,
+        geometry: &mut Geometry,
+    ) -> Result<()> {
         let present = [
             ("vertices", o.vertices.is_some()),
             ("uvs", o.uvs.is_some()),
@@ -694,7 +700,7 @@ impl Builder<'_> {
             }
         };
         let first_new = geometry.positions.len();
-        geometry.append(&mesh, &world, &materials);
+        geometry.append(&mesh, &world, &materials, index as u32);
         if geometry.positions[first_new..]
             .iter()
             .any(|p| !p.is_finite())

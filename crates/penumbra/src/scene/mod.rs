@@ -11,7 +11,7 @@ mod obj;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use crate::bvh::Bvh;
+use crate::accel::Bvh;
 use crate::camera::PinholeCamera;
 use crate::geometry::Geometry;
 use crate::integrator::Settings;

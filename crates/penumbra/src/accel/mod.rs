@@ -8,7 +8,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::geometry::{intersect_triangle, Geometry};
+use crate::geometry::{intersect_triangle, Geometry, Hit};
 use crate::math::{Aabb, Ray};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at
@@ -42,20 +42,6 @@ struct TriAccel {
     v0: Vec3,
     e1: Vec3,
     e2: Vec3,
-}
-
-/// The closest hit of a ray: distance, barycentrics and the index of the triangle in
-/// [`Geometry::triangles`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Ray parameter of the hit.
-    pub t: f32,
-    /// Barycentric weight of the triangle's second vertex.
-    pub b1: f32,
-    /// Barycentric weight of the triangle's third vertex.
-    pub b2: f32,
-    /// Index of the triangle hit.
-    pub triangle: u32,
 }
 
 /// The BVH: nodes, triangles in leaf order, and the permutation back to scene triangle indices.
@@ -252,6 +238,27 @@ impl Bvh {
             }
         }
         false
+    }
+
+    /// The closest hit of every ray of `rays` with `t` in `(t_min, t_max)`, written to `hits`
+    /// (which must be as long as `rays`). Each result equals [`Bvh::intersect`]'s.
+    pub fn intersect_batch(&self, rays: &[Ray], t_min: f32, t_max: f32, hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.intersect(ray, t_min, t_max);
+        }
+    }
+
+    /// Occlusion of the segments from `origin` to each point of `ends`: `occluded[i]` is true
+    /// when a triangle meets `origin + t·(ends[i] − origin)` for some `t` in `(0, t_max)`, as
+    /// [`Bvh::occluded`] on that ray would say. The segments share their origin, like the N×N
+    /// samples of an area light seen from one shading point. `occluded` must be as long as
+    /// `ends`.
+    pub fn occluded_from(&self, origin: Vec3, ends: &[Vec3], t_max: f32, occluded: &mut [bool]) {
+        assert_eq!(ends.len(), occluded.len(), "one mask slot per segment");
+        for (&end, o) in ends.iter().zip(occluded) {
+            *o = self.occluded(&Ray::new(origin, end - origin), 0.0, t_max);
+        }
     }
 
     /// Checks the structure's invariants against the geometry it was built from: every
@@ -558,7 +565,7 @@ mod tests {
                 indices: vec![[0, 1, 2]],
                 ..Mesh::default()
             };
-            g.append(&mesh, &Transform::IDENTITY, &[0]);
+            g.append(&mesh, &Transform::IDENTITY, &[0], 0);
         }
         g
     }
