@@ -12,8 +12,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::light::Light;
 use penumbra::{
-    render, write_image, OutputFormat, Overrides, PixelBounds, RenderError, RenderOptions, Sampler,
-    Scene, SceneFile,
+    render, write_image, OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings,
+    Sampler, Scene, SceneFile, SettingsError, View, World,
 };
 use serde_json::json;
 
@@ -145,20 +145,52 @@ fn main() -> ExitCode {
     }
 }
 
-fn overrides(args: &RenderArgs) -> Overrides {
-    Overrides {
-        width: args.width,
-        height: args.height,
-        sampler: args.sampler.map(|s| match s {
+/// The scene file's settings with the command line's flags applied.
+fn settings(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> RenderSettings {
+    let mut s = scene.settings.clone();
+    if let Some(w) = args.width {
+        s.width = w;
+    }
+    if let Some(h) = args.height {
+        s.height = h;
+    }
+    if let Some(sampler) = args.sampler {
+        s.sampler = match sampler {
             SamplerArg::Center => Sampler::Center,
             SamplerArg::Grid => Sampler::Grid,
             SamplerArg::Rgss => Sampler::Rgss,
             SamplerArg::Jittered => Sampler::Jittered,
-        }),
-        spp: args.spp,
-        light_samples: args.light_samples,
-        seed: args.seed,
-        camera: args.camera.clone(),
+        };
+        // A sampler without --spp takes its own default count: 1 for center, else the
+        // file's `samples`, else 4.
+        s.spp = match (s.sampler, file.desc.render.samples) {
+            (Sampler::Center, _) => 1,
+            (_, Some(n)) => u32::try_from(n).unwrap_or(u32::MAX),
+            (_, None) => 4,
+        };
+    }
+    if let Some(spp) = args.spp {
+        s.spp = spp;
+    }
+    if args.light_samples.is_some() {
+        s.light_samples = args.light_samples;
+    }
+    if let Some(seed) = args.seed {
+        s.seed = seed;
+    }
+    if let Some(name) = &args.camera {
+        s.view = View::Named(name.clone());
+    }
+    s
+}
+
+/// The flag a settings error is about, as the user typed it.
+fn flag_of(e: &SettingsError) -> &'static str {
+    match e {
+        SettingsError::Spp(_) | SettingsError::CenterSpp => "--spp",
+        SettingsError::LightSamples(_) => "--light-samples",
+        SettingsError::EmptyFilm { .. } | SettingsError::FilmTooLarge { .. } => "--width/--height",
+        SettingsError::UnknownCamera { .. } | SettingsError::NoCamera => "--camera",
     }
 }
 
@@ -167,7 +199,7 @@ fn output_path(args: &RenderArgs, scene: &Scene) -> PathBuf {
     if let Some(o) = &args.output {
         return o.clone();
     }
-    if let Some(o) = &scene.film.output {
+    if let Some(o) = &scene.output {
         return o.clone();
     }
     let stem = args.scene.file_stem().unwrap_or_default();
@@ -175,12 +207,14 @@ fn output_path(args: &RenderArgs, scene: &Scene) -> PathBuf {
         .with_file_name(Path::new(stem).with_extension("png"))
 }
 
-fn light_samples(scene: &Scene) -> u64 {
-    scene
-        .lights
+/// Light samples per shading point: N² for each area light (N from `n`, else the light's
+/// own), 1 for each point light.
+fn light_samples(world: &World, n: Option<u32>) -> u64 {
+    world
+        .lights()
         .iter()
         .map(|l| match l {
-            Light::Area(a) => a.sample_count() as u64,
+            Light::Area(a) => n.unwrap_or(a.n) as u64 * n.unwrap_or(a.n) as u64,
             Light::Point(_) => 1,
         })
         .sum()
@@ -210,9 +244,12 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     };
     let load_start = Instant::now();
     let file = SceneFile::load(&args.scene).map_err(invalid)?;
-    let scene = file
-        .build_with_threads(&overrides(&args), args.threads)
-        .map_err(invalid)?;
+    let scene = file.build(args.threads).map_err(invalid)?;
+    let settings = settings(&args, &file, &scene);
+    // Settings from flags are checked before anything is written or rendered.
+    settings
+        .check(&scene.world)
+        .map_err(|e| invalid(format!("{}: {e}", flag_of(&e))))?;
     let load_time = load_start.elapsed();
     if cancel.load(Ordering::SeqCst) {
         return Err(interrupted());
@@ -259,7 +296,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         progress: Some(&progress),
     };
     rendering.store(true, Ordering::SeqCst);
-    let result = render(&scene, &options);
+    let result = render(&scene.world, &settings, &options);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
@@ -269,32 +306,34 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         Err(e @ RenderError::BadRegion { .. }) => {
             return Err(invalid(format!("--pixelbounds: {e}")))
         }
+        Err(RenderError::Settings(e)) => return Err(invalid(format!("{}: {e}", flag_of(&e)))),
         Err(e) => return Err(runtime(e)),
     };
     if cancel.load(Ordering::SeqCst) {
         return Err(interrupted());
     }
-    write_image(&film, &out, scene.film.gamma).map_err(runtime)?;
+    write_image(&film, &out, scene.gamma).map_err(runtime)?;
 
-    let spp = scene.settings.samples_per_axis.pow(2);
+    let spp = settings.spp;
+    let world_stats = scene.world.stats();
     let mrays = stats.rays_per_second() / 1e6;
     if !args.quiet {
         // "640x480", or "64x48 of 640x480" for a --pixelbounds region.
-        let size = if (film.width, film.height) == (scene.film.width, scene.film.height) {
+        let size = if (film.width, film.height) == (settings.width, settings.height) {
             format!("{}x{}", film.width, film.height)
         } else {
             format!(
                 "{}x{} of {}x{}",
-                film.width, film.height, scene.film.width, scene.film.height
+                film.width, film.height, settings.width, settings.height
             )
         };
         eprintln!(
             "penumbra: {size}, {spp} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {mrays:.2} Mrays/s, {} threads -> {}",
-            scene.settings.sampler.name(),
-            light_samples(&scene),
-            scene.stats.triangles,
+            settings.sampler.name(),
+            light_samples(&scene.world, settings.light_samples),
+            world_stats.triangles,
             load_time.as_secs_f64(),
-            scene.stats.bvh_build_time.as_secs_f64(),
+            world_stats.bvh_build_time.as_secs_f64(),
             stats.time.as_secs_f64(),
             stats.threads,
             out.display()
@@ -306,14 +345,14 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             "output": out.display().to_string(),
             "width": film.width,
             "height": film.height,
-            "film_width": scene.film.width,
-            "film_height": scene.film.height,
+            "film_width": settings.width,
+            "film_height": settings.height,
             "spp": spp,
-            "sampler": scene.settings.sampler.name(),
-            "light_samples": light_samples(&scene),
-            "triangles": scene.stats.triangles,
+            "sampler": settings.sampler.name(),
+            "light_samples": light_samples(&scene.world, settings.light_samples),
+            "triangles": world_stats.triangles,
             "load_seconds": load_time.as_secs_f64(),
-            "bvh_build_seconds": scene.stats.bvh_build_time.as_secs_f64(),
+            "bvh_build_seconds": world_stats.bvh_build_time.as_secs_f64(),
             "render_seconds": stats.time.as_secs_f64(),
             "camera_rays": stats.camera_rays,
             "shadow_rays": stats.shadow_rays,
@@ -327,27 +366,30 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
 
 fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
     let file = SceneFile::load(path).map_err(invalid)?;
-    let scene = file.build(&Overrides::default()).map_err(invalid)?;
-    let bounds = scene.geometry.bounds();
+    let scene = file.build(0).map_err(invalid)?;
+    let world = &scene.world;
+    let bounds = world.bounds();
     let (min, max) = if bounds.is_empty() {
         ([0.0; 3], [0.0; 3])
     } else {
         (bounds.min.to_array(), bounds.max.to_array())
     };
-    let s = &scene.stats;
+    let s = world.stats();
+    let settings = &scene.settings;
+    let cameras: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
     if json {
         let summary = json!({
             "scene": path.display().to_string(),
-            "width": scene.film.width,
-            "height": scene.film.height,
-            "spp": scene.settings.samples_per_axis.pow(2),
-            "sampler": scene.settings.sampler.name(),
+            "width": settings.width,
+            "height": settings.height,
+            "spp": settings.spp,
+            "sampler": settings.sampler.name(),
             "triangles": s.triangles,
             "lights": s.lights,
-            "light_samples": light_samples(&scene),
+            "light_samples": light_samples(world, None),
             "materials": s.materials,
             "textures": s.textures,
-            "cameras": s.cameras,
+            "cameras": cameras,
             "bounds": { "min": min, "max": max },
         });
         println!("{summary}");
@@ -355,20 +397,20 @@ fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
         println!("{}: ok", path.display());
         println!(
             "  film       {}x{}, {} spp {}",
-            scene.film.width,
-            scene.film.height,
-            scene.settings.samples_per_axis.pow(2),
-            scene.settings.sampler.name()
+            settings.width,
+            settings.height,
+            settings.spp,
+            settings.sampler.name()
         );
         println!("  triangles  {}", s.triangles);
         println!(
             "  lights     {} ({} light samples per shading point)",
             s.lights,
-            light_samples(&scene)
+            light_samples(world, None)
         );
         println!("  materials  {}", s.materials);
         println!("  textures   {}", s.textures);
-        println!("  cameras    {}", s.cameras.join(", "));
+        println!("  cameras    {}", cameras.join(", "));
         println!(
             "  bounds     [{:.4}, {:.4}, {:.4}] to [{:.4}, {:.4}, {:.4}]",
             min[0], min[1], min[2], max[0], max[1], max[2]

@@ -13,7 +13,7 @@ use glam::Vec3;
 use penumbra::accel::{intersect_brute_force, Bvh};
 use penumbra::geometry::{self, Geometry};
 use penumbra::math::{Ray, Transform};
-use penumbra::{render, Overrides, RenderOptions, SceneFile};
+use penumbra::{render, RenderOptions, SceneFile};
 
 /// Two tessellated spheres and a floor: 18,050 triangles.
 fn spheres() -> Geometry {
@@ -68,12 +68,9 @@ fn bench_intersect(c: &mut Criterion) {
 fn bench_render(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
     let file = SceneFile::load(path).expect("scenes/cornell.toml");
-    let overrides = Overrides {
-        width: Some(128),
-        height: Some(128),
-        ..Overrides::default()
-    };
-    let scene = file.build(&overrides).unwrap();
+    let scene = file.build(0).unwrap();
+    let mut settings = scene.settings.clone();
+    (settings.width, settings.height) = (128, 128);
     let mut group = c.benchmark_group("render_cornell_128x128_rgss4_light25");
     group.sample_size(10);
     for threads in [1, 2] {
@@ -82,7 +79,7 @@ fn bench_render(c: &mut Criterion) {
             ..RenderOptions::default()
         };
         group.bench_function(format!("{threads}_threads"), |b| {
-            b.iter(|| render(black_box(&scene), &options).unwrap())
+            b.iter(|| render(black_box(&scene.world), &settings, &options).unwrap())
         });
     }
     group.finish();

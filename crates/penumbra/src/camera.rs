@@ -1,10 +1,96 @@
-//! The pinhole camera of SPEC §3: a film point becomes a ray from the eye.
+//! The pinhole camera of SPEC §3: a [`Camera`] is a pose and a field of view; paired with a
+//! film size it becomes a [`PinholeCamera`] that turns film points into rays from the eye.
 
 use glam::Vec3;
 
 use crate::math::Ray;
 
-/// A pinhole camera for a film of `width × height` pixels.
+/// Where a pinhole camera stands and what it sees: a checked pose and vertical field of view,
+/// independent of any film. A [`World`](crate::World) keeps its cameras in this form; a render
+/// pairs one with a film size ([`PinholeCamera::new`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    position: Vec3,
+    look_at: Vec3,
+    up: Vec3,
+    fov_y_deg: f32,
+}
+
+/// Why a camera cannot be made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// `look_at` equals `position`, or the view direction is parallel to `up`.
+    Degenerate,
+    /// The field of view is not inside (0, 180) degrees.
+    FovOutOfRange,
+}
+
+impl std::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CameraError::Degenerate => {
+                "degenerate camera: look_at equals position or the view direction is parallel to up"
+            }
+            CameraError::FovOutOfRange => "fov must be between 0 and 180 degrees",
+        })
+    }
+}
+
+impl std::error::Error for CameraError {}
+
+/// The camera's orthonormal frame: forward, right, up.
+fn frame(position: Vec3, look_at: Vec3, up: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
+    let forward = (look_at - position).normalize_or_zero();
+    let right = forward.cross(up).normalize_or_zero();
+    if forward == Vec3::ZERO || right == Vec3::ZERO || !right.is_finite() {
+        return None;
+    }
+    Some((forward, right, right.cross(forward)))
+}
+
+impl Camera {
+    /// A camera at `position` looking at `look_at`, with `up` giving the vertical and
+    /// `fov_y_deg` the vertical field of view in degrees, inside (0, 180).
+    pub fn new(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        fov_y_deg: f32,
+    ) -> Result<Self, CameraError> {
+        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+            return Err(CameraError::FovOutOfRange);
+        }
+        frame(position, look_at, up).ok_or(CameraError::Degenerate)?;
+        Ok(Self {
+            position,
+            look_at,
+            up,
+            fov_y_deg,
+        })
+    }
+
+    /// The eye position.
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// The point seen at the film's center.
+    pub fn look_at(&self) -> Vec3 {
+        self.look_at
+    }
+
+    /// The up direction as given (not orthogonalized).
+    pub fn up(&self) -> Vec3 {
+        self.up
+    }
+
+    /// The vertical field of view in degrees.
+    pub fn fov_y_deg(&self) -> f32 {
+        self.fov_y_deg
+    }
+}
+
+/// A [`Camera`] projected onto a film of `width × height` pixels: turns film points into rays.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PinholeCamera {
     eye: Vec3,
@@ -18,49 +104,25 @@ pub struct PinholeCamera {
     height: f32,
 }
 
-/// Why a camera cannot be built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CameraError {
-    /// `look_at` equals `position`, or the view direction is parallel to `up`.
-    Degenerate,
-    /// The field of view is not inside (0, 180) degrees.
-    FovOutOfRange,
-    /// Width or height is below one pixel.
-    EmptyFilm,
-}
-
 impl PinholeCamera {
-    /// A camera at `eye` looking at `look_at`, with `up` giving the vertical and `fov_y_deg`
-    /// the vertical field of view, for a film of `width × height` pixels.
-    pub fn new(
-        eye: Vec3,
-        look_at: Vec3,
-        up: Vec3,
-        fov_y_deg: f32,
-        width: u32,
-        height: u32,
-    ) -> Result<Self, CameraError> {
-        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-            return Err(CameraError::FovOutOfRange);
-        }
-        if width < 1 || height < 1 {
-            return Err(CameraError::EmptyFilm);
-        }
-        let forward = (look_at - eye).normalize_or_zero();
-        let right = forward.cross(up).normalize_or_zero();
-        if forward == Vec3::ZERO || right == Vec3::ZERO || !right.is_finite() {
-            return Err(CameraError::Degenerate);
-        }
-        Ok(Self {
-            eye,
+    /// `camera` on a film of `width × height` pixels (both at least 1).
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        // `Camera::new` checked the frame, so it exists.
+        let (forward, right, up) = frame(camera.position, camera.look_at, camera.up).unwrap_or((
+            Vec3::NEG_Z,
+            Vec3::X,
+            Vec3::Y,
+        ));
+        Self {
+            eye: camera.position,
             forward,
             right,
-            up: right.cross(forward),
-            half_height: (0.5 * fov_y_deg.to_radians()).tan(),
+            up,
+            half_height: (0.5 * camera.fov_y_deg.to_radians()).tan(),
             aspect: width as f32 / height as f32,
             width: width as f32,
             height: height as f32,
-        })
+        }
     }
 
     /// The ray through film point `(x, y)`: x in `[0, width)` from the left edge, y in
@@ -78,7 +140,8 @@ mod tests {
     use super::*;
 
     fn cam(w: u32, h: u32) -> PinholeCamera {
-        PinholeCamera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0, w, h).unwrap()
+        let c = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0).unwrap();
+        PinholeCamera::new(&c, w, h)
     }
 
     #[test]
@@ -104,8 +167,7 @@ mod tests {
 
     #[test]
     fn rejects_bad_cameras() {
-        let new =
-            |at: Vec3, up: Vec3, fov: f32| PinholeCamera::new(Vec3::ZERO, at, up, fov, 10, 10);
+        let new = |at: Vec3, up: Vec3, fov: f32| Camera::new(Vec3::ZERO, at, up, fov);
         assert_eq!(new(Vec3::Y, Vec3::Y, 45.0), Err(CameraError::Degenerate));
         assert_eq!(new(Vec3::ZERO, Vec3::Y, 45.0), Err(CameraError::Degenerate));
         assert_eq!(new(Vec3::Z, Vec3::Y, 0.0), Err(CameraError::FovOutOfRange));
@@ -113,6 +175,5 @@ mod tests {
             new(Vec3::Z, Vec3::Y, 180.0),
             Err(CameraError::FovOutOfRange)
         );
-        assert!(PinholeCamera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 45.0, 0, 10).is_err());
     }
 }

@@ -1,11 +1,14 @@
 //! penumbra: a fast, exact CPU ray tracer for direct lighting, soft shadows and textures.
 //!
 //! Data flows one way: a scene file is parsed into a [`SceneFile`] (its [`SceneDesc`] mirrors
-//! the file), built into a [`Scene`] (world-space triangles, BVH, materials, lights, camera),
-//! rendered into a [`Film`] of linear RGB, and written with [`write_image`].
+//! the file) and built into a [`Scene`]: a shared [`World`] (geometry with its BVH,
+//! materials, textures, lights, every camera by name) and the file's default
+//! [`RenderSettings`]. [`render`] takes the world and settings per call, so one world renders
+//! any camera, size, sampler or seed without a rebuild, into a [`Film`] of linear RGB that
+//! [`write_image`] writes. A world can also be made from data with a [`WorldBuilder`].
 //!
 //! ```
-//! use penumbra::{render, Overrides, RenderOptions, SceneFile, SceneFormat};
+//! use penumbra::{render, RenderOptions, RenderSettings, SceneFile, SceneFormat};
 //!
 //! let file = SceneFile::from_str(r#"
 //!     [film]
@@ -26,10 +29,15 @@
 //!     u = [2, 0, 0]
 //!     v = [0, 2, 0]
 //! "#, SceneFormat::Toml, "doc.toml", ".")?;
-//! let scene = file.build(&Overrides::default())?;
-//! let (film, _stats) = render(&scene, &RenderOptions::default())?;
+//! let scene = file.build(0)?;
+//! let (film, _stats) = render(&scene.world, &scene.settings, &RenderOptions::default())?;
 //! // Lit head-on, the default grey diffuse (0.8) reflects about 0.8.
 //! assert!((film.get(4, 4).x - 0.8).abs() < 0.01);
+//!
+//! // Another size and sampler from the same world: nothing is rebuilt.
+//! let quick = RenderSettings { width: 4, height: 4, spp: 1, ..scene.settings.clone() };
+//! let (small, _) = render(&scene.world, &quick, &RenderOptions::default())?;
+//! assert_eq!((small.width, small.height), (4, 4));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -41,17 +49,26 @@ pub mod camera;
 pub mod film;
 pub mod geometry;
 pub mod image_io;
-pub mod integrator;
+mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
-pub mod render;
+mod pool;
+mod render;
 pub mod sampling;
 pub mod scene;
 pub mod texture;
+mod world;
 
+pub use camera::{Camera, CameraError};
 pub use film::Film;
 pub use image_io::{write_image, ImageError, OutputFormat};
-pub use render::{render, PixelBounds, RenderError, RenderOptions, RenderStats};
+pub use integrator::{LightModel, Shading};
+pub use material::Material;
+pub use render::{
+    render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
+    View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
+};
 pub use sampling::Sampler;
-pub use scene::{Overrides, Scene, SceneDesc, SceneError, SceneFile, SceneFormat};
+pub use scene::{Scene, SceneDesc, SceneError, SceneFile, SceneFormat};
+pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};

@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::math::Rgb;
-use crate::sampling::jittered_offset;
+use crate::sampling::{jittered_offset, Rng};
 
 /// A light source.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,6 +64,22 @@ impl AreaLight {
         let ab = jittered_offset(self.n, k, l, xi);
         self.center + ab.x * self.u + ab.y * self.v
     }
+
+    /// Appends all N² sample points in cell order (cell `(k, l)` at index `k·N + l`): the cell
+    /// centers, or for a jittered light one uniform point per cell, drawn from `rng` in that
+    /// order.
+    pub fn sample_points(&self, rng: &mut Rng, out: &mut Vec<Vec3>) {
+        for k in 0..self.n {
+            for l in 0..self.n {
+                let xi = if self.jitter {
+                    rng.uniform2()
+                } else {
+                    Vec2::splat(0.5)
+                };
+                out.push(self.sample_point(k, l, xi));
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -95,6 +111,25 @@ mod tests {
         assert!((pts[24] - Vec3::new(0.8, 5.0, 0.8)).length() < 1e-6);
         let mean = pts.iter().sum::<Vec3>() / 25.0;
         assert!((mean - Vec3::new(0.0, 5.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn batch_of_points_is_the_grid_in_cell_order() {
+        let mut l = light(3);
+        let mut rng = Rng::new(0, &[]);
+        let mut pts = Vec::new();
+        l.sample_points(&mut rng, &mut pts);
+        assert_eq!(pts.len(), 9);
+        assert_eq!(pts[5], l.sample_point(1, 2, Vec2::splat(0.5)));
+        // Jittered: the same draws, in the same order, as point by point.
+        l.jitter = true;
+        pts.clear();
+        l.sample_points(&mut Rng::new(4, &[1]), &mut pts);
+        let mut rng = Rng::new(4, &[1]);
+        for (i, p) in pts.iter().enumerate() {
+            let (k, m) = (i as u32 / 3, i as u32 % 3);
+            assert_eq!(*p, l.sample_point(k, m, rng.uniform2()));
+        }
     }
 
     #[test]

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use image::RgbImage;
 use penumbra::image_io::encode_8bit;
-use penumbra::{render, Overrides, RenderOptions, SceneFile};
+use penumbra::{render, RenderOptions, Scene, SceneFile, View};
 
 const SIZE: u32 = 96;
 
@@ -37,28 +37,35 @@ fn render_scene(name: &str, camera: Option<&str>) -> RgbImage {
 
 fn render_file(path: &Path, camera: Option<&str>) -> RgbImage {
     let file = SceneFile::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let overrides = Overrides {
-        width: Some(SIZE),
-        height: Some(SIZE),
-        camera: camera.map(str::to_owned),
-        ..Overrides::default()
-    };
-    let scene = file.build(&overrides).unwrap_or_else(|e| panic!("{e}"));
-    let (film, _) = render(&scene, &RenderOptions::default()).unwrap();
+    let scene = file.build(0).unwrap_or_else(|e| panic!("{e}"));
+    render_view(&scene, camera)
+}
+
+/// One view of a built scene at SIZE², through `camera` (default: the first).
+fn render_view(scene: &Scene, camera: Option<&str>) -> RgbImage {
+    let mut settings = scene.settings.clone();
+    (settings.width, settings.height) = (SIZE, SIZE);
+    if let Some(c) = camera {
+        settings.view = View::Named(c.to_owned());
+    }
+    let (film, _) = render(&scene.world, &settings, &RenderOptions::default()).unwrap();
     let bytes = film
         .pixels
         .iter()
-        .flat_map(|p| p.to_array().map(|c| encode_8bit(c, scene.film.gamma)))
+        .flat_map(|p| p.to_array().map(|c| encode_8bit(c, scene.gamma)))
         .collect();
     RgbImage::from_raw(film.width, film.height, bytes).unwrap()
 }
 
 fn check(name: &str, camera: Option<&str>) {
+    check_image(name, camera, render_scene(name, camera));
+}
+
+fn check_image(name: &str, camera: Option<&str>, actual: RgbImage) {
     let id = match camera {
         Some(c) => format!("{name}_{c}"),
         None => name.to_owned(),
     };
-    let actual = render_scene(name, camera);
     let reference_path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/golden")
         .join(format!("{id}.png"));
@@ -101,10 +108,26 @@ fn check(name: &str, camera: Option<&str>) {
 }
 
 #[test]
-fn cornell_white_light_three_cameras() {
+fn cornell_white_light_three_cameras_from_one_world() {
+    // One load and one BVH build; each camera is a per-call setting of the same world.
+    let path = repo_root().join("scenes/cornell.toml");
+    let scene = SceneFile::load(&path).unwrap().build(0).unwrap();
+    let names: Vec<&str> = scene
+        .world
+        .cameras()
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect();
+    assert_eq!(names, ["front", "left", "high"]);
+    let mut images = Vec::new();
     for camera in ["front", "left", "high"] {
-        check("cornell", Some(camera));
+        let image = render_view(&scene, Some(camera));
+        check_image("cornell", Some(camera), image.clone());
+        images.push(image);
     }
+    assert!(images[0] != images[1] && images[1] != images[2]);
+    // The default view is the first camera.
+    assert!(render_view(&scene, None) == images[0]);
 }
 
 #[test]

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Vec2, Vec3};
 use penumbra::texture::TextureKind;
-use penumbra::{Overrides, Scene, SceneError, SceneFile, SceneFormat};
+use penumbra::{Scene, SceneError, SceneFile, SceneFormat};
 
 /// A folder of its own under the system's temporary folder, removed when dropped.
 struct TempDir(PathBuf);
@@ -65,7 +65,7 @@ fn scene_text(body: &str) -> String {
 fn try_build(dir: &Path, body: &str) -> Result<Scene, SceneError> {
     let text = scene_text(body);
     let file = SceneFile::from_str(&text, SceneFormat::Toml, "x.toml", dir)?;
-    file.build(&Overrides::default())
+    file.build(0)
 }
 
 fn build(dir: &Path, body: &str) -> Scene {
@@ -91,23 +91,23 @@ fn mesh_error(dir: &Path, file: &str) -> String {
 }
 
 fn tri_positions(scene: &Scene, i: usize) -> [Vec3; 3] {
-    scene.geometry.corners(i)
+    scene.world.geometry().corners(i)
 }
 
 fn tri_uvs(scene: &Scene, i: usize) -> [Vec2; 3] {
-    scene.geometry.triangles[i]
+    scene.world.geometry().triangles[i]
         .vertices
-        .map(|v| scene.geometry.uvs[v as usize])
+        .map(|v| scene.world.geometry().uvs[v as usize])
 }
 
 fn tri_normals(scene: &Scene, i: usize) -> [Vec3; 3] {
-    scene.geometry.triangles[i]
+    scene.world.geometry().triangles[i]
         .vertices
-        .map(|v| scene.geometry.normals[v as usize])
+        .map(|v| scene.world.geometry().normals[v as usize])
 }
 
 fn tri_diffuse(scene: &Scene, i: usize) -> Vec3 {
-    scene.materials[scene.geometry.triangles[i].material as usize].diffuse
+    scene.world.materials()[scene.world.geometry().triangles[i].material as usize].diffuse
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {
@@ -139,13 +139,13 @@ fn triangle() {
     let dir = TempDir::new("triangle");
     dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let scene = mesh(dir.path(), "t.obj");
-    assert_eq!(scene.stats.triangles, 1);
+    assert_eq!(scene.world.stats().triangles, 1);
     assert_eq!(
         tri_positions(&scene, 0),
         [Vec3::ZERO, Vec3::X, Vec3::Y],
         "corners in file order"
     );
-    let t = scene.geometry.triangles[0];
+    let t = scene.world.geometry().triangles[0];
     assert!(!t.smooth, "no vn: flat shading");
     assert_eq!(t.material, 0, "no usemtl: the default material");
     assert_eq!(tri_uvs(&scene, 0), [Vec2::ZERO; 3], "no vt: uv (0, 0)");
@@ -159,7 +159,7 @@ fn quad_and_pentagon_are_fan_triangulated() {
         format!("{}f 1 2 3 4\nf 1 2 3 4 5\n", v_lines(&PENTAGON)),
     );
     let scene = mesh(dir.path(), "fan.obj");
-    assert_eq!(scene.stats.triangles, 2 + 3);
+    assert_eq!(scene.world.stats().triangles, 2 + 3);
     let expected = [[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3], [0, 3, 4]];
     for (i, e) in expected.iter().enumerate() {
         assert_eq!(
@@ -182,7 +182,7 @@ fn negative_indices_are_relative_to_what_is_defined_so_far() {
          f 1/1 -1/-2 -6/-1\n",
     );
     let scene = mesh(dir.path(), "neg.obj");
-    assert_eq!(scene.stats.triangles, 4);
+    assert_eq!(scene.world.stats().triangles, 4);
     let (v, vt) = (
         [
             Vec3::ZERO,
@@ -227,10 +227,10 @@ fn corner_forms_v_vt_vn() {
     for (name, face, has_uv, has_normal) in cases {
         dir.write(&format!("{name}.obj"), format!("{head}{face}\n"));
         let scene = mesh(dir.path(), &format!("{name}.obj"));
-        assert_eq!(scene.stats.triangles, 1, "{name}");
+        assert_eq!(scene.world.stats().triangles, 1, "{name}");
         let want_uv = if has_uv { uvs } else { [Vec2::ZERO; 3] };
         assert_eq!(tri_uvs(&scene, 0), want_uv, "{name}");
-        let t = scene.geometry.triangles[0];
+        let t = scene.world.geometry().triangles[0];
         assert_eq!(t.smooth, has_normal, "{name}: smooth only with vn");
         if has_normal {
             let n = tri_normals(&scene, 0);
@@ -252,7 +252,7 @@ fn faces_with_and_without_vt_in_one_file_keep_their_own_uvs() {
          f 1/1 2/2 3/3\nf 2 4 3\nf 2/2 4 3/3\n",
     );
     let scene = mesh(dir.path(), "m.obj");
-    assert_eq!(scene.stats.triangles, 3);
+    assert_eq!(scene.world.stats().triangles, 3);
     let t = [
         Vec2::new(0.1, 0.2),
         Vec2::new(0.3, 0.4),
@@ -275,10 +275,10 @@ fn faces_without_vn_stay_flat_beside_smooth_faces() {
          f 1//1 2//2 3//3\nf 2 4 3\nf 2//2 4 3\n",
     );
     let scene = mesh(dir.path(), "m.obj");
-    assert_eq!(scene.stats.triangles, 3);
+    assert_eq!(scene.world.stats().triangles, 3);
     let n = tri_normals(&scene, 0);
     assert!(close(n[0], Vec3::new(0.0, 0.6, 0.8)) && close(n[1], Vec3::new(0.6, 0.0, 0.8)));
-    assert!(scene.geometry.triangles[0].smooth);
+    assert!(scene.world.geometry().triangles[0].smooth);
     assert_eq!(tri_normals(&scene, 1), [Vec3::ZERO; 3], "no vn: flat");
     assert_eq!(tri_normals(&scene, 2), [Vec3::ZERO; 3], "partial vn: flat");
     assert_eq!(
@@ -295,7 +295,7 @@ fn zero_normals_make_their_face_flat() {
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//1\n",
     );
     let scene = mesh(dir.path(), "z.obj");
-    assert!(!scene.geometry.triangles[0].smooth);
+    assert!(!scene.world.geometry().triangles[0].smooth);
 }
 
 #[test]
@@ -309,7 +309,7 @@ fn groups_and_objects_do_not_split_or_drop_faces() {
         ),
     );
     let scene = mesh(dir.path(), "g.obj");
-    assert_eq!(scene.stats.triangles, 1 + 1 + 1 + 2);
+    assert_eq!(scene.world.stats().triangles, 1 + 1 + 1 + 2);
     assert_eq!(tri_positions(&scene, 2), [p(0), p(3), p(4)]);
     assert_eq!(tri_positions(&scene, 4), [p(1), p(3), p(4)]);
 }
@@ -332,10 +332,10 @@ fn an_obj_used_twice_is_read_once_and_shares_its_materials() {
         format!("[[objects]]\ntype = \"mesh\"\nfile = \"u.obj\"\ntranslate = {translate}\n")
     };
     let scene = build(dir.path(), &(object("[0, 0, 0]") + &object("[5, 0, 0]")));
-    assert_eq!(scene.stats.triangles, 2);
+    assert_eq!(scene.world.stats().triangles, 2);
     // One scene material for "green", shared by both copies.
-    assert_eq!(scene.stats.materials, 1);
-    let [a, b] = [0, 1].map(|i| scene.geometry.triangles[i].material);
+    assert_eq!(scene.world.stats().materials, 1);
+    let [a, b] = [0, 1].map(|i| scene.world.geometry().triangles[i].material);
     assert_eq!(a, b);
     assert_eq!(tri_diffuse(&scene, 1), Vec3::Y);
     assert_eq!(
@@ -359,16 +359,17 @@ fn usemtl_switches_materials_per_face() {
     let scene = mesh(dir.path(), "u.obj");
     let (red, green, blue, grey) = (Vec3::X, Vec3::Y, Vec3::Z, Vec3::splat(0.8));
     let want = [grey, green, red, red, blue, grey, green];
-    assert_eq!(scene.stats.triangles, want.len());
+    assert_eq!(scene.world.stats().triangles, want.len());
     for (i, w) in want.iter().enumerate() {
         assert_eq!(tri_diffuse(&scene, i), *w, "triangle {i}");
     }
     assert_eq!(
-        scene.geometry.triangles[0].material, 0,
+        scene.world.geometry().triangles[0].material,
+        0,
         "faces before usemtl use the default material"
     );
     // Only used materials become scene materials: green, red, blue (not "unused").
-    assert_eq!(scene.stats.materials, 3);
+    assert_eq!(scene.world.stats().materials, 3);
 }
 
 #[test]
@@ -386,18 +387,18 @@ fn mtl_colors_shininess_and_texture() {
         "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl full\nf 1 2 3\nusemtl grey\nf 1 2 3\n",
     );
     let scene = mesh(dir.path(), "m.obj");
-    let m = &scene.materials[scene.geometry.triangles[0].material as usize];
+    let m = &scene.world.materials()[scene.world.geometry().triangles[0].material as usize];
     assert_eq!(m.ambient, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(m.diffuse, Vec3::new(0.4, 0.5, 0.6));
     assert_eq!(m.specular, Vec3::new(0.7, 0.8, 0.9));
     assert_eq!(m.shininess, 42.0);
-    let tex = &scene.textures[m.texture.expect("map_Kd gives a texture") as usize];
+    let tex = &scene.world.textures()[m.texture.expect("map_Kd gives a texture") as usize];
     match &tex.kind {
         TextureKind::Image(img) => assert_eq!((img.image.width, img.image.height), (3, 2)),
         other => panic!("not an image texture: {other:?}"),
     }
     // One number means grey; Ka defaults to Kd.
-    let g = &scene.materials[scene.geometry.triangles[1].material as usize];
+    let g = &scene.world.materials()[scene.world.geometry().triangles[1].material as usize];
     assert_eq!(g.diffuse, Vec3::splat(0.5));
     assert_eq!(g.ambient, Vec3::splat(0.5));
     assert_eq!(g.specular, Vec3::splat(0.25));
@@ -421,8 +422,8 @@ fn mtllib_in_a_subfolder_resolves_map_kd_against_the_mtl_folder() {
     );
     let scene = mesh(dir.path(), "models/m.obj");
     let size = |i: usize| {
-        let m = &scene.materials[scene.geometry.triangles[i].material as usize];
-        match &scene.textures[m.texture.unwrap() as usize].kind {
+        let m = &scene.world.materials()[scene.world.geometry().triangles[i].material as usize];
+        match &scene.world.textures()[m.texture.unwrap() as usize].kind {
             TextureKind::Image(img) => (img.image.width, img.image.height),
             other => panic!("not an image texture: {other:?}"),
         }
@@ -436,8 +437,8 @@ fn mtllib_in_a_subfolder_resolves_map_kd_against_the_mtl_folder() {
         "mtllib sub/x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
     );
     let scene = mesh(dir.path(), "top.obj");
-    let m = &scene.materials[scene.geometry.triangles[0].material as usize];
-    match &scene.textures[m.texture.unwrap() as usize].kind {
+    let m = &scene.world.materials()[scene.world.geometry().triangles[0].material as usize];
+    match &scene.world.textures()[m.texture.unwrap() as usize].kind {
         TextureKind::Image(img) => assert_eq!(img.image.width, 5),
         other => panic!("not an image texture: {other:?}"),
     }
@@ -456,11 +457,11 @@ fn scene_material_overrides_the_mtl() {
         "[materials.mine]\ndiffuse = [0.2, 0.3, 0.4]\n\n\
          [[objects]]\ntype = \"mesh\"\nfile = \"o.obj\"\nmaterial = \"mine\"\n",
     );
-    assert_eq!(scene.stats.triangles, 3);
-    for (i, t) in scene.geometry.triangles.iter().enumerate() {
+    assert_eq!(scene.world.stats().triangles, 3);
+    for (i, t) in scene.world.geometry().triangles.iter().enumerate() {
         assert_eq!(t.material, 1, "triangle {i} uses the scene's material");
     }
-    assert_eq!(scene.stats.materials, 1, "no MTL material is added");
+    assert_eq!(scene.world.stats().materials, 1, "no MTL material is added");
     assert_eq!(tri_diffuse(&scene, 0), Vec3::new(0.2, 0.3, 0.4));
 }
 
@@ -478,10 +479,14 @@ fn unused_statements_are_ignored() {
          cstype bspline\ndeg 3\ng a\nusemtl m\ns off\nl 1 2\np 1\nf 1 2 3\nmg 1\n",
     );
     let scene = mesh(dir.path(), "u.obj");
-    assert_eq!(scene.stats.triangles, 1);
+    assert_eq!(scene.world.stats().triangles, 1);
     assert_eq!(tri_diffuse(&scene, 0), Vec3::new(0.5, 0.25, 1.0));
-    assert_eq!(scene.materials[1].shininess, 10.0);
-    assert_eq!(scene.materials[1].texture, None, "only map_Kd is a texture");
+    assert_eq!(scene.world.materials()[1].shininess, 10.0);
+    assert_eq!(
+        scene.world.materials()[1].texture,
+        None,
+        "only map_Kd is a texture"
+    );
 }
 
 #[test]
@@ -494,7 +499,11 @@ fn crlf_tabs_comments_and_continuations() {
     );
     dir.write("c.obj", obj);
     let scene = mesh(dir.path(), "c.obj");
-    assert_eq!(scene.stats.triangles, 2, "the last line has no newline");
+    assert_eq!(
+        scene.world.stats().triangles,
+        2,
+        "the last line has no newline"
+    );
     assert_eq!(tri_positions(&scene, 0), [Vec3::ZERO, Vec3::X, Vec3::Y]);
     assert_eq!(
         tri_diffuse(&scene, 0),
@@ -609,8 +618,8 @@ fn unused_material_with_a_missing_texture_is_not_an_error() {
         "mtllib u.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl used\nf 1 2 3\n",
     );
     let scene = mesh(dir.path(), "u.obj");
-    assert_eq!(scene.stats.materials, 1);
-    assert_eq!(scene.stats.textures, 0);
+    assert_eq!(scene.world.stats().materials, 1);
+    assert_eq!(scene.world.stats().textures, 0);
 }
 
 #[test]
@@ -623,7 +632,7 @@ fn map_kd_with_windows_separators() {
         "mtllib w.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
     );
     let scene = mesh(dir.path(), "w.obj");
-    assert_eq!(scene.stats.textures, 1);
+    assert_eq!(scene.world.stats().textures, 1);
 }
 
 #[test]
@@ -631,7 +640,7 @@ fn empty_obj_has_no_triangles() {
     let dir = TempDir::new("empty");
     dir.write("e.obj", "# nothing\nv 0 0 0\n");
     let scene = mesh(dir.path(), "e.obj");
-    assert_eq!(scene.stats.triangles, 0);
+    assert_eq!(scene.world.stats().triangles, 0);
 }
 
 #[test]
@@ -672,11 +681,11 @@ fn assets() -> PathBuf {
 #[test]
 fn cornell_box_obj() {
     let scene = mesh(&assets(), "scenes/cornell_box/CornellBox-Original.obj");
-    assert_eq!(scene.stats.triangles, 36);
+    assert_eq!(scene.world.stats().triangles, 36);
     // Eight MTL materials, all used; materials by `usemtl`, not by `g`.
-    assert_eq!(scene.stats.materials, 8);
+    assert_eq!(scene.world.stats().materials, 8);
     let count = |kd: Vec3| {
-        (0..scene.stats.triangles)
+        (0..scene.world.stats().triangles)
             .filter(|&i| close(tri_diffuse(&scene, i), kd))
             .count()
     };
@@ -686,7 +695,8 @@ fn cornell_box_obj() {
     // Floor, ceiling, back wall and the two boxes (6 faces each, bottoms included).
     assert_eq!(count(Vec3::new(0.725, 0.71, 0.68)), 2 + 2 + 2 + 12 + 12);
     let lit = scene
-        .materials
+        .world
+        .materials()
         .iter()
         .find(|m| m.diffuse == Vec3::splat(0.78))
         .unwrap();
@@ -697,7 +707,7 @@ fn cornell_box_obj() {
     let first = tri_positions(&scene, 0);
     assert!(close(first[0], Vec3::new(-1.01, 0.0, 0.99)), "{first:?}");
     assert!(close(first[2], Vec3::new(1.0, 0.0, -1.04)), "{first:?}");
-    let b = scene.geometry.bounds();
+    let b = scene.world.geometry().bounds();
     assert!(close(b.min, Vec3::new(-1.02, 0.0, -1.04)), "{b:?}");
     assert!(close(b.max, Vec3::new(1.0, 1.99, 0.99)), "{b:?}");
 }
@@ -706,8 +716,8 @@ fn cornell_box_obj() {
 fn spot_triangulated_and_quadrangulated() {
     for name in ["spot_triangulated.obj", "spot_quadrangulated.obj"] {
         let scene = mesh(&assets(), &format!("meshes/{name}"));
-        assert_eq!(scene.stats.triangles, 5_856, "{name}");
-        let g = &scene.geometry;
+        assert_eq!(scene.world.stats().triangles, 5_856, "{name}");
+        let g = scene.world.geometry();
         assert!(g.triangles.iter().all(|t| !t.smooth), "{name}: no vn");
         assert!(
             g.uvs
@@ -736,13 +746,14 @@ fn spot_with_an_mtl_gets_its_texture() {
         format!("newmtl spot\nKd 1 1 1\nmap_Kd {}\n", texture.display()),
     );
     let scene = mesh(dir.path(), "spot.obj");
-    assert_eq!(scene.stats.triangles, 5_856);
-    assert_eq!(scene.stats.textures, 1);
-    let m = &scene.materials[scene.geometry.triangles[0].material as usize];
+    assert_eq!(scene.world.stats().triangles, 5_856);
+    assert_eq!(scene.world.stats().textures, 1);
+    let m = &scene.world.materials()[scene.world.geometry().triangles[0].material as usize];
     assert!(m.texture.is_some());
     assert!(scene
-        .geometry
+        .world
+        .geometry()
         .triangles
         .iter()
-        .all(|t| t.material == scene.geometry.triangles[0].material));
+        .all(|t| t.material == scene.world.geometry().triangles[0].material));
 }

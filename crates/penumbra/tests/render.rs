@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DVec2, DVec3, Vec3};
 use penumbra::{
-    render, write_image, Film, Overrides, PixelBounds, RenderOptions, Scene, SceneFile, SceneFormat,
+    render, write_image, Film, PixelBounds, RenderOptions, Scene, SceneFile, SceneFormat,
 };
 
 /// Relative tolerance of plain f32 arithmetic against f64 (floored, see [`assert_close`]).
@@ -39,12 +39,14 @@ const SPHERE_TOL: f64 = 3e-3;
 
 fn build_in(text: &str, base_dir: &Path) -> Scene {
     SceneFile::from_str(text, SceneFormat::Toml, "test.toml", base_dir)
-        .and_then(|f| f.build(&Overrides::default()))
+        .and_then(|f| f.build(0))
         .unwrap_or_else(|e| panic!("{e}\n--- scene ---\n{text}"))
 }
 
 fn render_with(scene: &Scene, options: &RenderOptions) -> Film {
-    render(scene, options).expect("render").0
+    render(&scene.world, &scene.settings, options)
+        .expect("render")
+        .0
 }
 
 fn render_in(text: &str, base_dir: &Path) -> Film {
@@ -946,7 +948,7 @@ fn lights_cast_no_shadows() {
 #[test]
 fn light_samples_default_and_override() {
     // `render.light_samples` is N for area lights that give none; a light's own `samples`
-    // wins over it; the --light-samples override (Overrides::light_samples) sets N for every
+    // wins over it; the per-render override (RenderSettings::light_samples) sets N for every
     // area light. Each case must equal the seed-model sum over its own N×N cell centers.
     let cam = Cam::probe(rgb(0.0, 0.0, 3.0), DVec3::ZERO);
     let mat = Mat::diffuse(grey(0.3), rgb(0.8, 0.7, 0.6));
@@ -980,15 +982,13 @@ fn light_samples_default_and_override() {
             + &light_toml
             + &floor_toml("m")
     };
-    let run = |text: &str, ov: Overrides| {
+    let run = |text: &str, light_samples: Option<u32>| {
         let file = SceneFile::from_str(text, SceneFormat::Toml, "t.toml", ".").unwrap();
-        let scene = file.build(&ov).unwrap_or_else(|e| panic!("{e}"));
+        let mut scene = file.build(0).unwrap_or_else(|e| panic!("{e}"));
+        scene.settings.light_samples = light_samples;
         render_with(&scene, &RenderOptions::default()).get(0, 0)
     };
-    let ov = |n: Option<u32>| Overrides {
-        light_samples: n,
-        ..Overrides::default()
-    };
+    let ov = |n: Option<u32>| n;
     assert_close(
         run(&text("", None), ov(None)),
         want(5),
@@ -1280,12 +1280,8 @@ fn jittered_sampler_depends_on_the_seed_only() {
     assert_ne!(bits(&a), bits(&c), "another seed, another image");
     // The seed override is the same as the file's seed.
     let file = SceneFile::from_str(&text(7), SceneFormat::Toml, "t.toml", ".").unwrap();
-    let overridden = file
-        .build(&Overrides {
-            seed: Some(8),
-            ..Overrides::default()
-        })
-        .unwrap();
+    let mut overridden = file.build(0).unwrap();
+    overridden.settings.seed = 8;
     assert_eq!(
         bits(&render_with(&overridden, &RenderOptions::default())),
         bits(&c)

@@ -92,6 +92,14 @@ impl Geometry {
         }
     }
 
+    /// Drops every vertex from `vertices` on and every triangle from `triangles` on.
+    pub(crate) fn truncate(&mut self, vertices: usize, triangles: usize) {
+        self.positions.truncate(vertices);
+        self.normals.truncate(vertices);
+        self.uvs.truncate(vertices);
+        self.triangles.truncate(triangles);
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.triangles.len()

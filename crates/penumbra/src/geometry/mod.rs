@@ -1,10 +1,13 @@
 //! Triangles and the meshes they live in. Every object of a scene becomes triangles here:
-//! the ray–triangle test, indexed mesh storage, and the built-in shapes (quad, cube, sphere).
+//! the ray–triangle test and its [`Hit`] record, indexed mesh storage, the built-in shapes
+//! (quad, cube, sphere), and the [`Surface`] at a hit.
 
 mod mesh;
 mod shapes;
+mod surface;
 mod triangle;
 
 pub use mesh::{Geometry, Mesh, Triangle};
 pub use shapes::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
+pub use surface::Surface;
 pub use triangle::{intersect_triangle, Hit, TriangleHit};

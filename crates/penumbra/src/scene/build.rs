@@ -5,34 +5,25 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
-use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 
 use super::desc::*;
 use super::error::{KeyPath, SceneError};
 use super::obj::{load_obj, ObjMaterial};
-use super::{FilmSettings, Overrides, Scene, SceneFile, SceneStats};
-use crate::accel::Bvh;
-use crate::camera::{CameraError, PinholeCamera};
-use crate::geometry::{self, Geometry, Mesh};
+use super::{Scene, SceneFile};
+use crate::camera::{Camera, CameraError};
+use crate::geometry::{self, Mesh};
 use crate::image_io::{load_texture_image, OutputFormat};
-use crate::integrator::{LightModel, Settings, Shading};
+use crate::integrator::{LightModel, Shading};
 use crate::light::{AreaLight, Light, PointLight};
 use crate::material::Material;
 use crate::math::{Rgb, Transform};
-use crate::render::thread_pool;
+use crate::render::{RenderSettings, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 use crate::sampling::{perfect_square_root, Sampler};
 use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
+use crate::world::{WorldBuilder, DEFAULT_MATERIAL};
 
-/// Largest film accepted: 2^28 pixels (16384 × 16384), 3 GiB of float RGB.
-pub const MAX_PIXELS: u64 = 1 << 28;
-/// Largest area-light grid resolution N.
-pub const MAX_LIGHT_SAMPLES: u32 = 1024;
-/// Largest samples per pixel.
-pub const MAX_SPP: u32 = 1 << 16;
-/// Most triangles in a scene: about 100 bytes each with the BVH, so 2^27 need some 13 GiB.
-pub const MAX_TRIANGLES: usize = 1 << 27;
 const DEFAULT_LIGHT_SAMPLES: u32 = 5;
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -54,8 +45,7 @@ struct Builder<'a> {
     file: &'a SceneFile,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     meshes: HashMap<PathBuf, LoadedObj>,
-    textures: Vec<Texture>,
-    materials: Vec<Material>,
+    world: WorldBuilder,
 }
 
 /// An OBJ file read once for every object that uses it.
@@ -67,73 +57,42 @@ struct LoadedObj {
     scene_materials: Option<Vec<u32>>,
 }
 
-pub(super) fn build(file: &SceneFile, ov: &Overrides, threads: usize) -> Result<Scene> {
+pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     let desc = &file.desc;
     let mut b = Builder {
         file,
         images: HashMap::new(),
         meshes: HashMap::new(),
-        textures: Vec::new(),
-        materials: Vec::new(),
+        world: WorldBuilder::new(),
     };
-    let film = b.film(ov)?;
-    let (camera, cameras) = b.camera(ov, film.width, film.height)?;
-    let (settings, default_light_samples) = b.settings(ov)?;
+    let (width, height, output, gamma) = b.film()?;
+    b.cameras()?;
+    let (settings, default_light_samples) = b.settings(width, height)?;
 
-    for (i, (name, tex)) in desc.textures.0.iter().enumerate() {
+    for (name, tex) in &desc.textures.0 {
         let t = b.texture(&KeyPath::root("textures").key(name), tex)?;
-        debug_assert_eq!(b.textures.len(), i);
-        b.textures.push(t);
+        b.world.add_texture(t);
     }
     // Material 0 is the format's default; named materials follow in file order.
-    b.materials.push(Material::default());
     for (name, m) in &desc.materials.0 {
-        let mat = b.material(&KeyPath::root("materials").key(name), m)?;
-        b.materials.push(mat);
+        let path = KeyPath::root("materials").key(name);
+        let mat = b.material(&path, m)?;
+        b.world
+            .add_material(mat)
+            .map_err(|e| b.err(&path, e.to_string()))?;
     }
-
-    let mut lights = Vec::with_capacity(desc.lights.len());
     for (i, l) in desc.lights.iter().enumerate() {
-        lights.push(b.light(
-            &KeyPath::root("lights").index(i),
-            l,
-            ov,
-            default_light_samples,
-        )?);
+        let light = b.light(&KeyPath::root("lights").index(i), l, default_light_samples)?;
+        b.world.add_light(light);
     }
-
-    let mut geometry = Geometry::default();
     for (i, o) in desc.objects.iter().enumerate() {
-        b.object(&KeyPath::root("objects").index(i), o, i, &mut geometry)?;
+        b.object(&KeyPath::root("objects").index(i), o)?;
     }
-
-    let start = Instant::now();
-    // Without a pool of its own (the system refused threads) the build runs serially: the
-    // library never borrows rayon's global pool.
-    let bvh = match thread_pool(threads) {
-        Ok((pool, _)) => Bvh::build_parallel(&geometry, &pool),
-        Err(_) => Bvh::build(&geometry),
-    };
-    let bvh_build_time = start.elapsed();
-    let stats = SceneStats {
-        triangles: geometry.len(),
-        lights: lights.len(),
-        materials: b.materials.len() - 1,
-        textures: b.textures.len(),
-        cameras,
-        bvh_build_time,
-        bvh_nodes: bvh.node_count(),
-    };
     Ok(Scene {
-        geometry,
-        bvh,
-        materials: b.materials,
-        textures: b.textures,
-        lights,
-        camera,
-        film,
+        world: Arc::new(b.world.build(threads)),
         settings,
-        stats,
+        output,
+        gamma,
     })
 }
 
@@ -168,7 +127,7 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn film(&self, ov: &Overrides) -> Result<FilmSettings> {
+    fn film(&self) -> Result<(u32, u32, Option<PathBuf>, Option<f32>)> {
         let d = &self.file.desc.film;
         let path = KeyPath::root("film");
         let dim = |key: &str, v: i64| -> Result<u32> {
@@ -183,27 +142,11 @@ impl Builder<'_> {
         };
         let width = dim("width", d.width)?;
         let height = dim("height", d.height)?;
-        for (flag, v) in [("--width", ov.width), ("--height", ov.height)] {
-            if v == Some(0) {
-                return Err(SceneError::Override {
-                    option: flag,
-                    message: "must be at least 1 pixel".into(),
-                });
-            }
-        }
-        let (width, height) = (ov.width.unwrap_or(width), ov.height.unwrap_or(height));
         if width as u64 * height as u64 > MAX_PIXELS {
             let message = format!(
                 "a {width}x{height} image is too large for memory (at most {MAX_PIXELS} pixels)"
             );
-            return Err(if ov.width.is_some() || ov.height.is_some() {
-                SceneError::Override {
-                    option: "--width/--height",
-                    message,
-                }
-            } else {
-                self.err(&path.key("width"), message)
-            });
+            return Err(self.err(&path.key("width"), message));
         }
         let gamma = match d.gamma {
             Some(Num(g)) if g <= 0.0 => {
@@ -225,20 +168,11 @@ impl Builder<'_> {
             }
             Some(o) => Some(self.file.resolve(o)),
         };
-        Ok(FilmSettings {
-            width,
-            height,
-            output,
-            gamma,
-        })
+        Ok((width, height, output, gamma))
     }
 
-    fn camera(
-        &self,
-        ov: &Overrides,
-        width: u32,
-        height: u32,
-    ) -> Result<(PinholeCamera, Vec<String>)> {
+    /// Every camera of the file, checked, into the world under its name.
+    fn cameras(&mut self) -> Result<()> {
         let desc = &self.file.desc;
         let named: Vec<(String, &CameraDesc, KeyPath)> =
             match (&desc.camera, desc.cameras.0.is_empty()) {
@@ -262,52 +196,31 @@ impl Builder<'_> {
                     .map(|(n, c)| (n.clone(), c, KeyPath::root("cameras").key(n)))
                     .collect(),
             };
-        // Check every camera, not only the one rendered: the file is wrong either way.
-        let mut built = Vec::with_capacity(named.len());
-        for (_, c, path) in &named {
-            let cam = PinholeCamera::new(
+        for (name, c, path) in named {
+            let cam = Camera::new(
                 v3(c.position),
                 v3(c.look_at),
                 c.up.map_or(Vec3::Y, v3),
                 c.fov.0 as f32,
-                width,
-                height,
             )
             .map_err(|e| match e {
                 CameraError::FovOutOfRange => self.err(
                     &path.key("fov"),
                     format!("fov must be between 0 and 180 degrees, not {}", c.fov.0),
                 ),
-                CameraError::Degenerate => self.err(
-                    &path.key("look_at"),
-                    "degenerate camera: look_at equals position or the view direction is parallel to up",
-                ),
-                CameraError::EmptyFilm => self.err(&KeyPath::root("film"), "empty film"),
+                CameraError::Degenerate => self.err(&path.key("look_at"), e.to_string()),
             })?;
-            built.push(cam);
+            // Names are table keys, unique by construction.
+            self.world
+                .add_camera(name, cam)
+                .map_err(|e| self.err(&path, e.to_string()))?;
         }
-        let index = match &ov.camera {
-            None => 0,
-            Some(name) => named
-                .iter()
-                .position(|(n, _, _)| n == name)
-                .ok_or_else(|| {
-                    let names: Vec<&str> = named.iter().map(|(n, _, _)| n.as_str()).collect();
-                    SceneError::Override {
-                        option: "--camera",
-                        message: format!(
-                            "no camera named \"{name}\" (the scene has: {})",
-                            names.join(", ")
-                        ),
-                    }
-                })?,
-        };
-        let mut names: Vec<String> = named.iter().map(|(n, _, _)| n.clone()).collect();
-        names.swap(0, index);
-        Ok((built[index], names))
+        Ok(())
     }
 
-    fn settings(&self, ov: &Overrides) -> Result<(Settings, u32)> {
+    /// The file's render settings on a `width × height` film, and the default N of area
+    /// lights.
+    fn settings(&self, width: u32, height: u32) -> Result<(RenderSettings, u32)> {
         let r = &self.file.desc.render;
         let path = KeyPath::root("render");
         let file_sampler = match &r.sampler {
@@ -338,20 +251,8 @@ impl Builder<'_> {
                 Some(n)
             }
         };
-        let sampler = ov.sampler.or(file_sampler).unwrap_or(Sampler::Rgss);
-        let samples_per_axis = if let Some(spp) = ov.spp {
-            let n = Some(spp).filter(|&s| s <= MAX_SPP).and_then(perfect_square_root).ok_or_else(|| SceneError::Override {
-                option: "--spp",
-                message: format!("samples per pixel must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {spp}"),
-            })?;
-            if sampler == Sampler::Center && n != 1 {
-                return Err(SceneError::Override {
-                    option: "--spp",
-                    message: "the center sampler takes exactly 1 sample".into(),
-                });
-            }
-            n
-        } else if sampler == Sampler::Center {
+        let sampler = file_sampler.unwrap_or(Sampler::Rgss);
+        let samples_per_axis = if sampler == Sampler::Center {
             1
         } else {
             file_samples.unwrap_or(2)
@@ -361,14 +262,6 @@ impl Builder<'_> {
             None => DEFAULT_LIGHT_SAMPLES,
             Some(n) => self.light_n(&path.key("light_samples"), n)?,
         };
-        if let Some(n) = ov.light_samples {
-            if !(1..=MAX_LIGHT_SAMPLES).contains(&n) {
-                return Err(SceneError::Override {
-                    option: "--light-samples",
-                    message: format!("must be between 1 and {MAX_LIGHT_SAMPLES}, not {n}"),
-                });
-            }
-        }
         let shading = match r.shading.as_deref() {
             None | Some("phong") => Shading::Phong,
             Some("blinn-phong") => Shading::BlinnPhong,
@@ -389,14 +282,18 @@ impl Builder<'_> {
                 ))
             }
         };
-        let settings = Settings {
+        let settings = RenderSettings {
+            view: View::First,
+            width,
+            height,
             sampler,
-            samples_per_axis,
+            spp: samples_per_axis * samples_per_axis,
+            light_samples: None,
+            seed: r.seed.unwrap_or(0),
             shading,
             light_model,
             ambient: r.ambient.map_or(Rgb::splat(0.1), rgb),
             background: r.background.map_or(Rgb::ZERO, rgb),
-            seed: ov.seed.or(r.seed).unwrap_or(0),
         };
         Ok((settings, light_samples))
     }
@@ -553,13 +450,7 @@ impl Builder<'_> {
         })
     }
 
-    fn light(
-        &self,
-        path: &KeyPath,
-        l: &LightDesc,
-        ov: &Overrides,
-        default_n: u32,
-    ) -> Result<Light> {
+    fn light(&self, path: &KeyPath, l: &LightDesc, default_n: u32) -> Result<Light> {
         let present = [
             ("center", l.center.is_some()),
             ("u", l.u.is_some()),
@@ -586,7 +477,7 @@ impl Builder<'_> {
                     u: v3(self.require(path, "u", l.u)?),
                     v: v3(self.require(path, "v", l.v)?),
                     radiance: color,
-                    n: ov.light_samples.unwrap_or(file_n),
+                    n: file_n,
                     jitter: l.jitter.unwrap_or(false),
                 })
             }
@@ -612,13 +503,7 @@ impl Builder<'_> {
             })
     }
 
-    fn object(
-        &mut self,
-        path: &KeyPath,
-        o: &ObjectDesc,
-        index: usize,
-        geometry: &mut Geometry,
-    ) -> Result<()> {
+    fn object(&mut self, path: &KeyPath, o: &ObjectDesc) -> Result<()> {
         let present = [
             ("vertices", o.vertices.is_some()),
             ("uvs", o.uvs.is_some()),
@@ -651,7 +536,7 @@ impl Builder<'_> {
         }
         let mut materials = vec![match &o.material {
             Some(name) => self.material_index(&path.key("material"), name)?,
-            None => 0,
+            None => DEFAULT_MATERIAL,
         }];
 
         let mesh = match o.kind {
@@ -699,23 +584,9 @@ impl Builder<'_> {
                 mesh
             }
         };
-        let first_new = geometry.positions.len();
-        geometry.append(&mesh, &world, &materials, index as u32);
-        if geometry.positions[first_new..]
-            .iter()
-            .any(|p| !p.is_finite())
-        {
-            return Err(self.err(
-                path,
-                "the transformed object has coordinates beyond the range of 32-bit floats",
-            ));
-        }
-        if geometry.len() > MAX_TRIANGLES {
-            return Err(self.err(
-                path,
-                format!("the scene has more than {MAX_TRIANGLES} triangles, too many for memory"),
-            ));
-        }
+        self.world
+            .add_mesh(&mesh, &world, &materials)
+            .map_err(|e| self.err(path, e.to_string()))?;
         Ok(())
     }
 }
@@ -763,7 +634,7 @@ impl Builder<'_> {
                 Some(t) => {
                     let what = format!("texture (map_Kd of material \"{}\")", m.name);
                     let image = self.image(path, t.clone(), true, &what)?;
-                    self.textures.push(Texture {
+                    Some(self.world.add_texture(Texture {
                         kind: TextureKind::Image(ImageTexture {
                             image,
                             filter: Filter::Bilinear,
@@ -771,22 +642,24 @@ impl Builder<'_> {
                         }),
                         uv_scale: Vec2::ONE,
                         uv_offset: Vec2::ZERO,
-                    });
-                    Some(self.textures.len() as u32 - 1)
+                    }))
                 }
             };
             let diffuse = m.diffuse.map_or(Rgb::splat(0.8), Vec3::from);
-            ids.push(self.materials.len() as u32);
-            self.materials.push(Material {
-                ambient: m.ambient.map_or(diffuse, Vec3::from),
-                diffuse,
-                specular: m.specular.map_or(Rgb::ZERO, Vec3::from),
-                shininess: m.shininess.map_or(16.0, |s| s.max(0.0)),
-                texture,
-            });
+            let id = self
+                .world
+                .add_material(Material {
+                    ambient: m.ambient.map_or(diffuse, Vec3::from),
+                    diffuse,
+                    specular: m.specular.map_or(Rgb::ZERO, Vec3::from),
+                    shininess: m.shininess.map_or(16.0, |s| s.max(0.0)),
+                    texture,
+                })
+                .map_err(|e| self.err(path, e.to_string()))?;
+            ids.push(id);
         }
         // Faces without an MTL material use slot `mtl.len()`: the default material.
-        ids.push(0);
+        ids.push(DEFAULT_MATERIAL);
         if let Some(loaded) = self.meshes.get_mut(&key) {
             loaded.scene_materials = Some(ids.clone());
         }

@@ -1,6 +1,6 @@
-//! Scene files and built scenes. Data flows one way: text → [`SceneDesc`] (serde types that
-//! mirror the file, see `desc`) → [`Scene`] (world-space triangles, BVH, materials, lights,
-//! camera, settings), with every error located in the file.
+//! Scene files. Data flows one way: text → [`SceneDesc`] (serde types that mirror the file,
+//! see `desc`) → [`Scene`]: a shared [`World`] plus the file's default [`RenderSettings`] and
+//! output, with every error located in the file.
 
 mod build;
 pub mod desc;
@@ -9,16 +9,10 @@ mod locate;
 mod obj;
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::sync::Arc;
 
-use crate::accel::Bvh;
-use crate::camera::PinholeCamera;
-use crate::geometry::Geometry;
-use crate::integrator::Settings;
-use crate::light::Light;
-use crate::material::Material;
-use crate::sampling::Sampler;
-use crate::texture::Texture;
+use crate::render::RenderSettings;
+use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{KeyPath, Location, SceneError, Segment};
@@ -63,79 +57,19 @@ struct Source {
     format: SceneFormat,
 }
 
-/// Values that replace the scene file's, as the command line gives them. `None` keeps the
-/// file's value.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Overrides {
-    /// Film width.
-    pub width: Option<u32>,
-    /// Film height.
-    pub height: Option<u32>,
-    /// Pixel sampler; `center` without `spp` means one sample.
-    pub sampler: Option<Sampler>,
-    /// Samples per pixel (a perfect square).
-    pub spp: Option<u32>,
-    /// N of every area light, including lights that set their own.
-    pub light_samples: Option<u32>,
-    /// Random seed.
-    pub seed: Option<u64>,
-    /// Name of the camera to render (default: the first).
-    pub camera: Option<String>,
-}
-
-/// Film settings of a built scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FilmSettings {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Output path from the file, resolved against its folder.
-    pub output: Option<PathBuf>,
-    /// Power-law encoding exponent, or `None` for the sRGB curve.
-    pub gamma: Option<f32>,
-}
-
-/// Summary statistics of a built scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SceneStats {
-    /// Number of triangles.
-    pub triangles: usize,
-    /// Number of lights.
-    pub lights: usize,
-    /// Number of materials (including those made from MTL files).
-    pub materials: usize,
-    /// Number of textures.
-    pub textures: usize,
-    /// Camera names, the rendered one first.
-    pub cameras: Vec<String>,
-    /// Time spent building the BVH.
-    pub bvh_build_time: Duration,
-    /// Number of BVH nodes.
-    pub bvh_nodes: usize,
-}
-
-/// A scene ready to render: immutable and shareable between threads.
+/// A scene file built: the world it describes, shared, and what the file says about rendering
+/// it. Render it with [`render`](crate::render)`(&scene.world, &scene.settings, …)`, or with
+/// settings changed per call: the world is never rebuilt.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    /// All triangles in world space.
-    pub geometry: Geometry,
-    /// The acceleration structure over `geometry`.
-    pub bvh: Bvh,
-    /// Materials, indexed by `Triangle::material`.
-    pub materials: Vec<Material>,
-    /// Textures, indexed by `Material::texture`.
-    pub textures: Vec<Texture>,
-    /// Lights.
-    pub lights: Vec<Light>,
-    /// The camera to render.
-    pub camera: PinholeCamera,
-    /// Film size and encoding.
-    pub film: FilmSettings,
-    /// Sampling and shading settings.
-    pub settings: Settings,
-    /// Counts and timings.
-    pub stats: SceneStats,
+    /// Geometry, acceleration structure, materials, textures, lights and every camera.
+    pub world: Arc<World>,
+    /// The file's `[film]` size and `[render]` settings, through its first camera.
+    pub settings: RenderSettings,
+    /// The file's `film.output`, resolved against its folder.
+    pub output: Option<PathBuf>,
+    /// The file's `film.gamma`: a power-law encoding exponent, or `None` for the sRGB curve.
+    pub gamma: Option<f32>,
 }
 
 impl SceneFile {
@@ -183,19 +117,10 @@ impl SceneFile {
         self.source.error(path, message)
     }
 
-    /// Builds the scene as the file describes it, with `overrides` applied, using every core
-    /// for the BVH.
-    pub fn build(&self, overrides: &Overrides) -> Result<Scene, SceneError> {
-        build::build(self, overrides, 0)
-    }
-
-    /// Like [`SceneFile::build`], with `threads` workers for the BVH (0: all cores).
-    pub fn build_with_threads(
-        &self,
-        overrides: &Overrides,
-        threads: usize,
-    ) -> Result<Scene, SceneError> {
-        build::build(self, overrides, threads)
+    /// Builds the scene the file describes (loading every mesh and texture) with `threads`
+    /// workers for the BVH (0: all cores).
+    pub fn build(&self, threads: usize) -> Result<Scene, SceneError> {
+        build::build(self, threads)
     }
 
     /// Resolves a path written in the scene file against its folder.

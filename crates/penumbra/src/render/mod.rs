@@ -1,6 +1,9 @@
-//! Renders a built scene into a [`Film`]: tiles over a local rayon pool, each pixel the box-
-//! filtered mean of its samples. A pixel's value depends only on its coordinates in the full
-//! film, so any thread count, scheduling or region gives the same bits.
+//! Renders a [`World`] with per-call [`RenderSettings`] into a [`Film`]: tiles over a local
+//! rayon pool, each pixel the box-filtered mean of its samples. A pixel's value depends only on
+//! its coordinates in the full film, so any thread count, scheduling or region gives the same
+//! bits.
+
+mod settings;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -9,11 +12,15 @@ use glam::Vec2;
 use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::camera::PinholeCamera;
 use crate::film::Film;
-use crate::integrator::{shade, CAMERA_T_MIN};
+use crate::integrator::{Integrator, Scratch, CAMERA_T_MIN};
 use crate::math::Rgb;
+use crate::pool::thread_pool;
 use crate::sampling::{fixed_offsets, jittered_offset, Rng};
-use crate::scene::Scene;
+use crate::world::World;
+
+pub use settings::{RenderSettings, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 
 /// A half-open pixel rectangle `[x0, x1) × [y0, y1)` of the full film (pbrt's
 /// `--pixelbounds`).
@@ -29,14 +36,15 @@ pub struct PixelBounds {
     pub y1: u32,
 }
 
-/// How to render (everything about *what* is in the [`Scene`]).
+/// How to run a render: threads, region, cancellation and progress (what it shows is in the
+/// [`RenderSettings`]).
 #[derive(Clone, Copy, Default)]
 pub struct RenderOptions<'a> {
     /// Worker threads; 0 means all available cores.
     pub threads: usize,
     /// Render only this region of the film (default: all of it).
     pub region: Option<PixelBounds>,
-    /// Checked between tiles: when set, rendering stops with [`RenderError::Cancelled`].
+    /// Checked between tile rows: when set, rendering stops with [`RenderError::Cancelled`].
     pub cancel: Option<&'a AtomicBool>,
     /// Called from worker threads after each tile with (pixels done, pixels in all).
     pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
@@ -65,6 +73,9 @@ impl RenderStats {
 /// Why a render did not finish.
 #[derive(Debug, Error)]
 pub enum RenderError {
+    /// The settings cannot be rendered.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
     /// The cancel flag was set.
     #[error("interrupted")]
     Cancelled,
@@ -106,27 +117,14 @@ pub enum RenderError {
 
 const TILE: u32 = 16;
 
-/// A pool of `threads` workers (0: one per available core) of the library's own, never rayon's
-/// global pool, so that callers keep control of their threads.
-pub(crate) fn thread_pool(threads: usize) -> Result<(rayon::ThreadPool, usize), RenderError> {
-    let threads = if threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        threads
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| RenderError::Threads {
-            threads,
-            message: e.to_string(),
-        })?;
-    Ok((pool, threads))
-}
-
-/// Renders `scene` (or a region of it) with the given options.
-pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderStats), RenderError> {
-    let (width, height) = (scene.film.width, scene.film.height);
+/// Renders `world` (or a region of its film) as `settings` say, run as `options` say.
+pub fn render(
+    world: &World,
+    settings: &RenderSettings,
+    options: &RenderOptions,
+) -> Result<(Film, RenderStats), RenderError> {
+    let camera = settings.check(world)?;
+    let (width, height) = (settings.width, settings.height);
     let region = options.region.unwrap_or(PixelBounds {
         x0: 0,
         x1: width,
@@ -154,7 +152,17 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
         })?;
     pixels.resize(rw as usize * rh as usize, Rgb::ZERO);
 
-    let (pool, threads) = thread_pool(options.threads)?;
+    let (pool, threads) = thread_pool(options.threads).map_err(|e| RenderError::Threads {
+        threads: options.threads,
+        message: e.to_string(),
+    })?;
+    let job = Job {
+        camera: PinholeCamera::new(&camera, width, height),
+        integrator: Integrator::new(world, settings.shading_settings()),
+        world,
+        settings,
+        offsets: fixed_offsets(settings.sampler, settings.samples_per_axis()),
+    };
 
     let tiles: Vec<PixelBounds> = (region.y0..region.y1)
         .step_by(TILE as usize)
@@ -169,7 +177,6 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
                 })
         })
         .collect();
-    let offsets = fixed_offsets(scene.settings.sampler, scene.settings.samples_per_axis);
     let total = rw as u64 * rh as u64;
     let done = AtomicU64::new(0);
     let start = Instant::now();
@@ -185,13 +192,14 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
                 let mut out =
                     Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
                 let mut shadow = 0;
+                let mut scratch = Scratch::default();
                 for y in tile.y0..tile.y1 {
                     // A row of a tile can take long at high sample counts: check per row.
                     if cancelled() {
                         return None;
                     }
                     for x in tile.x0..tile.x1 {
-                        let (c, s) = render_pixel(scene, offsets.as_deref(), x, y);
+                        let (c, s) = job.pixel(x, y, &mut scratch);
                         out.push(c);
                         shadow += s;
                     }
@@ -221,9 +229,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
             pixels[at..at + tw].copy_from_slice(chunk);
         }
     }
-    let spp = scene.settings.samples_per_axis as u64 * scene.settings.samples_per_axis as u64;
     let stats = RenderStats {
-        camera_rays: total * spp,
+        camera_rays: total * settings.spp as u64,
         shadow_rays,
         time: start.elapsed(),
         threads,
@@ -236,30 +243,43 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<(Film, RenderSta
     Ok((film, stats))
 }
 
-/// The value of pixel `(x, y)` of the full film and the shadow rays it took.
-fn render_pixel(scene: &Scene, offsets: Option<&[Vec2]>, x: u32, y: u32) -> (Rgb, u64) {
-    let settings = &scene.settings;
-    let n = settings.samples_per_axis;
-    let pixel_index = y as u64 * scene.film.width as u64 + x as u64;
-    let mut sum = Rgb::ZERO;
-    let mut shadow = 0;
-    for s in 0..n * n {
-        let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
-        let offset = match offsets {
-            Some(o) => o[s as usize],
-            None => jittered_offset(n, s / n, s % n, rng.uniform2()),
-        };
-        let ray = scene
-            .camera
-            .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-        match scene.bvh.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) {
-            Some(hit) => {
-                let (c, rays) = shade(scene, &ray, &hit, &mut rng);
-                sum += c;
-                shadow += rays;
+/// One render's fixed parts, shared by its workers.
+struct Job<'a> {
+    world: &'a World,
+    settings: &'a RenderSettings,
+    camera: PinholeCamera,
+    integrator: Integrator<'a>,
+    /// The pixel offsets of a deterministic sampler; `None` for jittered.
+    offsets: Option<Vec<Vec2>>,
+}
+
+impl Job<'_> {
+    /// The value of pixel `(x, y)` of the full film and the shadow rays it took.
+    fn pixel(&self, x: u32, y: u32, scratch: &mut Scratch) -> (Rgb, u64) {
+        let settings = self.settings;
+        let n = settings.samples_per_axis();
+        let pixel_index = y as u64 * settings.width as u64 + x as u64;
+        let mut sum = Rgb::ZERO;
+        let mut shadow = 0;
+        for s in 0..n * n {
+            let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
+            let offset = match &self.offsets {
+                Some(o) => o[s as usize],
+                None => jittered_offset(n, s / n, s % n, rng.uniform2()),
+            };
+            let ray = self
+                .camera
+                .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+            match self.world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) {
+                Some(hit) => {
+                    let surface = self.world.surface(&hit);
+                    let (c, rays) = self.integrator.shade(&ray, &surface, &mut rng, scratch);
+                    sum += c;
+                    shadow += rays;
+                }
+                None => sum += settings.background,
             }
-            None => sum += settings.background,
         }
+        (sum / (n * n) as f32, shadow)
     }
-    (sum / (n * n) as f32, shadow)
 }

@@ -1,0 +1,92 @@
+//! What a ray hit, as shading and ray-casting queries need it: [`Surface::from_hit`] turns a
+//! geometric [`Hit`] into the point, normals, texture coordinates and ids of the triangle.
+
+use glam::{Vec2, Vec3};
+
+use super::{Geometry, Hit};
+
+/// The surface at a ray hit, in world space. Normals are as the triangle defines them, not
+/// turned toward the ray: callers that shade face-forward them, callers that cast rays (like
+/// Open3D's `primitive_normals`) do not.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// The hit point, interpolated from the vertices by the barycentrics.
+    pub position: Vec3,
+    /// Unit `e1 × e2` of the triangle; zero for a sliver whose cross product underflows.
+    pub geometric_normal: Vec3,
+    /// Unit interpolated vertex normal of a smooth triangle, else the geometric normal.
+    pub shading_normal: Vec3,
+    /// Interpolated texture coordinates.
+    pub uv: Vec2,
+    /// Index of the triangle in [`Geometry::triangles`].
+    pub triangle: u32,
+    /// The object the triangle belongs to.
+    pub object: u32,
+    /// The triangle's material index.
+    pub material: u32,
+}
+
+impl Surface {
+    /// The surface of `geometry` at `hit`.
+    pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
+        let tri = &geometry.triangles[hit.triangle as usize];
+        let [i0, i1, i2] = tri.vertices.map(|v| v as usize);
+        let (p0, p1, p2) = (
+            geometry.positions[i0],
+            geometry.positions[i1],
+            geometry.positions[i2],
+        );
+        let b0 = 1.0 - hit.b1 - hit.b2;
+        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let shading_normal = if tri.smooth {
+            let ns = b0 * geometry.normals[i0]
+                + hit.b1 * geometry.normals[i1]
+                + hit.b2 * geometry.normals[i2];
+            ns.try_normalize().unwrap_or(geometric_normal)
+        } else {
+            geometric_normal
+        };
+        Surface {
+            position: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
+            geometric_normal,
+            shading_normal,
+            uv: b0 * geometry.uvs[i0] + hit.b1 * geometry.uvs[i1] + hit.b2 * geometry.uvs[i2],
+            triangle: hit.triangle,
+            object: tri.object,
+            material: tri.material,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Mesh;
+    use crate::math::Transform;
+
+    #[test]
+    fn interpolates_position_uv_and_normals_and_keeps_ids() {
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![Vec3::Z, Vec3::Z, Vec3::X],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
+            indices: vec![[0, 1, 2]],
+            material_slots: Vec::new(),
+        };
+        let mut g = Geometry::default();
+        g.append(&mesh, &Transform::IDENTITY, &[3], 7);
+        let hit = Hit {
+            t: 1.0,
+            b1: 0.25,
+            b2: 0.5,
+            triangle: 0,
+        };
+        let s = Surface::from_hit(&g, &hit);
+        assert!((s.position - Vec3::new(0.25, 0.5, 0.0)).length() < 1e-6);
+        assert!((s.uv - Vec2::new(0.25, 0.5)).length() < 1e-6);
+        assert_eq!(s.geometric_normal, Vec3::Z);
+        // 0.5·z + 0.5·x, normalized: not flipped toward any ray.
+        assert!((s.shading_normal - Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-6);
+        assert_eq!((s.triangle, s.object, s.material), (0, 7, 3));
+    }
+}
