@@ -1,4 +1,6 @@
-//! Wavefront OBJ meshes and their MTL material libraries.
+//! Wavefront OBJ meshes: the reader of `.obj` files and the assembly of their faces into one
+//! indexed triangle mesh. Their MTL material libraries are read by [`mtl`], and the line rules
+//! both file kinds share (comments, continuations) live in [`lines`].
 //!
 //! A small reader of its own rather than a general OBJ crate, so that every face keeps exactly
 //! the data it has and every problem is an error message with a line number, never a panic:
@@ -16,20 +18,21 @@
 //!   `l`, `p` and every other statement. A `usemtl` name that no library defines leaves its
 //!   faces with the default material. Only the materials that faces use are returned, in order
 //!   of first use, so an unused material's missing texture is not an error.
-//! - In an MTL file: `newmtl`, `Kd`, `Ka`, `Ks` (one number means grey), `Ns` and `map_Kd`
-//!   (relative to the MTL file's folder; options such as `-s` or `-clamp` are skipped and the
-//!   rest of the line is the file name, spaces included). Everything else (`illum`, `Ni`, `d`,
-//!   `Tr`, `Tf`, `Ke`, other maps) is ignored.
 //! - `#` starts a comment anywhere on a line; a line ending in `\` continues on the next one;
 //!   CRLF line endings, tabs, a UTF-8 byte-order mark and bytes that are not UTF-8 are fine.
 
-use std::borrow::Cow;
-use std::collections::{HashMap, HashSet};
+mod lines;
+mod mtl;
+
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
 use crate::geometry::Mesh;
+
+use lines::{for_each_line, numbers, rest_of_line};
+use mtl::{resolve, Library};
 
 /// A material from an MTL file.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,14 +84,6 @@ struct ObjData {
     /// Names given to `usemtl`, in order of first appearance.
     material_names: Vec<String>,
     library: Library,
-}
-
-/// The materials of every `mtllib`, later definitions of a name replacing earlier ones.
-#[derive(Default)]
-struct Library {
-    materials: Vec<ObjMaterial>,
-    by_name: HashMap<String, usize>,
-    loaded: HashSet<PathBuf>,
 }
 
 /// Loads `path`. Errors are messages that do not repeat the OBJ file's path (the caller adds
@@ -186,10 +181,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjModel, String> {
                     rest.split_ascii_whitespace().collect()
                 };
                 for f in files {
-                    let mtl = resolve(dir, f);
-                    if data.library.loaded.insert(mtl.clone()) {
-                        load_mtl(&mtl, &mut data.library)?;
-                    }
+                    data.library.load(resolve(dir, f))?;
                 }
             }
             _ => {}
@@ -238,7 +230,7 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
 
     // Materials in order of first use; slot `used.len()` is "no material".
     let mut slot_of_name = vec![NONE; data.material_names.len()];
-    let mut slot_of_library = vec![NONE; data.library.materials.len()];
+    let mut slot_of_library = vec![NONE; data.library.len()];
     let mut materials = Vec::new();
     for face in &data.faces {
         let m = face.material;
@@ -246,10 +238,10 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
             continue;
         }
         let name = &data.material_names[m as usize];
-        if let Some(&lib) = data.library.by_name.get(name) {
+        if let Some((lib, material)) = data.library.find(name) {
             if slot_of_library[lib] == NONE {
                 slot_of_library[lib] = materials.len() as u32;
-                materials.push(data.library.materials[lib].clone());
+                materials.push(material.clone());
             }
             slot_of_name[m as usize] = slot_of_library[lib];
         }
@@ -318,126 +310,6 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
     Ok(ObjModel { mesh, materials })
 }
 
-/// Reads an MTL file into `library`. Errors name the MTL file.
-fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
-    let text = String::from_utf8_lossy(&bytes);
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let mut current: Option<usize> = None;
-    for_each_line(&text, |n, line| {
-        let at = |message: &str| {
-            format!(
-                "material library \"{}\", line {n}: {message}",
-                path.display()
-            )
-        };
-        let mut words = line.split_ascii_whitespace();
-        let Some(keyword) = words.next() else {
-            return Ok(());
-        };
-        if keyword == "newmtl" {
-            let name = rest_of_line(line, keyword).to_owned();
-            let index = library.materials.len();
-            library.by_name.insert(name.clone(), index);
-            library.materials.push(ObjMaterial {
-                name,
-                diffuse: None,
-                ambient: None,
-                specular: None,
-                shininess: None,
-                diffuse_texture: None,
-            });
-            current = Some(index);
-            return Ok(());
-        }
-        // Statements before the first `newmtl` belong to no material.
-        let Some(m) = current.map(|i| &mut library.materials[i]) else {
-            return Ok(());
-        };
-        match keyword {
-            "Kd" | "Ka" | "Ks" => {
-                // The `spectral` and `xyz` forms are not RGB; leave the default.
-                if matches!(words.clone().next(), Some("spectral" | "xyz")) {
-                    return Ok(());
-                }
-                let given = words.clone().count();
-                let c = numbers::<3>(&mut words, 1)
-                    .filter(|c| c.iter().all(|x| x.is_finite()))
-                    .ok_or_else(|| at(&format!("`{keyword}` needs one or three numbers")))?;
-                // `Kd r` means grey.
-                let c = if given < 3 { [c[0]; 3] } else { c };
-                match keyword {
-                    "Kd" => m.diffuse = Some(c),
-                    "Ka" => m.ambient = Some(c),
-                    _ => m.specular = Some(c),
-                }
-            }
-            "Ns" => {
-                let [p] = numbers::<1>(&mut words, 1)
-                    .filter(|p| p[0].is_finite())
-                    .ok_or_else(|| at("`Ns` needs a number"))?;
-                m.shininess = Some(p);
-            }
-            "map_Kd" => {
-                if let Some(file) = texture_file_name(line, words) {
-                    m.diffuse_texture = Some(resolve(dir, file));
-                }
-            }
-            _ => {}
-        }
-        Ok(())
-    })
-}
-
-/// Calls `f(line number, line)` for every logical line of `text`, comments removed and
-/// `\`-continued lines joined (numbered by their first line).
-fn for_each_line(
-    text: &str,
-    mut f: impl FnMut(usize, &str) -> Result<(), String>,
-) -> Result<(), String> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut pending = String::new();
-    let mut pending_line = 0;
-    for (i, raw) in text.split('\n').enumerate() {
-        let line = raw.find('#').map_or(raw, |k| &raw[..k]).trim_end();
-        if let Some(head) = line.strip_suffix('\\') {
-            if pending.is_empty() {
-                pending_line = i + 1;
-            }
-            pending.push_str(head);
-            pending.push(' ');
-            continue;
-        }
-        let (n, line) = if pending.is_empty() {
-            (i + 1, Cow::Borrowed(line))
-        } else {
-            pending.push_str(line);
-            (pending_line, Cow::Owned(std::mem::take(&mut pending)))
-        };
-        f(n, &line)?;
-    }
-    if !pending.is_empty() {
-        f(pending_line, &pending)?;
-    }
-    Ok(())
-}
-
-/// The first `N` numbers of `words`, at least `min` of them present; missing ones are 0.
-/// Words after the first `N` are ignored (`v x y z w`, `v x y z r g b`).
-fn numbers<const N: usize>(
-    words: &mut std::str::SplitAsciiWhitespace<'_>,
-    min: usize,
-) -> Option<[f32; N]> {
-    let mut out = [0.0; N];
-    let mut count = 0;
-    for (slot, word) in out.iter_mut().zip(words) {
-        *slot = word.parse().ok()?;
-        count += 1;
-    }
-    (count >= min).then_some(out)
-}
-
 /// Parses one face corner `v`, `v/vt`, `v//vn` or `v/vt/vn` into 0-based indices, given how
 /// many positions, texture coordinates and normals are defined so far (for negative indices).
 fn parse_corner(word: &str, defined: [usize; 3]) -> Result<[u32; 3], String> {
@@ -485,57 +357,4 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<[u32; 3], String> {
         ));
     }
     Ok(out)
-}
-
-/// The text after `keyword` on `line`, trimmed (names may contain spaces).
-fn rest_of_line<'a>(line: &'a str, keyword: &str) -> &'a str {
-    line.trim_start()[keyword.len()..].trim()
-}
-
-/// The file name of a `map_Kd` statement: what follows its options, to the end of the line.
-fn texture_file_name<'a>(
-    line: &'a str,
-    mut words: std::str::SplitAsciiWhitespace<'a>,
-) -> Option<&'a str> {
-    while let Some(word) = words.next() {
-        if !word.starts_with('-') || word.len() == 1 {
-            // `word` is a slice of `line`: the name runs from it to the end of the line.
-            let start = word.as_ptr() as usize - line.as_ptr() as usize;
-            return Some(line[start..].trim_end());
-        }
-        match word {
-            "-blendu" | "-blendv" | "-cc" | "-clamp" | "-texres" | "-bm" | "-boost"
-            | "-imfchan" | "-type" => {
-                words.next();
-            }
-            "-mm" => {
-                words.next();
-                words.next();
-            }
-            // `-o`, `-s`, `-t` (and options unknown here): up to three numbers.
-            _ => {
-                for _ in 0..3 {
-                    let mut peek = words.clone();
-                    match peek.next() {
-                        Some(w) if w.parse::<f32>().is_ok() => words = peek,
-                        _ => break,
-                    }
-                }
-            }
-        }
-    }
-    None
-}
-
-/// `name` relative to `dir`. Names written with Windows separators are tried with `/` when
-/// the name as written does not exist.
-fn resolve(dir: &Path, name: &str) -> PathBuf {
-    let path = dir.join(name);
-    if name.contains('\\') && !path.exists() {
-        let alt = dir.join(name.replace('\\', "/"));
-        if alt.exists() {
-            return alt;
-        }
-    }
-    path
 }
