@@ -19,7 +19,8 @@ use crate::sampling::Rng;
 use crate::world::World;
 
 /// The specular lobe.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Shading {
     /// max(0, r·v)^p with r the mirrored light direction.
     Phong,
@@ -28,7 +29,8 @@ pub enum Shading {
 }
 
 /// How much light reaches a point and how the BRDF is normalized.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum LightModel {
     /// The seed's: each area-light sample is a point light of color·intensity/N² shining
     /// both ways, no falloff; the BRDF is the plain Phong sum.

@@ -4,7 +4,8 @@
 use glam::Vec2;
 
 /// How pixel samples are placed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Sampler {
     /// One sample at the pixel center.
     Center,

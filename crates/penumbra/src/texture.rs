@@ -8,7 +8,8 @@ use glam::Vec2;
 use crate::math::Rgb;
 
 /// How texels are blended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Filter {
     /// The texel the point falls in.
     Nearest,
@@ -17,7 +18,8 @@ pub enum Filter {
 }
 
 /// How texel indices outside the image are mapped back in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Wrap {
     /// Euclidean modulo: the image tiles the plane.
     Repeat,

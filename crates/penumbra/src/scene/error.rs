@@ -87,6 +87,34 @@ impl fmt::Display for Location {
     }
 }
 
+/// What kind of mistake a [`SceneError`] reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The text is not valid TOML or JSON (including a duplicate TOML key).
+    Syntax,
+    /// A key the table (or that kind of object, light or texture) does not take.
+    UnknownKey,
+    /// A required key is absent.
+    MissingKey,
+    /// A value of the wrong type, out of range, not finite, or not one of the allowed names.
+    BadValue,
+    /// A name that refers to nothing: a material, texture or camera.
+    UnknownName,
+    /// A file the scene refers to cannot be loaded.
+    Asset(AssetKind),
+    /// The scene file itself cannot be read, or its name names no format.
+    File,
+}
+
+/// Which kind of file an [`ErrorKind::Asset`] error is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AssetKind {
+    /// A Wavefront OBJ mesh or its MTL material library.
+    Mesh,
+    /// A texture image.
+    Image,
+}
+
 /// Why a scene could not be loaded or built. Every variant is the user's input being wrong.
 #[derive(Debug, Error)]
 pub enum SceneError {
@@ -104,24 +132,46 @@ pub enum SceneError {
         /// The file.
         path: PathBuf,
     },
-    /// Something in the file is wrong: a syntax error, an unknown or missing key, a wrong
-    /// type or value, a reference to something that does not exist, or an asset (mesh,
-    /// texture) that cannot be loaded.
+    /// Something in the file is wrong, located in it.
     #[error("{location}: {message}")]
     Invalid {
+        /// What kind of mistake.
+        kind: ErrorKind,
         /// Where.
         location: Location,
         /// What is wrong.
         message: String,
     },
-    /// A command-line or API override is invalid.
-    #[error("{option}: {message}")]
-    Override {
-        /// The option, as the command line spells it.
-        option: &'static str,
-        /// What is wrong.
-        message: String,
-    },
+}
+
+impl SceneError {
+    /// What kind of mistake this is.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            SceneError::Read { .. } | SceneError::UnknownFormat { .. } => ErrorKind::File,
+            SceneError::Invalid { kind, .. } => *kind,
+        }
+    }
+
+    /// Where in the file, for errors about its contents.
+    pub fn location(&self) -> Option<&Location> {
+        match self {
+            SceneError::Invalid { location, .. } => Some(location),
+            _ => None,
+        }
+    }
+}
+
+/// The kind of a parser's message. serde reports mistakes as text only, so its standard
+/// phrases (and this crate's own, from the scene types' deserializers) are matched here.
+pub(crate) fn classify(message: &str) -> ErrorKind {
+    if message.starts_with("unknown field") || message.starts_with("unknown key") {
+        ErrorKind::UnknownKey
+    } else if message.starts_with("missing field") || message.starts_with("missing key") {
+        ErrorKind::MissingKey
+    } else {
+        ErrorKind::BadValue
+    }
 }
 
 /// 1-based line and column (in characters) of a byte offset.

@@ -1,0 +1,159 @@
+//! Textures, materials and lights. Scene materials and MTL materials go through one
+//! conversion ([`material`]), so both get the same defaults: those of [`Material::default`].
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::Vec2;
+
+use super::{list, Builder, Result};
+use crate::image_io::load_texture_image;
+use crate::light::{AreaLight, Light, PointLight};
+use crate::material::Material;
+use crate::math::Rgb;
+use crate::scene::desc::{ColorSpace, LightDesc, MaterialDesc, Num, TextureDesc, TextureKindDesc};
+use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
+use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
+
+/// The (Blinn-)Phong coefficients as a scene file or an MTL file gives them; what is absent
+/// takes the default material's value (k_a defaults to k_d).
+pub(super) struct Phong {
+    pub(super) diffuse: Option<Rgb>,
+    pub(super) ambient: Option<Rgb>,
+    pub(super) specular: Option<Rgb>,
+    pub(super) shininess: Option<f32>,
+    pub(super) texture: Option<u32>,
+}
+
+/// The material `p` describes.
+pub(super) fn material(p: Phong) -> Material {
+    let defaults = Material::default();
+    let diffuse = p.diffuse.unwrap_or(defaults.diffuse);
+    Material {
+        ambient: p.ambient.unwrap_or(diffuse),
+        diffuse,
+        specular: p.specular.unwrap_or(defaults.specular),
+        shininess: p.shininess.unwrap_or(defaults.shininess),
+        texture: p.texture,
+    }
+}
+
+impl Builder<'_> {
+    /// The decoded image `file`, loaded once per scene and color space.
+    pub(super) fn image(
+        &mut self,
+        path: &KeyPath,
+        file: PathBuf,
+        srgb: bool,
+        what: &str,
+    ) -> Result<Arc<Image>> {
+        let key = (std::fs::canonicalize(&file).unwrap_or(file.clone()), srgb);
+        if let Some(img) = self.images.get(&key) {
+            return Ok(img.clone());
+        }
+        let img = load_texture_image(&file, srgb).map_err(|e| {
+            self.err(
+                ErrorKind::Asset(AssetKind::Image),
+                path,
+                format!("cannot load {what} \"{}\": {e}", file.display()),
+            )
+        })?;
+        let img = Arc::new(img);
+        self.images.insert(key, img.clone());
+        Ok(img)
+    }
+
+    pub(super) fn texture(&mut self, path: &KeyPath, t: &TextureDesc) -> Result<Texture> {
+        let kind = match &t.kind {
+            TextureKindDesc::Image(i) => {
+                let srgb = i.colorspace.unwrap_or(ColorSpace::Srgb) == ColorSpace::Srgb;
+                let file = self.file.resolve(&i.file);
+                let image = self.image(&path.key("file"), file, srgb, "texture")?;
+                TextureKind::Image(ImageTexture {
+                    image,
+                    filter: i.filter.unwrap_or(Filter::Bilinear),
+                    wrap: i.wrap.unwrap_or(Wrap::Repeat),
+                })
+            }
+            TextureKindDesc::Checker(c) => TextureKind::Checker {
+                even: c.even.map_or(Rgb::ONE, |c| c.rgb()),
+                odd: c.odd.map_or(Rgb::ZERO, |c| c.rgb()),
+                checks: c.checks.map_or(8.0, Num::f32),
+            },
+        };
+        Ok(Texture {
+            kind,
+            uv_scale: t.uv_scale.map_or(Vec2::ONE, |v| v.vec2()),
+            uv_offset: t.uv_offset.map_or(Vec2::ZERO, |v| v.vec2()),
+        })
+    }
+
+    pub(super) fn material(&self, path: &KeyPath, m: &MaterialDesc) -> Result<Material> {
+        if let Some(Num(p)) = m.shininess {
+            if p < 0.0 {
+                return Err(self.bad(
+                    &path.key("shininess"),
+                    format!("shininess must be at least 0, not {p}"),
+                ));
+            }
+        }
+        let textures = &self.file.desc.textures;
+        let texture = match &m.texture {
+            None => None,
+            Some(name) => Some(textures.get(name).map(|(i, _)| i as u32).ok_or_else(|| {
+                let known: Vec<&str> = textures.names().collect();
+                self.err(
+                    ErrorKind::UnknownName,
+                    &path.key("texture"),
+                    format!("unknown texture \"{name}\"{}", list(&known)),
+                )
+            })?),
+        };
+        Ok(material(Phong {
+            diffuse: m.diffuse.map(|c| c.rgb()),
+            ambient: m.ambient.map(|c| c.rgb()),
+            specular: m.specular.map(|c| c.rgb()),
+            shininess: m.shininess.map(Num::f32),
+            texture,
+        }))
+    }
+
+    pub(super) fn light(&self, path: &KeyPath, l: &LightDesc, default_n: u32) -> Result<Light> {
+        let color = |c: Option<crate::scene::desc::ColorDesc>, i: Option<Num>| {
+            c.map_or(Rgb::ONE, |c| c.rgb()) * i.map_or(1.0, Num::f32)
+        };
+        Ok(match l {
+            LightDesc::Area(a) => Light::Area(AreaLight {
+                center: a.center.vec3(),
+                u: a.u.vec3(),
+                v: a.v.vec3(),
+                radiance: color(a.color, a.intensity),
+                n: match a.samples {
+                    Some(n) => self.light_n(&path.key("samples"), n)?,
+                    None => default_n,
+                },
+                jitter: a.jitter.unwrap_or(false),
+            }),
+            LightDesc::Point(p) => Light::Point(PointLight {
+                position: p.position.vec3(),
+                intensity: color(p.color, p.intensity),
+            }),
+        })
+    }
+
+    /// The index of the material called `name`.
+    pub(super) fn material_index(&self, path: &KeyPath, name: &str) -> Result<u32> {
+        let materials = &self.file.desc.materials;
+        materials
+            .get(name)
+            .map(|(i, _)| i as u32 + 1)
+            .ok_or_else(|| {
+                let known: Vec<&str> = materials.names().collect();
+                self.err(
+                    ErrorKind::UnknownName,
+                    path,
+                    format!("unknown material \"{name}\"{}", list(&known)),
+                )
+            })
+    }
+}

@@ -1,0 +1,90 @@
+//! [`SceneDesc`](super::SceneDesc) → [`Scene`]: checks every value the parser could not (ranges,
+//! names that refer to other entries), loads meshes and textures, and feeds a
+//! [`WorldBuilder`]. Split by concern: `settings` (film, cameras, `[render]`), `materials`
+//! (textures, materials, lights, and MTL materials through the same conversion) and `objects`
+//! (shapes and OBJ meshes). Every error is located in the file.
+
+mod materials;
+mod objects;
+mod settings;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use super::error::{ErrorKind, KeyPath, SceneError};
+use super::{Scene, SceneFile};
+use crate::texture::Image;
+use crate::world::WorldBuilder;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Builder state: the file for locating errors, caches shared across entries, and the world
+/// being built.
+struct Builder<'a> {
+    file: &'a SceneFile,
+    /// Decoded images by canonical path and color space, shared by every texture using one.
+    images: HashMap<(PathBuf, bool), Arc<Image>>,
+    /// OBJ files read once per scene.
+    meshes: HashMap<PathBuf, objects::LoadedObj>,
+    world: WorldBuilder,
+}
+
+pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
+    let desc = &file.desc;
+    let mut b = Builder {
+        file,
+        images: HashMap::new(),
+        meshes: HashMap::new(),
+        world: WorldBuilder::new(),
+    };
+    let film = b.film()?;
+    b.cameras()?;
+    let (settings, default_light_samples) = b.settings(film.width, film.height)?;
+
+    for (name, tex) in &desc.textures.0 {
+        let texture = b.texture(&KeyPath::root("textures").key(name), tex)?;
+        b.world.add_texture(texture);
+    }
+    // Material 0 is the format's default; named materials follow in file order.
+    for (name, m) in &desc.materials.0 {
+        let path = KeyPath::root("materials").key(name);
+        let material = b.material(&path, m)?;
+        b.world
+            .add_material(material)
+            .map_err(|e| b.err(ErrorKind::BadValue, &path, e.to_string()))?;
+    }
+    for (i, l) in desc.lights.iter().enumerate() {
+        let light = b.light(&KeyPath::root("lights").index(i), l, default_light_samples)?;
+        b.world.add_light(light);
+    }
+    for (i, o) in desc.objects.iter().enumerate() {
+        b.object(&KeyPath::root("objects").index(i), o)?;
+    }
+    Ok(Scene {
+        world: Arc::new(b.world.build(threads)),
+        settings,
+        output: film.output,
+        gamma: film.gamma,
+    })
+}
+
+impl Builder<'_> {
+    fn err(&self, kind: ErrorKind, path: &KeyPath, message: impl Into<String>) -> SceneError {
+        self.file.error(kind, path, message)
+    }
+
+    /// A value out of its range.
+    fn bad(&self, path: &KeyPath, message: impl Into<String>) -> SceneError {
+        self.err(ErrorKind::BadValue, path, message)
+    }
+}
+
+/// " (known: a, b)" or " (none are defined)", to end an unknown-name message.
+fn list(known: &[&str]) -> String {
+    if known.is_empty() {
+        " (none are defined)".to_owned()
+    } else {
+        format!(" (known: {})", known.join(", "))
+    }
+}

@@ -1,0 +1,167 @@
+//! Objects: each shape becomes an object-space [`Mesh`] (OBJ files read once per scene, their
+//! MTL materials made once per file) and is added to the world with its transform.
+
+use std::rc::Rc;
+
+use glam::Vec3;
+
+use super::materials::{material, Phong};
+use super::{Builder, Result};
+use crate::geometry::{self, Mesh};
+use crate::math::Transform;
+use crate::scene::desc::{ObjectDesc, ShapeDesc};
+use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
+use crate::scene::obj::{load_obj, ObjMaterial};
+use crate::texture::{Filter, ImageTexture, Texture, TextureKind, Wrap};
+use crate::world::{WorldError, DEFAULT_MATERIAL};
+
+/// An OBJ file read once for every object that uses it.
+pub(super) struct LoadedObj {
+    mesh: Rc<Mesh>,
+    mtl: Vec<ObjMaterial>,
+    /// World materials made from `mtl` (then the default for faces without one), made when an
+    /// object first uses the file without a `material` of its own.
+    world_materials: Option<Vec<u32>>,
+}
+
+impl Builder<'_> {
+    pub(super) fn object(&mut self, path: &KeyPath, o: &ObjectDesc) -> Result<()> {
+        let mut world = Transform::from_srt(
+            o.scale.map_or(Vec3::ONE, |s| s.rgb()),
+            o.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
+            o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
+        );
+        if world.is_singular() {
+            return Err(self.bad(&path.key("scale"), "scale must not be zero"));
+        }
+        let mut materials = vec![match &o.material {
+            Some(name) => self.material_index(&path.key("material"), name)?,
+            None => DEFAULT_MATERIAL,
+        }];
+        let mesh = match &o.shape {
+            ShapeDesc::Triangle(t) => {
+                let uvs = t
+                    .uvs
+                    .map_or([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y], |u| {
+                        u.map(|v| v.vec2())
+                    });
+                let normals = t.normals.map(|n| n.map(|v| v.vec3()));
+                Rc::new(geometry::triangle(
+                    t.vertices.map(|v| v.vec3()),
+                    uvs,
+                    normals,
+                ))
+            }
+            ShapeDesc::Quad(q) => Rc::new(geometry::quad(q.corner.vec3(), q.u.vec3(), q.v.vec3())),
+            ShapeDesc::Cube(c) => {
+                world =
+                    Transform::from_srt(Vec3::ONE, Vec3::ZERO, c.center.vec3()).then_after(world);
+                let size = c.size.rgb();
+                if size.cmplt(Vec3::ZERO).any() {
+                    return Err(self.bad(&path.key("size"), "size must not be negative"));
+                }
+                Rc::new(geometry::cube(size))
+            }
+            ShapeDesc::Sphere(s) => {
+                world =
+                    Transform::from_srt(Vec3::ONE, Vec3::ZERO, s.center.vec3()).then_after(world);
+                if s.radius.0 < 0.0 {
+                    return Err(self.bad(&path.key("radius"), "radius must not be negative"));
+                }
+                Rc::new(geometry::sphere(s.radius.f32()))
+            }
+            ShapeDesc::Mesh(m) => {
+                let (mesh, mtl_materials) =
+                    self.obj(&path.key("file"), &m.file, o.material.is_none())?;
+                if let Some(m) = mtl_materials {
+                    materials = m;
+                }
+                mesh
+            }
+        };
+        self.world
+            .add_mesh(&mesh, &world, &materials)
+            .map_err(|e| {
+                let kind = match e {
+                    WorldError::VertexOutOfRange { .. } => ErrorKind::Asset(AssetKind::Mesh),
+                    _ => ErrorKind::BadValue,
+                };
+                self.err(kind, path, e.to_string())
+            })?;
+        Ok(())
+    }
+
+    /// The mesh of the OBJ `file` (read once per scene) and, when `with_mtl`, the world
+    /// materials of its MTL materials followed by the default (made once per file).
+    fn obj(
+        &mut self,
+        path: &KeyPath,
+        file: &str,
+        with_mtl: bool,
+    ) -> Result<(Rc<Mesh>, Option<Vec<u32>>)> {
+        let obj_path = self.file.resolve(file);
+        let key = std::fs::canonicalize(&obj_path).unwrap_or_else(|_| obj_path.clone());
+        let loaded = match self.meshes.get(&key) {
+            Some(loaded) => loaded,
+            None => {
+                let model = load_obj(&obj_path).map_err(|e| {
+                    self.err(
+                        ErrorKind::Asset(AssetKind::Mesh),
+                        path,
+                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
+                    )
+                })?;
+                let loaded = LoadedObj {
+                    mesh: Rc::new(model.mesh),
+                    mtl: model.materials,
+                    world_materials: None,
+                };
+                self.meshes.entry(key.clone()).or_insert(loaded)
+            }
+        };
+        let mesh = loaded.mesh.clone();
+        if !with_mtl {
+            return Ok((mesh, None));
+        }
+        if let Some(ids) = &loaded.world_materials {
+            return Ok((mesh, Some(ids.clone())));
+        }
+        let mtl = loaded.mtl.clone();
+        let mut ids = Vec::with_capacity(mtl.len() + 1);
+        for m in &mtl {
+            let texture = match &m.diffuse_texture {
+                None => None,
+                Some(t) => {
+                    let what = format!("texture (map_Kd of material \"{}\")", m.name);
+                    let image = self.image(path, t.clone(), true, &what)?;
+                    Some(self.world.add_texture(Texture {
+                        kind: TextureKind::Image(ImageTexture {
+                            image,
+                            filter: Filter::Bilinear,
+                            wrap: Wrap::Repeat,
+                        }),
+                        uv_scale: glam::Vec2::ONE,
+                        uv_offset: glam::Vec2::ZERO,
+                    }))
+                }
+            };
+            let id = self
+                .world
+                .add_material(material(Phong {
+                    diffuse: m.diffuse.map(Vec3::from),
+                    ambient: m.ambient.map(Vec3::from),
+                    specular: m.specular.map(Vec3::from),
+                    shininess: m.shininess.map(|s| s.max(0.0)),
+                    texture,
+                }))
+                .map_err(|e| self.bad(path, e.to_string()))?;
+            ids.push(id);
+        }
+        // Faces without an MTL material use slot `mtl.len()`: the default material.
+        ids.push(DEFAULT_MATERIAL);
+        if let Some(loaded) = self.meshes.get_mut(&key) {
+            loaded.world_materials = Some(ids.clone());
+        }
+        Ok((mesh, Some(ids)))
+    }
+}

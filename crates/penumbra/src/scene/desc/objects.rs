@@ -1,0 +1,232 @@
+//! `[[objects]]`: one struct per shape, chosen by the table's `type` key (read by `tagged`).
+//!
+//! ```
+//! use penumbra::scene::desc::{ShapeDesc, ObjectDesc};
+//! let file = penumbra::SceneFile::from_str(r#"
+//! [film]
+//! width = 8
+//! height = 8
+//! [camera]
+//! position = [0, 0, 5]
+//! look_at = [0, 0, 0]
+//! fov = 40
+//! [[objects]]
+//! type = "sphere"
+//! center = [0, 0, 0]
+//! radius = 1
+//! translate = [0, 1, 0]
+//! "#, penumbra::SceneFormat::Toml, "doc.toml", ".").unwrap();
+//! let ObjectDesc { shape: ShapeDesc::Sphere(s), translate, .. } = &file.desc.objects[0] else {
+//!     panic!("a sphere")
+//! };
+//! assert_eq!((s.radius.0, translate.unwrap().0[1]), (1.0, 1.0));
+//! ```
+
+use serde::de::{Deserializer, MapAccess};
+use serde::Deserialize;
+
+use super::tagged::{self, Tagged};
+use super::values::{ColorDesc, Num, Vec2Desc, Vec3Desc};
+
+/// `[[objects]]`: a shape, its material and its placement (`T·Rz·Ry·Rx·S`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectDesc {
+    /// What the object is.
+    pub shape: ShapeDesc,
+    /// Material name (default: the format's default material).
+    pub material: Option<String>,
+    /// Scale factor(s).
+    pub scale: Option<ColorDesc>,
+    /// Rotation about x, y, z in degrees.
+    pub rotate: Option<Vec3Desc>,
+    /// Translation.
+    pub translate: Option<Vec3Desc>,
+}
+
+/// The shape of an object, by its `type`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeDesc {
+    /// `type = "triangle"`.
+    Triangle(TriangleDesc),
+    /// `type = "quad"`: a parallelogram.
+    Quad(QuadDesc),
+    /// `type = "cube"`: a box.
+    Cube(CubeDesc),
+    /// `type = "sphere"`: a tessellated sphere.
+    Sphere(SphereDesc),
+    /// `type = "mesh"`: a Wavefront OBJ file.
+    Mesh(MeshDesc),
+}
+
+/// One triangle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleDesc {
+    /// Its corners.
+    pub vertices: [Vec3Desc; 3],
+    /// Texture coordinates (default (0,0), (1,0), (0,1)).
+    pub uvs: Option<[Vec2Desc; 3]>,
+    /// Vertex normals for smooth shading.
+    pub normals: Option<[Vec3Desc; 3]>,
+}
+
+/// The parallelogram `corner`, `corner + u`, `corner + u + v`, `corner + v`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuadDesc {
+    /// First corner.
+    pub corner: Vec3Desc,
+    /// First edge.
+    pub u: Vec3Desc,
+    /// Second edge.
+    pub v: Vec3Desc,
+}
+
+/// An axis-aligned box before its transform.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CubeDesc {
+    /// Center.
+    pub center: Vec3Desc,
+    /// Edge length(s), not negative.
+    pub size: ColorDesc,
+}
+
+/// A sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SphereDesc {
+    /// Center.
+    pub center: Vec3Desc,
+    /// Radius, not negative.
+    pub radius: Num,
+}
+
+/// A mesh file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshDesc {
+    /// Wavefront OBJ file, relative to the scene file's folder.
+    pub file: String,
+}
+
+/// The `type` of an object.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ObjectType {
+    /// One triangle.
+    Triangle,
+    /// A parallelogram.
+    Quad,
+    /// A box.
+    Cube,
+    /// A tessellated sphere.
+    Sphere,
+    /// A Wavefront OBJ file.
+    Mesh,
+}
+
+#[derive(Default)]
+pub(super) struct ObjectFields {
+    material: Option<String>,
+    scale: Option<ColorDesc>,
+    rotate: Option<Vec3Desc>,
+    translate: Option<Vec3Desc>,
+    vertices: Option<[Vec3Desc; 3]>,
+    uvs: Option<[Vec2Desc; 3]>,
+    normals: Option<[Vec3Desc; 3]>,
+    corner: Option<Vec3Desc>,
+    u: Option<Vec3Desc>,
+    v: Option<Vec3Desc>,
+    center: Option<Vec3Desc>,
+    size: Option<ColorDesc>,
+    radius: Option<Num>,
+    file: Option<String>,
+}
+
+impl Tagged for ObjectDesc {
+    type Kind = ObjectType;
+    type Fields = ObjectFields;
+    const COMMON: &'static [&'static str] = &["material", "scale", "rotate", "translate"];
+    const ALL: &'static [&'static str] = &[
+        "vertices", "uvs", "normals", "corner", "u", "v", "center", "size", "radius", "file",
+    ];
+
+    fn keys(kind: ObjectType) -> &'static [&'static str] {
+        match kind {
+            ObjectType::Triangle => &["vertices", "uvs", "normals"],
+            ObjectType::Quad => &["corner", "u", "v"],
+            ObjectType::Cube => &["center", "size"],
+            ObjectType::Sphere => &["center", "radius"],
+            ObjectType::Mesh => &["file"],
+        }
+    }
+
+    fn describe(kind: ObjectType) -> &'static str {
+        match kind {
+            ObjectType::Triangle => "a triangle",
+            ObjectType::Quad => "a quad",
+            ObjectType::Cube => "a cube",
+            ObjectType::Sphere => "a sphere",
+            ObjectType::Mesh => "a mesh",
+        }
+    }
+
+    fn read<'de, A: MapAccess<'de>>(
+        f: &mut ObjectFields,
+        key: &str,
+        map: &mut A,
+    ) -> Result<(), A::Error> {
+        match key {
+            "material" => f.material = Some(map.next_value()?),
+            "scale" => f.scale = Some(map.next_value()?),
+            "rotate" => f.rotate = Some(map.next_value()?),
+            "translate" => f.translate = Some(map.next_value()?),
+            "vertices" => f.vertices = Some(map.next_value()?),
+            "uvs" => f.uvs = Some(map.next_value()?),
+            "normals" => f.normals = Some(map.next_value()?),
+            "corner" => f.corner = Some(map.next_value()?),
+            "u" => f.u = Some(map.next_value()?),
+            "v" => f.v = Some(map.next_value()?),
+            "center" => f.center = Some(map.next_value()?),
+            "size" => f.size = Some(map.next_value()?),
+            "radius" => f.radius = Some(map.next_value()?),
+            _ => f.file = Some(map.next_value()?),
+        }
+        Ok(())
+    }
+
+    fn finish(kind: ObjectType, f: ObjectFields) -> Result<Self, &'static str> {
+        let shape = match kind {
+            ObjectType::Triangle => ShapeDesc::Triangle(TriangleDesc {
+                vertices: f.vertices.ok_or("vertices")?,
+                uvs: f.uvs,
+                normals: f.normals,
+            }),
+            ObjectType::Quad => ShapeDesc::Quad(QuadDesc {
+                corner: f.corner.ok_or("corner")?,
+                u: f.u.ok_or("u")?,
+                v: f.v.ok_or("v")?,
+            }),
+            ObjectType::Cube => ShapeDesc::Cube(CubeDesc {
+                center: f.center.ok_or("center")?,
+                size: f.size.ok_or("size")?,
+            }),
+            ObjectType::Sphere => ShapeDesc::Sphere(SphereDesc {
+                center: f.center.ok_or("center")?,
+                radius: f.radius.ok_or("radius")?,
+            }),
+            ObjectType::Mesh => ShapeDesc::Mesh(MeshDesc {
+                file: f.file.ok_or("file")?,
+            }),
+        };
+        Ok(ObjectDesc {
+            shape,
+            material: f.material,
+            scale: f.scale,
+            rotate: f.rotate,
+            translate: f.translate,
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for ObjectDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        tagged::deserialize(d)
+    }
+}
