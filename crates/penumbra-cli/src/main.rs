@@ -10,10 +10,10 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use penumbra::light::Light;
+
 use penumbra::{
-    render, write_image, OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings,
-    Sampler, Scene, SceneFile, SettingsError, View, World,
+    render, write_image, Light, OutputFormat, PixelBounds, RenderError, RenderOptions,
+    RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World,
 };
 use serde_json::json;
 

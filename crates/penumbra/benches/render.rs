@@ -10,20 +10,18 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::accel::{intersect_brute_force, Bvh};
-use penumbra::geometry::{self, Geometry};
-use penumbra::math::{Ray, Transform};
+use penumbra::{intersect_brute_force, shapes, Bvh, Geometry, Ray, Transform};
 use penumbra::{render, RenderOptions, SceneFile};
 
 /// Two tessellated spheres and a floor: 18,050 triangles.
 fn spheres() -> Geometry {
     let mut g = Geometry::default();
-    let ball = geometry::sphere(1.0);
+    let ball = shapes::sphere(1.0);
     for x in [-1.2f32, 1.2] {
         let t = Transform::from_srt(Vec3::ONE, Vec3::ZERO, Vec3::new(x, 1.0, 0.0));
         g.append(&ball, &t, &[0], 0);
     }
-    let floor = geometry::quad(Vec3::new(-5.0, 0.0, 5.0), Vec3::X * 10.0, Vec3::Z * -10.0);
+    let floor = shapes::quad(Vec3::new(-5.0, 0.0, 5.0), Vec3::X * 10.0, Vec3::Z * -10.0);
     g.append(&floor, &Transform::IDENTITY, &[0], 1);
     g
 }

@@ -44,31 +44,43 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod accel;
-pub mod camera;
-pub mod film;
-pub mod geometry;
-pub mod image_io;
+mod accel;
+mod camera;
+mod film;
+mod geometry;
+mod image_io;
 mod integrator;
-pub mod light;
-pub mod material;
-pub mod math;
+mod light;
+mod material;
+mod math;
 mod pool;
 mod render;
-pub mod sampling;
-pub mod scene;
-pub mod texture;
+mod sampling;
+mod scene;
+mod texture;
 mod world;
 
-pub use camera::{Camera, CameraError};
+/// The built-in shapes as object-space meshes, for [`WorldBuilder::add_mesh`].
+pub mod shapes {
+    pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
+}
+
+pub use accel::{intersect_brute_force, Bvh};
+pub use camera::{Camera, CameraError, PinholeCamera};
 pub use film::Film;
-pub use image_io::{write_image, ImageError, OutputFormat};
+pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
+pub use image_io::{encode_8bit, write_image, ImageError, OutputFormat};
 pub use integrator::{LightModel, Shading};
+pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
+pub use math::{Aabb, Ray, Rgb, Transform};
 pub use render::{
     render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
     View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
 };
-pub use sampling::Sampler;
-pub use scene::{Scene, SceneDesc, SceneError, SceneFile, SceneFormat};
+pub use sampling::{Rng, Sampler};
+pub use scene::{
+    desc, AssetKind, ErrorKind, Location, Scene, SceneDesc, SceneError, SceneFile, SceneFormat,
+};
+pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};

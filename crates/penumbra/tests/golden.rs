@@ -19,7 +19,7 @@
 use std::path::{Path, PathBuf};
 
 use image::RgbImage;
-use penumbra::image_io::encode_8bit;
+use penumbra::encode_8bit;
 use penumbra::{render, RenderOptions, Scene, SceneFile, View};
 
 const SIZE: u32 = 96;

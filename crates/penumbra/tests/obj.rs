@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Vec2, Vec3};
-use penumbra::texture::TextureKind;
+use penumbra::TextureKind;
 use penumbra::{Scene, SceneError, SceneFile, SceneFormat};
 
 /// A folder of its own under the system's temporary folder, removed when dropped.

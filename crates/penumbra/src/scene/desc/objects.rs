@@ -1,7 +1,7 @@
 //! `[[objects]]`: one struct per shape, chosen by the table's `type` key (read by `tagged`).
 //!
 //! ```
-//! use penumbra::scene::desc::{ShapeDesc, ObjectDesc};
+//! use penumbra::desc::{ObjectDesc, ShapeDesc};
 //! let file = penumbra::SceneFile::from_str(r#"
 //! [film]
 //! width = 8
