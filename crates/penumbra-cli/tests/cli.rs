@@ -1,5 +1,5 @@
 //! End-to-end tests of the `penumbra` binary: what a user sees when they run it. Exit codes,
-//! the one-line `error:` messages of SPEC §8 (file, line:col, key path), that a failed run
+//! the one-line `error:` messages of SPEC §8 (docs/spec.md) (file, line:col, key path), that a failed run
 //! leaves no image (and no temporary file) behind, the success paths of SPEC §9, and that
 //! images do not depend on the thread count or on rendering a sub-region.
 //!

@@ -1,4 +1,4 @@
-//! The pinhole camera of SPEC §3: a [`Camera`] is a pose and a field of view; paired with a
+//! The pinhole camera of SPEC §3 (docs/spec.md): a [`Camera`] is a pose and a field of view; paired with a
 //! film size it becomes a [`PinholeCamera`] that turns film points into rays from the eye.
 
 use glam::Vec3;

@@ -1,4 +1,4 @@
-//! Lights of SPEC §6: parallelogram area lights sampled on an N×N grid, and point lights.
+//! Lights of SPEC §6 (docs/spec.md): parallelogram area lights sampled on an N×N grid, and point lights.
 //! Lights are not geometry: camera rays do not see them and they cast no shadows.
 
 use glam::{Vec2, Vec3};

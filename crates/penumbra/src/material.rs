@@ -1,4 +1,4 @@
-//! Phong materials of SPEC §6.
+//! Phong materials of SPEC §6 (docs/spec.md).
 
 use crate::math::Rgb;
 

@@ -1,4 +1,4 @@
-//! Sample generators: the pixel offset patterns of SPEC §4 and a counter-based random
+//! Sample generators: the pixel offset patterns of SPEC §4 (docs/spec.md) and a counter-based random
 //! generator, seeded per pixel and sample, so that images never depend on scheduling.
 
 use glam::Vec2;

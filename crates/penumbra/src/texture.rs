@@ -1,4 +1,4 @@
-//! Textures of SPEC §6: decoded images sampled with nearest or bilinear filtering and repeat or
+//! Textures of SPEC §6 (docs/spec.md): decoded images sampled with nearest or bilinear filtering and repeat or
 //! clamp wrapping, and the procedural checker.
 
 use std::sync::Arc;

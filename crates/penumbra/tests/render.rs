@@ -1,6 +1,6 @@
 //! Rendered pixels against closed forms: small scenes built from TOML text through the public
 //! API, rendered, and compared pixel by pixel with values computed here, in f64, straight from
-//! the formulas of SPEC §3 (camera), §4 (pixel sampling), §5 (intersection), §6 (shading) and
+//! the formulas of SPEC §3 (docs/spec.md) (camera), §4 (pixel sampling), §5 (intersection), §6 (shading) and
 //! §7 (output). Nothing here calls the library's own math: the expected side re-derives every
 //! ray, hit point, normal, light sample and texel from the SPEC text.
 //!
