@@ -84,3 +84,8 @@ pub use scene::{
 };
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};
+
+// The README's Rust snippets are compiled (and, unless `no_run`, run) as doc-tests.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+struct ReadmeDoctests;
