@@ -1,10 +1,20 @@
-//! Tests of the BVH against the brute-force references: unit tests for edge cases and
-//! property tests over random triangle soups.
+//! Tests of the BVH against the brute-force references [`intersect_brute_force`] and
+//! [`occluded_brute_force`]: the shared helpers, and unit tests of the structure (node layout,
+//! validation, depth cap, serial against parallel build) and of the queries on empty scenes and
+//! batches. Edge cases of the geometry are in `edges`, property tests over random scenes in
+//! `props`.
+
+use std::sync::OnceLock;
 
 use super::*;
-use crate::geometry::Mesh;
+use crate::geometry::{intersect_triangle, Mesh};
 use crate::math::Transform;
-use proptest::prelude::*;
+
+mod edges;
+mod props;
+
+/// The `t_max` of shadow segments: short of the end point, so a surface there is not a blocker.
+const T_MAX: f32 = 1.0 - 1e-4;
 
 #[test]
 fn node_is_32_bytes() {
@@ -12,6 +22,7 @@ fn node_is_32_bytes() {
     assert_eq!(std::mem::align_of::<BvhNode>(), 32);
 }
 
+/// One single-triangle mesh per entry, so triangle `i` of the geometry is `tris[i]`.
 fn soup(tris: &[[[f32; 3]; 3]]) -> Geometry {
     let mut g = Geometry::default();
     for t in tris {
@@ -25,21 +36,91 @@ fn soup(tris: &[[[f32; 3]; 3]]) -> Geometry {
     g
 }
 
+/// The two triangles of the parallelogram `corner + a·u + b·v`, `a, b ∈ [0, 1]`.
+fn parallelogram(corner: Vec3, u: Vec3, v: Vec3) -> [[[f32; 3]; 3]; 2] {
+    let [p, pu, pv, puv] = [corner, corner + u, corner + v, corner + u + v].map(<[f32; 3]>::from);
+    [[p, pu, puv], [p, puv, pv]]
+}
+
+fn pool() -> &'static rayon::ThreadPool {
+    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
+    POOL.get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+    })
+}
+
+/// Builds serially and on a pool, validates both, checks they are the same tree, and returns it.
+fn build_checked(g: &Geometry) -> Bvh {
+    let bvh = Bvh::build(g);
+    bvh.validate(g)
+        .unwrap_or_else(|e| panic!("serial build: {e}"));
+    let parallel = Bvh::build_parallel(g, pool());
+    parallel
+        .validate(g)
+        .unwrap_or_else(|e| panic!("parallel build: {e}"));
+    assert_same_tree(&bvh, &parallel);
+    bvh
+}
+
+fn assert_same_tree(a: &Bvh, b: &Bvh) {
+    assert_eq!(a.nodes, b.nodes);
+    assert_eq!(a.prim_ids, b.prim_ids);
+    assert_eq!(a.tris, b.tris);
+}
+
 fn assert_agree(g: &Geometry, bvh: &Bvh, ray: &Ray) {
-    let a = bvh.intersect(ray, 1e-4, f32::INFINITY);
-    let b = intersect_brute_force(g, ray, 1e-4, f32::INFINITY);
+    assert_agree_in(g, bvh, ray, 1e-4, f32::INFINITY);
+}
+
+/// Closest hit and occlusion over `(t_min, t_max)` agree with brute force: the same distance
+/// (the triangle may differ only on an exact tie), the reported barycentrics are the hit
+/// triangle's own, and nothing blocks the ray strictly before its closest hit.
+fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
+    let a = bvh.intersect(ray, t_min, t_max);
+    let b = intersect_brute_force(g, ray, t_min, t_max);
     match (a, b) {
         (None, None) => {}
         (Some(a), Some(b)) => {
-            // The triangle may differ only on an exact tie in t.
-            assert_eq!(a.t, b.t, "closest distance differs");
+            assert_eq!(a.t, b.t, "closest distance differs for {ray:?}");
+            let tri = accel(g.corners(a.triangle as usize));
+            let own = intersect_triangle(
+                ray.origin,
+                ray.direction,
+                tri.v0,
+                tri.e1,
+                tri.e2,
+                t_min,
+                t_max,
+            )
+            .expect("the reported triangle is hit");
+            assert_eq!((a.t, a.b1, a.b2), (own.t, own.b1, own.b2));
         }
-        (a, b) => panic!("bvh {a:?} vs brute force {b:?}"),
+        (a, b) => panic!("bvh {a:?} vs brute force {b:?} for {ray:?} in ({t_min}, {t_max})"),
     }
-    assert_eq!(bvh.occluded(ray, 1e-4, f32::INFINITY), b.is_some());
+    let occluded = occluded_brute_force(g, ray, t_min, t_max);
+    assert_eq!(occluded, b.is_some(), "the two references disagree");
+    assert_eq!(
+        bvh.occluded(ray, t_min, t_max),
+        occluded,
+        "occluded({ray:?})"
+    );
     if let Some(b) = b {
-        // Nothing blocks the ray strictly before its closest hit.
-        assert!(!bvh.occluded(ray, 1e-4, b.t));
+        assert!(!bvh.occluded(ray, t_min, b.t));
+    }
+}
+
+/// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask.
+fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
+    let mut mask: Vec<bool> = (0..ends.len()).map(|i| i % 2 == 0).collect();
+    bvh.occluded_from(origin, ends, t_max, &mut mask);
+    for (&end, &m) in ends.iter().zip(&mask) {
+        let ray = Ray::new(origin, end - origin);
+        let expected = occluded_brute_force(g, &ray, 0.0, t_max);
+        assert_eq!(m, expected, "segment {origin} → {end}");
+        assert_eq!(m, bvh.occluded(&ray, 0.0, t_max));
     }
 }
 
@@ -59,6 +140,69 @@ fn empty_and_single_triangle() {
         .intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::Z), 0.0, 9.0)
         .unwrap();
     assert_eq!((hit.t, hit.triangle), (1.0, 0));
+}
+
+#[test]
+fn empty_scene_misses_everything() {
+    let g = Geometry::default();
+    let bvh = build_checked(&g);
+    assert_eq!(bvh.node_count(), 0);
+    let rays = [
+        Ray::new(Vec3::ZERO, Vec3::Z),
+        Ray::new(Vec3::ONE, -Vec3::ONE),
+    ];
+    for ray in &rays {
+        assert_agree_in(&g, &bvh, ray, 0.0, f32::INFINITY);
+    }
+    let stale = Hit {
+        t: 1.0,
+        b1: 0.0,
+        b2: 0.0,
+        triangle: 7,
+    };
+    let mut hits = [Some(stale); 2];
+    bvh.intersect_batch(&rays, 0.0, f32::INFINITY, &mut hits);
+    assert_eq!(hits, [None, None]);
+    let mut mask = [true; 3];
+    bvh.occluded_from(
+        Vec3::ZERO,
+        &[Vec3::X, Vec3::Y, Vec3::ZERO],
+        T_MAX,
+        &mut mask,
+    );
+    assert_eq!(mask, [false; 3]);
+    bvh.intersect_batch(&[], 0.0, f32::INFINITY, &mut []);
+    bvh.occluded_from(Vec3::ZERO, &[], T_MAX, &mut []);
+}
+
+#[test]
+fn empty_batches_are_no_ops() {
+    let g = soup(&parallelogram(
+        Vec3::new(-1.0, -1.0, 1.0),
+        2.0 * Vec3::X,
+        2.0 * Vec3::Y,
+    ));
+    let bvh = build_checked(&g);
+    bvh.intersect_batch(&[], 1e-4, f32::INFINITY, &mut []);
+    bvh.occluded_from(Vec3::ZERO, &[], T_MAX, &mut []);
+    // The same scene does block a segment, so the empty answers are not for want of geometry.
+    let mut mask = [false];
+    bvh.occluded_from(Vec3::ZERO, &[2.0 * Vec3::Z], T_MAX, &mut mask);
+    assert_eq!(mask, [true]);
+}
+
+#[test]
+#[should_panic(expected = "one hit slot per ray")]
+fn intersect_batch_needs_one_slot_per_ray() {
+    let bvh = Bvh::default();
+    bvh.intersect_batch(&[Ray::new(Vec3::ZERO, Vec3::Z)], 0.0, 1.0, &mut []);
+}
+
+#[test]
+#[should_panic(expected = "one mask slot per segment")]
+fn occluded_from_needs_one_slot_per_end() {
+    let bvh = Bvh::default();
+    bvh.occluded_from(Vec3::ZERO, &[Vec3::Z], 1.0, &mut [false, false]);
 }
 
 #[test]
@@ -82,19 +226,37 @@ fn identical_centroids_still_give_small_leaves() {
 }
 
 #[test]
-fn rays_in_a_box_face_plane_still_hit_edges() {
-    // The triangle's right edge lies on x = 0, the box's max x. A ray with direction x = 0
-    // travelling in that plane (the center column of an axis-aligned camera) hits the
-    // edge, which counts as inside; the box test must not skip it.
-    let g = soup(&[[[-1.0, -1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 0.0]]]);
-    let bvh = Bvh::build(&g);
-    for ray in [
-        Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z),
-        Ray::new(Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, -0.6, -1.0)),
-    ] {
-        assert!(intersect_brute_force(&g, &ray, 1e-4, f32::INFINITY).is_some());
-        assert_agree(&g, &bvh, &ray);
-    }
+fn validate_rejects_broken_trees() {
+    let tris: Vec<_> = (0..40)
+        .map(|i| {
+            let x = i as f32;
+            [[x, 0.0, 0.0], [x + 0.5, 0.0, 0.0], [x, 0.5, 1.0]]
+        })
+        .collect();
+    let g = soup(&tris);
+    let bvh = build_checked(&g);
+    assert!(bvh.node_count() > 3);
+    let broken = |f: &dyn Fn(&mut Bvh)| {
+        let mut b = bvh.clone();
+        f(&mut b);
+        b.validate(&g)
+    };
+    assert!(broken(&|b| b.prim_ids[0] = b.prim_ids[1]).is_err());
+    assert!(broken(&|b| b.prim_ids[0] = 40).is_err());
+    assert!(broken(&|b| b.nodes[0].first = 1000).is_err());
+    assert!(broken(&|b| b.nodes[0].max[0] = 0.0).is_err());
+    assert!(broken(&|b| {
+        let leaf = b.nodes.iter_mut().find(|n| n.is_leaf()).unwrap();
+        leaf.max = leaf.min;
+    })
+    .is_err());
+    assert!(broken(&|b| {
+        let leaf = b.nodes.iter_mut().find(|n| n.is_leaf()).unwrap();
+        leaf.count += 1;
+    })
+    .is_err());
+    assert!(bvh.validate(&soup(&tris[..39])).is_err());
+    assert!(bvh.validate(&Geometry::default()).is_err());
 }
 
 #[test]
@@ -116,42 +278,14 @@ fn depth_stays_within_the_traversal_stack() {
     let _ = bvh.occluded(&ray, 0.0, f32::INFINITY);
 }
 
-fn arb_point() -> impl Strategy<Value = [f32; 3]> {
-    prop::array::uniform3(-10.0f32..10.0)
-}
-
-fn arb_soup() -> impl Strategy<Value = Vec<[[f32; 3]; 3]>> {
-    // Small triangles scattered in a box, so that rays hit some and miss others.
-    prop::collection::vec(
-        (
-            arb_point(),
-            prop::array::uniform3(prop::array::uniform3(-1.5f32..1.5)),
-        ),
-        0..300,
-    )
-    .prop_map(|v| {
-        v.into_iter()
-            .map(|(c, offs)| offs.map(|o| [c[0] + o[0], c[1] + o[1], c[2] + o[2]]))
-            .collect()
-    })
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
-    #[test]
-    fn bvh_agrees_with_brute_force(
-        tris in arb_soup(),
-        rays in prop::collection::vec((arb_point(), arb_point()), 50),
-    ) {
-        let g = soup(&tris);
-        let bvh = Bvh::build(&g);
-        prop_assert!(bvh.validate(&g).is_ok(), "{:?}", bvh.validate(&g));
-        for (o, target) in rays {
-            let dir = Vec3::from(target) - Vec3::from(o);
-            if dir.length() < 1e-3 { continue; }
-            assert_agree(&g, &bvh, &Ray::new(Vec3::from(o), dir));
-        }
+/// Triangles under `node`, counted over its leaves.
+fn triangles_under(bvh: &Bvh, node: usize) -> usize {
+    let n = &bvh.nodes[node];
+    if n.is_leaf() {
+        return n.count as usize;
     }
+    let first = n.first as usize;
+    triangles_under(bvh, first) + triangles_under(bvh, first + 1)
 }
 
 #[test]
@@ -178,18 +312,35 @@ fn large_soup_takes_the_parallel_path_and_agrees() {
         })
         .collect();
     let g = soup(&tris);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
-    let bvh = Bvh::build_parallel(&g, &pool);
+    let bvh = Bvh::build_parallel(&g, pool());
     bvh.validate(&g).unwrap();
     let serial = Bvh::build(&g);
-    assert_eq!(bvh.nodes, serial.nodes);
-    assert_eq!(bvh.prim_ids, serial.prim_ids);
+    assert_same_tree(&bvh, &serial);
+    // The root's halves are both big enough to have been built on separate threads.
+    let first = bvh.nodes[0].first as usize;
+    let halves = [
+        triangles_under(&bvh, first),
+        triangles_under(&bvh, first + 1),
+    ];
+    assert!(halves.iter().all(|&h| h >= PARALLEL_MIN), "{halves:?}");
+    let mut rays = Vec::new();
     for _ in 0..300 {
         let o = Vec3::new(rnd(), rnd(), rnd()) * 2.0;
         let d = Vec3::new(rnd(), rnd(), rnd());
         assert_agree(&g, &bvh, &Ray::new(o, d));
+        rays.push(Ray::new(o, d));
+    }
+    let mut hits = vec![None; rays.len()];
+    bvh.intersect_batch(&rays, 1e-4, f32::INFINITY, &mut hits);
+    for (ray, hit) in rays.iter().zip(&hits) {
+        assert_eq!(*hit, bvh.intersect(ray, 1e-4, f32::INFINITY));
+    }
+    for _ in 0..4 {
+        let origin = Vec3::new(rnd(), rnd(), rnd());
+        let (corner, u, v) = (Vec3::new(rnd(), rnd(), rnd()), Vec3::X * 0.3, Vec3::Z * 0.2);
+        let ends: Vec<Vec3> = (0..36)
+            .map(|i| corner + (i % 6) as f32 / 5.0 * u + (i / 6) as f32 / 5.0 * v)
+            .collect();
+        assert_segments_agree(&g, &bvh, origin, &ends, T_MAX);
     }
 }
