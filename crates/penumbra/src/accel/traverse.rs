@@ -1,0 +1,159 @@
+//! Queries on a built [`Bvh`]: the slab test, closest-hit traversal (`intersect`), any-hit
+//! traversal (`occluded`), and the batch forms over them (`intersect_batch`, and
+//! `occluded_from` for segments sharing one origin).
+
+use glam::{Vec3, Vec3A};
+
+use super::{Bvh, BvhNode, STACK_SIZE};
+use crate::geometry::{intersect_triangle, Hit};
+use crate::math::Ray;
+
+/// The closest hit with `t` in `(t_min, t_max)`, if any.
+pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<Hit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+    let mut best: Option<(usize, f32, f32)> = None;
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 0;
+    let mut node = &bvh.nodes[0];
+    slab(node, origin, inv_dir, t_min, t_max)?;
+    loop {
+        if node.is_leaf() {
+            let first = node.first as usize;
+            for i in first..first + node.count as usize {
+                let tri = &bvh.tris[i];
+                let hit = intersect_triangle(
+                    ray.origin,
+                    ray.direction,
+                    tri.v0,
+                    tri.e1,
+                    tri.e2,
+                    t_min,
+                    t_max,
+                );
+                if let Some(h) = hit {
+                    t_max = h.t;
+                    best = Some((i, h.b1, h.b2));
+                }
+            }
+        } else {
+            let (l, r) = (node.first as usize, node.first as usize + 1);
+            let dl = slab(&bvh.nodes[l], origin, inv_dir, t_min, t_max);
+            let dr = slab(&bvh.nodes[r], origin, inv_dir, t_min, t_max);
+            match (dl, dr) {
+                (Some(a), Some(b)) => {
+                    let (near, far) = if a <= b { (l, r) } else { (r, l) };
+                    stack[sp] = far as u32;
+                    sp += 1;
+                    node = &bvh.nodes[near];
+                    continue;
+                }
+                (Some(_), None) => {
+                    node = &bvh.nodes[l];
+                    continue;
+                }
+                (None, Some(_)) => {
+                    node = &bvh.nodes[r];
+                    continue;
+                }
+                (None, None) => {}
+            }
+        }
+        // Pop the next subtree that can still hold a closer hit.
+        loop {
+            if sp == 0 {
+                return best.map(|(i, b1, b2)| Hit {
+                    t: t_max,
+                    b1,
+                    b2,
+                    triangle: bvh.prim_ids[i],
+                });
+            }
+            sp -= 1;
+            let candidate = &bvh.nodes[stack[sp] as usize];
+            if slab(candidate, origin, inv_dir, t_min, t_max).is_some() {
+                node = candidate;
+                break;
+            }
+        }
+    }
+}
+
+/// True when any triangle meets the ray with `t` in `(t_min, t_max)`; stops at the first.
+pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 1;
+    stack[0] = 0;
+    while sp > 0 {
+        sp -= 1;
+        let node = &bvh.nodes[stack[sp] as usize];
+        if slab(node, origin, inv_dir, t_min, t_max).is_none() {
+            continue;
+        }
+        if node.is_leaf() {
+            let first = node.first as usize;
+            for tri in &bvh.tris[first..first + node.count as usize] {
+                let hit = intersect_triangle(
+                    ray.origin,
+                    ray.direction,
+                    tri.v0,
+                    tri.e1,
+                    tri.e2,
+                    t_min,
+                    t_max,
+                );
+                if hit.is_some() {
+                    return true;
+                }
+            }
+        } else {
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
+    }
+    false
+}
+
+/// The closest hit of every ray of `rays`, written to `hits`; see [`Bvh::intersect_batch`].
+pub(super) fn intersect_batch(
+    bvh: &Bvh,
+    rays: &[Ray],
+    t_min: f32,
+    t_max: f32,
+    hits: &mut [Option<Hit>],
+) {
+    assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+    for (ray, hit) in rays.iter().zip(hits) {
+        *hit = intersect(bvh, ray, t_min, t_max);
+    }
+}
+
+/// Occlusion of the segments from `origin` to each of `ends`; see [`Bvh::occluded_from`].
+pub(super) fn occluded_from(bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32, mask: &mut [bool]) {
+    assert_eq!(ends.len(), mask.len(), "one mask slot per segment");
+    for (&end, o) in ends.iter().zip(mask) {
+        *o = occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
+    }
+}
+
+/// The entry distance of the ray into the node's box within `(t_min, t_max)`, or `None`.
+#[inline(always)]
+fn slab(node: &BvhNode, origin: Vec3A, inv_dir: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+    // With padded boxes (see `build::node`), `bound − origin` is zero only for rays outside the
+    // true box, so a NaN from 0·∞ can only turn a miss into a miss: SIMD min/max need no NaN
+    // care.
+    let t0 = (Vec3A::from(node.min) - origin) * inv_dir;
+    let t1 = (Vec3A::from(node.max) - origin) * inv_dir;
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element();
+    let near = if near > t_min { near } else { t_min };
+    let far = if far < t_max { far } else { t_max };
+    (near <= far).then_some(near)
+}
