@@ -19,12 +19,15 @@ use crate::geometry::{Geometry, Hit};
 use crate::math::{Aabb, Ray};
 
 mod build;
+mod packet;
+mod simd;
 mod traverse;
 mod validate;
 
 #[cfg(test)]
 mod tests;
 
+pub use simd::{simd_path, supported_paths, SimdPath};
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at
@@ -129,8 +132,24 @@ impl Bvh {
     /// [`Bvh::occluded`] on that ray would say. The segments share their origin, like the N×N
     /// samples of an area light seen from one shading point. `occluded` must be as long as
     /// `ends`.
+    ///
+    /// The segments are traced as SIMD packets on this process's [`simd_path`]; every path
+    /// gives the same answers.
     pub fn occluded_from(&self, origin: Vec3, ends: &[Vec3], t_max: f32, occluded: &mut [bool]) {
-        traverse::occluded_from(self, origin, ends, t_max, occluded);
+        simd::occluded_from(simd_path(), self, origin, ends, t_max, occluded);
+    }
+
+    /// [`Bvh::occluded_from`] on a given SIMD path (the portable one when `path` is not
+    /// supported), so that tests can run every path the machine has.
+    pub fn occluded_from_on(
+        &self,
+        path: SimdPath,
+        origin: Vec3,
+        ends: &[Vec3],
+        t_max: f32,
+        occluded: &mut [bool],
+    ) {
+        simd::occluded_from(path, self, origin, ends, t_max, occluded);
     }
 
     /// Checks the structure's invariants against the geometry it was built from: every

@@ -2,7 +2,7 @@
 //! traversal (`occluded`), and the batch forms over them (`intersect_batch`, and
 //! `occluded_from` for segments sharing one origin).
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 use super::{Bvh, BvhNode, STACK_SIZE};
 use crate::geometry::{intersect_triangle, Hit};
@@ -132,14 +132,6 @@ pub(super) fn intersect_batch(
     assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
     for (ray, hit) in rays.iter().zip(hits) {
         *hit = intersect(bvh, ray, t_min, t_max);
-    }
-}
-
-/// Occlusion of the segments from `origin` to each of `ends`; see [`Bvh::occluded_from`].
-pub(super) fn occluded_from(bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32, mask: &mut [bool]) {
-    assert_eq!(ends.len(), mask.len(), "one mask slot per segment");
-    for (&end, o) in ends.iter().zip(mask) {
-        *o = occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
     }
 }
 

@@ -1,0 +1,166 @@
+//! Shadow-ray packets: segments that share their origin (a shading point and the N×N samples
+//! of its lights) traced together through the BVH, `N` lanes at a time.
+//!
+//! Each node is fetched once per packet and its slab test runs for all lanes in one loop, which
+//! the compiler turns into vector instructions (`simd` compiles this file's code once per
+//! instruction set and picks one at run time). A lane leaves the packet at its first occluder;
+//! the packet stops when no lane is left.
+//!
+//! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
+//! operation for operation (the same products, sums and comparisons in the same order, no
+//! fused multiply-add), so a lane is occluded exactly when [`Bvh::occluded`] says so. The box
+//! tests only prune: like the scalar slab test they are conservative on the padded boxes, so
+//! which boxes are visited does not change any answer.
+
+use glam::Vec3;
+
+use super::{Bvh, BvhNode, STACK_SIZE};
+
+/// Occlusion of the segments from `origin` to `ends[i]` (`ends.len() <= N`) for `t` in
+/// `(0, t_max)`, written to `occluded[i]`.
+#[inline(always)]
+pub(super) fn occluded_packet<const N: usize>(
+    bvh: &Bvh,
+    origin: Vec3,
+    ends: &[Vec3],
+    t_max: f32,
+    occluded: &mut [bool],
+) {
+    debug_assert!(ends.len() <= N && ends.len() == occluded.len());
+    let count = ends.len();
+    // Lanes past `count` repeat the first segment and start inactive.
+    let mut dir = [[0.0f32; N]; 3];
+    let mut inv = [[0.0f32; N]; 3];
+    let mut active = [false; N];
+    for i in 0..N {
+        let d = ends[i.min(count - 1)] - origin;
+        for a in 0..3 {
+            dir[a][i] = d[a];
+            inv[a][i] = 1.0 / d[a];
+        }
+        active[i] = i < count;
+    }
+    let o = origin.to_array();
+
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 1;
+    stack[0] = 0;
+    'nodes: while sp > 0 {
+        sp -= 1;
+        let node = &bvh.nodes[stack[sp] as usize];
+        if !any(&slab(node, &o, &inv, t_max, &active)) {
+            continue;
+        }
+        if node.is_leaf() {
+            let first = node.first as usize;
+            for tri in &bvh.tris[first..first + node.count as usize] {
+                let hit = triangle(tri, origin, &dir, t_max, &active);
+                let mut live = false;
+                for i in 0..N {
+                    active[i] &= !hit[i];
+                    live |= active[i];
+                }
+                if !live {
+                    break 'nodes;
+                }
+            }
+        } else {
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
+    }
+    for (i, o) in occluded.iter_mut().enumerate() {
+        *o = !active[i];
+    }
+}
+
+#[inline(always)]
+fn any<const N: usize>(mask: &[bool; N]) -> bool {
+    mask.iter().fold(false, |a, &b| a | b)
+}
+
+/// `a < b ? a : b` and `a > b ? a : b`: the vector min and max instructions' semantics.
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Which active lanes enter the node's box within `(0, t_max)`.
+#[inline(always)]
+fn slab<const N: usize>(
+    node: &BvhNode,
+    o: &[f32; 3],
+    inv: &[[f32; N]; 3],
+    t_max: f32,
+    active: &[bool; N],
+) -> [bool; N] {
+    // The box relative to the shared origin, once for all lanes.
+    let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
+    let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
+    let mut hit = [false; N];
+    for i in 0..N {
+        let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
+        let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
+        let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
+        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
+        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max);
+        hit[i] = active[i] & (near <= far);
+    }
+    hit
+}
+
+/// Which active lanes hit the triangle with `t` in `(0, t_max)`: Möller–Trumbore exactly as
+/// `geometry::intersect_triangle` computes it, with the origin's terms shared by all lanes.
+// The comparisons are written out, negations included, to keep the scalar test's answers for
+// NaN values (a NaN `b2` passes its two tests there, and must here).
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+#[inline(always)]
+fn triangle<const N: usize>(
+    tri: &super::TriAccel,
+    origin: Vec3,
+    dir: &[[f32; N]; 3],
+    t_max: f32,
+    active: &[bool; N],
+) -> [bool; N] {
+    let (e1, e2) = (tri.e1, tri.e2);
+    let tvec = origin - tri.v0;
+    let qvec = tvec.cross(e1);
+    let t_num = e2.dot(qvec);
+    let mut hit = [false; N];
+    for i in 0..N {
+        let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
+        // pvec = dir × e2, as glam's cross product.
+        let px = dy * e2.z - e2.y * dz;
+        let py = dz * e2.x - e2.z * dx;
+        let pz = dx * e2.y - e2.x * dy;
+        let det = e1.x * px + e1.y * py + e1.z * pz;
+        let inv_det = 1.0 / det;
+        let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
+        let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;
+        let t = t_num * inv_det;
+        let ok = (det != 0.0)
+            & det.is_finite()
+            & (0.0 <= b1)
+            & (b1 <= 1.0)
+            & !(b2 < 0.0)
+            & !(b1 + b2 > 1.0)
+            & (t > 0.0)
+            & (t < t_max);
+        hit[i] = active[i] & ok;
+    }
+    hit
+}

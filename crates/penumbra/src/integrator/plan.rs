@@ -1,0 +1,150 @@
+//! Lights as one render uses them: each light's emission weight under the light model and its
+//! sample points, fixed grids computed once per render, stored by coordinate so that the
+//! per-sample directions of a shading point are computed many lanes at a time.
+
+use glam::Vec3;
+
+use super::ShadingSettings;
+use crate::light::{AreaLight, Light};
+use crate::math::Rgb;
+use crate::sampling::Rng;
+
+/// A light as one render uses it.
+pub(super) struct LightPlan {
+    /// Emission of one sample under the light model, before distance and angle terms.
+    pub(super) weight: Rgb,
+    /// Unit normal of an emitter that is one-sided under the light model (a physical area
+    /// light); `None` for one that shines all ways.
+    pub(super) facing: Option<Vec3>,
+    pub(super) source: Source,
+}
+
+pub(super) enum Source {
+    /// A point light or a fixed grid: points computed once per render.
+    Fixed(Points),
+    /// A jittered area light, drawn afresh at every shading point.
+    Jittered(AreaLight),
+}
+
+/// Points by coordinate.
+#[derive(Default)]
+pub(super) struct Points {
+    pub(super) x: Vec<f32>,
+    pub(super) y: Vec<f32>,
+    pub(super) z: Vec<f32>,
+}
+
+impl Points {
+    pub(super) fn set(&mut self, points: &[Vec3]) {
+        self.x.clear();
+        self.y.clear();
+        self.z.clear();
+        self.x.extend(points.iter().map(|p| p.x));
+        self.y.extend(points.iter().map(|p| p.y));
+        self.z.extend(points.iter().map(|p| p.z));
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub(super) fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+}
+
+/// The directions from a shading point to a light's points, by coordinate.
+#[derive(Default)]
+pub(super) struct Directions {
+    /// Unit direction toward each point.
+    pub(super) lx: Vec<f32>,
+    pub(super) ly: Vec<f32>,
+    pub(super) lz: Vec<f32>,
+    /// Squared distance to each point.
+    pub(super) d2: Vec<f32>,
+    /// `n·l` for the shading normal `n`.
+    pub(super) cos: Vec<f32>,
+}
+
+impl Directions {
+    /// The directions from `x` to every point of `points`, and their cosines with `n`. The
+    /// lanes are independent, so the loop vectorizes; each lane computes exactly what
+    /// `to = y − x; d2 = to·to; l = to / √d2; cos = n·l` does with glam's scalar `Vec3`.
+    pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
+        let count = points.len();
+        for v in [
+            &mut self.lx,
+            &mut self.ly,
+            &mut self.lz,
+            &mut self.d2,
+            &mut self.cos,
+        ] {
+            v.clear();
+            v.resize(count, 0.0);
+        }
+        let (px, py, pz) = (&points.x[..count], &points.y[..count], &points.z[..count]);
+        let (lx, ly, lz) = (
+            &mut self.lx[..count],
+            &mut self.ly[..count],
+            &mut self.lz[..count],
+        );
+        let (d2s, coss) = (&mut self.d2[..count], &mut self.cos[..count]);
+        for i in 0..count {
+            let (tx, ty, tz) = (px[i] - x.x, py[i] - x.y, pz[i] - x.z);
+            let d2 = tx * tx + ty * ty + tz * tz;
+            let s = d2.sqrt();
+            let (ux, uy, uz) = (tx / s, ty / s, tz / s);
+            lx[i] = ux;
+            ly[i] = uy;
+            lz[i] = uz;
+            d2s[i] = d2;
+            coss[i] = n.x * ux + n.y * uy + n.z * uz;
+        }
+    }
+
+    pub(super) fn l(&self, i: usize) -> Vec3 {
+        Vec3::new(self.lx[i], self.ly[i], self.lz[i])
+    }
+}
+
+/// How `light` is sampled and weighted in a render with `settings`.
+pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) -> LightPlan {
+    match light {
+        Light::Point(pl) => {
+            let mut points = Points::default();
+            points.set(&[pl.position]);
+            LightPlan {
+                weight: pl.intensity,
+                facing: None,
+                source: Source::Fixed(points),
+            }
+        }
+        Light::Area(al) => {
+            let al = AreaLight {
+                n: settings.light_samples.unwrap_or(al.n),
+                ..al.clone()
+            };
+            let count = al.sample_count() as f32;
+            let (weight, facing) = if physical {
+                (al.radiance * (al.area() / count), Some(al.normal()))
+            } else {
+                (al.radiance / count, None)
+            };
+            let source = if al.jitter {
+                Source::Jittered(al)
+            } else {
+                let mut grid = Vec::with_capacity(al.sample_count() as usize);
+                // A fixed grid draws nothing from the generator.
+                al.sample_points(&mut Rng::new(0, &[]), &mut grid);
+                let mut points = Points::default();
+                points.set(&grid);
+                Source::Fixed(points)
+            };
+            LightPlan {
+                weight,
+                facing,
+                source,
+            }
+        }
+    }
+}
