@@ -136,20 +136,29 @@ impl Bvh {
     /// The segments are traced as SIMD packets on this process's [`simd_path`]; every path
     /// gives the same answers.
     pub fn occluded_from(&self, origin: Vec3, ends: &[Vec3], t_max: f32, occluded: &mut [bool]) {
-        simd::occluded_from(simd_path(), self, origin, ends, t_max, occluded);
+        occluded.fill(false);
+        self.occlude_from(origin, ends, t_max, occluded);
     }
 
-    /// [`Bvh::occluded_from`] on a given SIMD path (the portable one when `path` is not
+    /// Like [`Bvh::occluded_from`] for the segments not yet `blocked`: each of them that a
+    /// triangle meets becomes blocked; blocked ones are not traced. A caller marks the samples
+    /// that cannot contribute (below the surface, facing away) as blocked and traces the rest
+    /// in one call.
+    pub fn occlude_from(&self, origin: Vec3, ends: &[Vec3], t_max: f32, blocked: &mut [bool]) {
+        simd::occlude_from(simd_path(), self, origin, ends, t_max, blocked);
+    }
+
+    /// [`Bvh::occlude_from`] on a given SIMD path (the portable one when `path` is not
     /// supported), so that tests can run every path the machine has.
-    pub fn occluded_from_on(
+    pub fn occlude_from_on(
         &self,
         path: SimdPath,
         origin: Vec3,
         ends: &[Vec3],
         t_max: f32,
-        occluded: &mut [bool],
+        blocked: &mut [bool],
     ) {
-        simd::occluded_from(path, self, origin, ends, t_max, occluded);
+        simd::occlude_from(path, self, origin, ends, t_max, blocked);
     }
 
     /// Checks the structure's invariants against the geometry it was built from: every

@@ -16,19 +16,19 @@ use glam::Vec3;
 
 use super::{Bvh, BvhNode, STACK_SIZE};
 
-/// Occlusion of the segments from `origin` to `ends[i]` (`ends.len() <= N`) for `t` in
-/// `(0, t_max)`, written to `occluded[i]`.
+/// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
+/// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-pub(super) fn occluded_packet<const N: usize>(
+pub(super) fn occlude_packet<const N: usize>(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
     t_max: f32,
-    occluded: &mut [bool],
+    blocked: &mut [bool],
 ) {
-    debug_assert!(ends.len() <= N && ends.len() == occluded.len());
+    debug_assert!(!ends.is_empty() && ends.len() <= N && ends.len() == blocked.len());
     let count = ends.len();
-    // Lanes past `count` repeat the first segment and start inactive.
+    // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
     let mut dir = [[0.0f32; N]; 3];
     let mut inv = [[0.0f32; N]; 3];
     let mut active = [false; N];
@@ -38,7 +38,7 @@ pub(super) fn occluded_packet<const N: usize>(
             dir[a][i] = d[a];
             inv[a][i] = 1.0 / d[a];
         }
-        active[i] = i < count;
+        active[i] = i < count && !blocked[i];
     }
     let o = origin.to_array();
 
@@ -70,8 +70,8 @@ pub(super) fn occluded_packet<const N: usize>(
             sp += 2;
         }
     }
-    for (i, o) in occluded.iter_mut().enumerate() {
-        *o = !active[i];
+    for (i, b) in blocked.iter_mut().enumerate() {
+        *b |= !active[i];
     }
 }
 

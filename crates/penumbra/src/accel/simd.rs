@@ -78,80 +78,84 @@ pub fn simd_path() -> SimdPath {
     })
 }
 
-/// [`Bvh::occluded_from`] on `path`, which must be supported (else the portable path runs).
-pub(super) fn occluded_from(
+/// [`Bvh::occlude_from`] on `path`, which must be supported (else the portable path runs).
+pub(super) fn occlude_from(
     path: SimdPath,
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
     t_max: f32,
-    occluded: &mut [bool],
+    blocked: &mut [bool],
 ) {
-    assert_eq!(ends.len(), occluded.len(), "one mask slot per segment");
+    assert_eq!(ends.len(), blocked.len(), "one mask slot per segment");
     #[cfg(target_arch = "x86_64")]
     if path.is_supported() {
         match path {
             // SAFETY: the CPU supports AVX-512 F/VL/BW/DQ (checked just above), all that
-            // `occluded_from_avx512` is compiled for.
+            // `occlude_from_avx512` is compiled for.
             SimdPath::Avx512 => {
-                return unsafe { occluded_from_avx512(bvh, origin, ends, t_max, occluded) }
+                return unsafe { occlude_from_avx512(bvh, origin, ends, t_max, blocked) }
             }
             // SAFETY: the CPU supports AVX2 (checked just above).
             SimdPath::Avx2 => {
-                return unsafe { occluded_from_avx2(bvh, origin, ends, t_max, occluded) }
+                return unsafe { occlude_from_avx2(bvh, origin, ends, t_max, blocked) }
             }
             SimdPath::Portable => {}
         }
     }
-    let _ = path;
-    packets::<8>(bvh, origin, ends, t_max, occluded);
+    packets::<8>(bvh, origin, ends, t_max, blocked);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
-unsafe fn occluded_from_avx512(
+unsafe fn occlude_from_avx512(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
     t_max: f32,
-    occluded: &mut [bool],
+    blocked: &mut [bool],
 ) {
-    packets::<16>(bvh, origin, ends, t_max, occluded);
+    packets::<16>(bvh, origin, ends, t_max, blocked);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn occluded_from_avx2(
+unsafe fn occlude_from_avx2(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
     t_max: f32,
-    occluded: &mut [bool],
+    blocked: &mut [bool],
 ) {
-    packets::<8>(bvh, origin, ends, t_max, occluded);
+    packets::<8>(bvh, origin, ends, t_max, blocked);
 }
 
-/// The segments in packets of `N` lanes; a remainder of a quarter packet or less goes one ray
-/// at a time.
+/// The segments in packets of `N` lanes; a packet with a quarter of its lanes or fewer to
+/// trace goes one ray at a time.
 #[inline(always)]
 fn packets<const N: usize>(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
     t_max: f32,
-    occluded: &mut [bool],
+    blocked: &mut [bool],
 ) {
     if bvh.nodes.is_empty() {
-        occluded.fill(false);
         return;
     }
-    for (ends, occluded) in ends.chunks(N).zip(occluded.chunks_mut(N)) {
-        if ends.len() * 4 <= N {
-            for (&end, o) in ends.iter().zip(occluded) {
-                *o = traverse::occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
+    for (ends, blocked) in ends.chunks(N).zip(blocked.chunks_mut(N)) {
+        let live = blocked.iter().filter(|&&b| !b).count();
+        if live == 0 {
+            continue;
+        }
+        if live * 4 <= N {
+            for (&end, b) in ends.iter().zip(blocked) {
+                if !*b {
+                    *b = traverse::occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
+                }
             }
         } else {
-            packet::occluded_packet::<N>(bvh, origin, ends, t_max, occluded);
+            packet::occlude_packet::<N>(bvh, origin, ends, t_max, blocked);
         }
     }
 }

@@ -112,17 +112,40 @@ fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
     }
 }
 
-/// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask, on
-/// every SIMD path this machine supports (packets of every fill, some lanes inactive).
+/// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask;
+/// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
+/// blocks exactly the others that brute force finds occluded (packets of every fill, with
+/// some lanes blocked from the start).
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
-    for path in supported_paths() {
-        let mut mask: Vec<bool> = (0..ends.len()).map(|i| i % 2 == 0).collect();
-        bvh.occluded_from_on(path, origin, ends, t_max, &mut mask);
-        for (&end, &m) in ends.iter().zip(&mask) {
+    let expected: Vec<bool> = ends
+        .iter()
+        .map(|&end| {
             let ray = Ray::new(origin, end - origin);
-            let expected = occluded_brute_force(g, &ray, 0.0, t_max);
-            assert_eq!(m, expected, "{path:?}: segment {origin} → {end}");
-            assert_eq!(m, bvh.occluded(&ray, 0.0, t_max));
+            let occluded = occluded_brute_force(g, &ray, 0.0, t_max);
+            assert_eq!(occluded, bvh.occluded(&ray, 0.0, t_max));
+            occluded
+        })
+        .collect();
+    let mut mask: Vec<bool> = (0..ends.len()).map(|i| i % 2 == 0).collect();
+    bvh.occluded_from(origin, ends, t_max, &mut mask);
+    assert_eq!(mask, expected, "occluded_from from {origin}");
+    for path in supported_paths() {
+        for pre_blocked in [0, 3, 7] {
+            // Every `pre_blocked`-th segment starts blocked (none for 0).
+            let start: Vec<bool> = (0..ends.len())
+                .map(|i| pre_blocked != 0 && i % pre_blocked == 1)
+                .collect();
+            let mut blocked = start.clone();
+            bvh.occlude_from_on(path, origin, ends, t_max, &mut blocked);
+            for i in 0..ends.len() {
+                assert_eq!(
+                    blocked[i],
+                    start[i] || expected[i],
+                    "{path:?}: segment {origin} → {} (blocked from the start: {})",
+                    ends[i],
+                    start[i]
+                );
+            }
         }
     }
 }

@@ -19,7 +19,7 @@ use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
 use crate::world::World;
-use model::{Lobe, Model, Physical, Seed};
+use model::{Lanes, Lobe, Model, Physical, Seed};
 use plan::{plan, Directions, LightPlan, Points, Source};
 
 /// The specular lobe.
@@ -72,14 +72,20 @@ pub(crate) struct Scratch {
     drawn: Vec<Vec3>,
     points: Points,
     directions: Directions,
-    /// Light samples that would contribute if visible: end point, contribution, and whether
-    /// the sample lies behind the surface (its shadow ray leaves from the other side).
+    spec: Vec<f32>,
+    /// Every sample of every light, in light and sample order: its point, the light it sends
+    /// toward the viewer if visible (by channel), whether it is blocked (cannot contribute,
+    /// then: occluded), and whether it lies behind the surface (its shadow ray leaves from the
+    /// other side).
     ends: Vec<Vec3>,
-    values: Vec<Rgb>,
+    r: Vec<f32>,
+    g: Vec<f32>,
+    b: Vec<f32>,
+    blocked: Vec<bool>,
     behind: Vec<bool>,
-    occluded: Vec<bool>,
-    group: Vec<Vec3>,
-    group_occluded: Vec<bool>,
+    /// The two sides' masks when samples lie on both sides.
+    front: Vec<bool>,
+    back: Vec<bool>,
 }
 
 /// Direct lighting for one render: the world, the shading settings and the planned lights.
@@ -152,20 +158,21 @@ impl<'w> Integrator<'w> {
             LightModel::Phong => self.gather::<Seed>(x, n_geom, &lobe, rng, scratch),
             LightModel::Physical => self.gather::<Physical>(x, n_geom, &lobe, rng, scratch),
         }
+        let traced = scratch.blocked.iter().filter(|&&b| !b).count() as u64;
         let offset = SHADOW_OFFSET * (1.0 + x.abs().max_element());
         self.occlude(x + offset * n_geom, x + offset * (-n_geom), scratch);
 
         let mut radiance = tex * material.ambient * self.settings.ambient;
-        for (value, occluded) in scratch.values.iter().zip(&scratch.occluded) {
-            if !occluded {
-                radiance += *value;
+        let s = &*scratch;
+        for (i, &blocked) in s.blocked.iter().enumerate() {
+            if !blocked {
+                radiance += Vec3::new(s.r[i], s.g[i], s.b[i]);
             }
         }
-        (radiance, scratch.ends.len() as u64)
+        (radiance, traced)
     }
 
-    /// Fills `scratch` with every light sample that contributes if visible, in light and
-    /// sample order.
+    /// Fills `scratch` with every sample of every light, in light and sample order.
     fn gather<M: Model>(
         &self,
         x: Vec3,
@@ -175,8 +182,6 @@ impl<'w> Integrator<'w> {
         scratch: &mut Scratch,
     ) {
         scratch.ends.clear();
-        scratch.values.clear();
-        scratch.behind.clear();
         for plan in &self.lights {
             let points = match &plan.source {
                 Source::Fixed(points) => points,
@@ -187,61 +192,71 @@ impl<'w> Integrator<'w> {
                     &scratch.points
                 }
             };
+            let n = points.len();
+            let base = scratch.ends.len();
+            scratch.ends.extend_from_slice(&points.all);
+            let end = base + n;
+            for v in [&mut scratch.r, &mut scratch.g, &mut scratch.b] {
+                v.resize(end, 0.0);
+            }
+            scratch.blocked.resize(end, false);
+            scratch.behind.resize(end, false);
             let dirs = &mut scratch.directions;
             dirs.compute(x, lobe.n, points);
-            for i in 0..points.len() {
-                let cos = dirs.cos[i];
-                // Below the surface, or NaN for a sample on the shaded point: no light.
-                if cos.is_nan() || cos <= 0.0 {
-                    continue;
+            scratch.spec.resize(n, 0.0);
+            if lobe.ks == Vec3::ZERO {
+                scratch.spec.fill(0.0);
+            } else {
+                for i in 0..n {
+                    let (cos, l) = (dirs.cos[i], Vec3::new(dirs.lx[i], dirs.ly[i], dirs.lz[i]));
+                    // powf only where the sample can contribute.
+                    scratch.spec[i] = if cos > 0.0 {
+                        lobe.specular(l, cos)
+                    } else {
+                        0.0
+                    };
                 }
-                let l = dirs.l(i);
-                let Some(e) = M::arrival(plan, l, dirs.d2[i]) else {
-                    continue;
-                };
-                if e == Vec3::ZERO {
-                    continue;
-                }
-                let spec = lobe.specular(l, cos);
-                scratch.ends.push(points.get(i));
-                scratch.values.push(e * M::reflect(lobe, cos, spec));
-                // `l` is finite here (a NaN `l` failed the cosine test), so the dot product is
-                // too.
-                scratch.behind.push(n_geom.dot(l) < 0.0);
+            }
+            let lanes = Lanes {
+                r: &mut scratch.r[base..end],
+                g: &mut scratch.g[base..end],
+                b: &mut scratch.b[base..end],
+                blocked: &mut scratch.blocked[base..end],
+            };
+            M::contribute(plan, lobe, dirs, &scratch.spec, lanes);
+            let behind = &mut scratch.behind[base..end];
+            let (lx, ly, lz) = (&dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
+            for i in 0..n {
+                behind[i] = n_geom.x * lx[i] + n_geom.y * ly[i] + n_geom.z * lz[i] < 0.0;
             }
         }
+        let count = scratch.ends.len();
+        for v in [&mut scratch.r, &mut scratch.g, &mut scratch.b] {
+            v.truncate(count);
+        }
+        scratch.blocked.truncate(count);
+        scratch.behind.truncate(count);
     }
 
-    /// Sets `scratch.occluded` for the gathered samples: shadow rays leave from `front` toward
-    /// samples on the viewer's side of the surface, from `back` toward the others.
-    fn occlude(&self, front: Vec3, back: Vec3, scratch: &mut Scratch) {
+    /// Blocks the gathered samples that something occludes: shadow rays leave from `front`
+    /// toward samples on the viewer's side of the surface, from `back` toward the others.
+    fn occlude(&self, front: Vec3, back: Vec3, s: &mut Scratch) {
         let accel = self.world.accel();
-        let count = scratch.ends.len();
-        scratch.occluded.clear();
-        scratch.occluded.resize(count, false);
-        if !scratch.behind.contains(&true) {
-            accel.occluded_from(front, &scratch.ends, SHADOW_T_MAX, &mut scratch.occluded);
+        let both_sides = s.blocked.iter().zip(&s.behind).any(|(&b, &h)| !b && h);
+        if !both_sides {
+            accel.occlude_from(front, &s.ends, SHADOW_T_MAX, &mut s.blocked);
             return;
         }
-        for (origin, behind) in [(front, false), (back, true)] {
-            scratch.group.clear();
-            scratch.group.extend(
-                (0..count)
-                    .filter(|&i| scratch.behind[i] == behind)
-                    .map(|i| scratch.ends[i]),
-            );
-            scratch.group_occluded.clear();
-            scratch.group_occluded.resize(scratch.group.len(), false);
-            accel.occluded_from(
-                origin,
-                &scratch.group,
-                SHADOW_T_MAX,
-                &mut scratch.group_occluded,
-            );
-            let mut results = scratch.group_occluded.iter();
-            for i in (0..count).filter(|&i| scratch.behind[i] == behind) {
-                scratch.occluded[i] = *results.next().unwrap_or(&false);
-            }
+        s.front.clear();
+        s.front
+            .extend(s.blocked.iter().zip(&s.behind).map(|(&b, &h)| b | h));
+        s.back.clear();
+        s.back
+            .extend(s.blocked.iter().zip(&s.behind).map(|(&b, &h)| b | !h));
+        accel.occlude_from(front, &s.ends, SHADOW_T_MAX, &mut s.front);
+        accel.occlude_from(back, &s.ends, SHADOW_T_MAX, &mut s.back);
+        for i in 0..s.blocked.len() {
+            s.blocked[i] = if s.behind[i] { s.back[i] } else { s.front[i] };
         }
     }
 }

@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::plan::LightPlan;
+use super::plan::{Directions, LightPlan};
 use super::Shading;
 use crate::math::Rgb;
 
@@ -48,13 +48,24 @@ impl Lobe {
     }
 }
 
-/// A light model.
+/// The light each sample of a light sends back toward the viewer if nothing blocks it, by
+/// channel, and which samples cannot contribute at all.
+pub(super) struct Lanes<'a> {
+    pub(super) r: &'a mut [f32],
+    pub(super) g: &'a mut [f32],
+    pub(super) b: &'a mut [f32],
+    /// True for a sample below the surface, behind a one-sided emitter or sending nothing.
+    pub(super) blocked: &'a mut [bool],
+}
+
+/// A light model: what arrives from a light sample, and how the surface reflects it. Each
+/// model writes every sample of a light in one loop over independent lanes, which the compiler
+/// vectorizes; each lane computes exactly `e · reflect(cos, spec)` with glam's scalar `Vec3`
+/// arithmetic (the same products and sums in the same order).
 pub(super) trait Model {
-    /// Light arriving from a sample of `plan` along unit `l` at squared distance `d2`; `None`
-    /// when the emitter sends nothing that way.
-    fn arrival(plan: &LightPlan, l: Vec3, d2: f32) -> Option<Rgb>;
-    /// The BRDF times the cosine, from the cosine and the specular lobe value.
-    fn reflect(lobe: &Lobe, cos: f32, spec: f32) -> Rgb;
+    /// Fills `out` for the samples of `plan` in the directions `dirs`, with specular lobe
+    /// values `spec`.
+    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes);
 }
 
 /// The seed's model: every sample a point light of the plan's weight, both ways, no falloff;
@@ -63,13 +74,26 @@ pub(super) struct Seed;
 
 impl Model for Seed {
     #[inline]
-    fn arrival(plan: &LightPlan, _l: Vec3, _d2: f32) -> Option<Rgb> {
-        Some(plan.weight)
-    }
-
-    #[inline]
-    fn reflect(lobe: &Lobe, cos: f32, spec: f32) -> Rgb {
-        lobe.kd * cos + lobe.ks * spec
+    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
+        let n = out.r.len();
+        let (w, kd, ks) = (plan.weight, lobe.kd, lobe.ks);
+        let dark = w == Vec3::ZERO;
+        let (cos, spec) = (&dirs.cos[..n], &spec[..n]);
+        let (r, g, b, blocked) = (
+            out.r,
+            &mut out.g[..n],
+            &mut out.b[..n],
+            &mut out.blocked[..n],
+        );
+        for i in 0..n {
+            let (c, s) = (cos[i], spec[i]);
+            r[i] = w.x * (kd.x * c + ks.x * s);
+            g[i] = w.y * (kd.y * c + ks.y * s);
+            b[i] = w.z * (kd.z * c + ks.z * s);
+            // Below the surface, or NaN for a sample on the shaded point: no light.
+            let lit = c > 0.0;
+            blocked[i] = !lit | dark;
+        }
     }
 }
 
@@ -80,19 +104,42 @@ pub(super) struct Physical;
 
 impl Model for Physical {
     #[inline]
-    fn arrival(plan: &LightPlan, l: Vec3, d2: f32) -> Option<Rgb> {
-        match plan.facing {
-            None => Some(plan.weight / d2),
-            Some(n_light) => {
-                let cos_light = -n_light.dot(l);
-                // NaN when the sample sits on the shaded point: no light.
-                (cos_light > 0.0).then(|| plan.weight * (cos_light / d2))
-            }
+    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
+        let n = out.r.len();
+        let (w, kd, ks, norm) = (plan.weight, lobe.kd, lobe.ks, lobe.specular_norm);
+        let (cos, spec, d2) = (&dirs.cos[..n], &spec[..n], &dirs.d2[..n]);
+        let (lx, ly, lz) = (&dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
+        let (r, g, b, blocked) = (
+            out.r,
+            &mut out.g[..n],
+            &mut out.b[..n],
+            &mut out.blocked[..n],
+        );
+        // One-sided area lights: the emitter's cosine; point lights: none (1, always lit).
+        let (facing, nl) = match plan.facing {
+            Some(nl) => (true, nl),
+            None => (false, Vec3::ZERO),
+        };
+        let kd_pi = kd * (1.0 / PI);
+        for i in 0..n {
+            let (c, s) = (cos[i], spec[i]);
+            // e = weight·(cos_light / d²), or weight / d² for a point light.
+            let cos_light = -(nl.x * lx[i] + nl.y * ly[i] + nl.z * lz[i]);
+            let q = cos_light / d2[i];
+            let (ex, ey, ez) = if facing {
+                (w.x * q, w.y * q, w.z * q)
+            } else {
+                (w.x / d2[i], w.y / d2[i], w.z / d2[i])
+            };
+            let sn = norm * s;
+            r[i] = ex * ((kd_pi.x + ks.x * sn) * c);
+            g[i] = ey * ((kd_pi.y + ks.y * sn) * c);
+            b[i] = ez * ((kd_pi.z + ks.z * sn) * c);
+            let emits = !facing | (cos_light > 0.0);
+            let dark = (ex == 0.0) & (ey == 0.0) & (ez == 0.0);
+            // NaN cosines (a sample on the shaded point) count as no light.
+            let lit = c > 0.0;
+            blocked[i] = !lit | !emits | dark;
         }
-    }
-
-    #[inline]
-    fn reflect(lobe: &Lobe, cos: f32, spec: f32) -> Rgb {
-        (lobe.kd * (1.0 / PI) + lobe.ks * (lobe.specular_norm * spec)) * cos
     }
 }

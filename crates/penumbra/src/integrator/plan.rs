@@ -26,9 +26,10 @@ pub(super) enum Source {
     Jittered(AreaLight),
 }
 
-/// Points by coordinate.
+/// Points, as they are and by coordinate.
 #[derive(Default)]
 pub(super) struct Points {
+    pub(super) all: Vec<Vec3>,
     pub(super) x: Vec<f32>,
     pub(super) y: Vec<f32>,
     pub(super) z: Vec<f32>,
@@ -36,6 +37,8 @@ pub(super) struct Points {
 
 impl Points {
     pub(super) fn set(&mut self, points: &[Vec3]) {
+        self.all.clear();
+        self.all.extend_from_slice(points);
         self.x.clear();
         self.y.clear();
         self.z.clear();
@@ -46,10 +49,6 @@ impl Points {
 
     pub(super) fn len(&self) -> usize {
         self.x.len()
-    }
-
-    pub(super) fn get(&self, i: usize) -> Vec3 {
-        Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 }
 
@@ -79,7 +78,6 @@ impl Directions {
             &mut self.d2,
             &mut self.cos,
         ] {
-            v.clear();
             v.resize(count, 0.0);
         }
         let (px, py, pz) = (&points.x[..count], &points.y[..count], &points.z[..count]);
@@ -100,10 +98,6 @@ impl Directions {
             d2s[i] = d2;
             coss[i] = n.x * ux + n.y * uy + n.z * uz;
         }
-    }
-
-    pub(super) fn l(&self, i: usize) -> Vec3 {
-        Vec3::new(self.lx[i], self.ly[i], self.lz[i])
     }
 }
 
