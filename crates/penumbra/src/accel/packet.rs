@@ -26,19 +26,20 @@ pub(super) fn occlude_packet<const N: usize>(
     t_max: f32,
     blocked: &mut [bool],
 ) {
-    debug_assert!(!ends.is_empty() && ends.len() <= N && ends.len() == blocked.len());
+    debug_assert!(N <= 32 && !ends.is_empty() && ends.len() <= N && ends.len() == blocked.len());
     let count = ends.len();
     // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
     let mut dir = [[0.0f32; N]; 3];
     let mut inv = [[0.0f32; N]; 3];
-    let mut active = [false; N];
+    // Lane i is bit i.
+    let mut active: u32 = 0;
     for i in 0..N {
         let d = ends[i.min(count - 1)] - origin;
         for a in 0..3 {
             dir[a][i] = d[a];
             inv[a][i] = 1.0 / d[a];
         }
-        active[i] = i < count && !blocked[i];
+        active |= ((i < count && !blocked[i]) as u32) << i;
     }
     let o = origin.to_array();
 
@@ -48,19 +49,14 @@ pub(super) fn occlude_packet<const N: usize>(
     'nodes: while sp > 0 {
         sp -= 1;
         let node = &bvh.nodes[stack[sp] as usize];
-        if !any(&slab(node, &o, &inv, t_max, &active)) {
+        if slab(node, &o, &inv, t_max) & active == 0 {
             continue;
         }
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                let hit = triangle(tri, origin, &dir, t_max, &active);
-                let mut live = false;
-                for i in 0..N {
-                    active[i] &= !hit[i];
-                    live |= active[i];
-                }
-                if !live {
+                active &= !triangle(tri, origin, &dir, t_max);
+                if active == 0 {
                     break 'nodes;
                 }
             }
@@ -71,13 +67,8 @@ pub(super) fn occlude_packet<const N: usize>(
         }
     }
     for (i, b) in blocked.iter_mut().enumerate() {
-        *b |= !active[i];
+        *b |= active & (1 << i) == 0;
     }
-}
-
-#[inline(always)]
-fn any<const N: usize>(mask: &[bool; N]) -> bool {
-    mask.iter().fold(false, |a, &b| a | b)
 }
 
 /// `a < b ? a : b` and `a > b ? a : b`: the vector min and max instructions' semantics.
@@ -99,48 +90,47 @@ fn max(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Which active lanes enter the node's box within `(0, t_max)`.
+/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max)`.
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize>(
-    node: &BvhNode,
-    o: &[f32; 3],
-    inv: &[[f32; N]; 3],
-    t_max: f32,
-    active: &[bool; N],
-) -> [bool; N] {
+fn slab<const N: usize>(node: &BvhNode, o: &[f32; 3], inv: &[[f32; N]; 3], t_max: f32) -> u32 {
     // The box relative to the shared origin, once for all lanes.
     let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
     let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
-    let mut hit = [false; N];
+    let mut hit = 0;
     for i in 0..N {
         let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
         let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
         let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
         let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
         let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max);
-        hit[i] = active[i] & (near <= far);
+        hit |= ((near <= far) as u32) << i;
     }
     hit
 }
 
-/// Which active lanes hit the triangle with `t` in `(0, t_max)`: Möller–Trumbore exactly as
+/// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`: Möller–Trumbore exactly as
 /// `geometry::intersect_triangle` computes it, with the origin's terms shared by all lanes.
 // The comparisons are written out, negations included, to keep the scalar test's answers for
 // NaN values (a NaN `b2` passes its two tests there, and must here).
-#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+#[allow(
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::manual_range_contains,
+    clippy::needless_range_loop
+)]
 #[inline(always)]
 fn triangle<const N: usize>(
     tri: &super::TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],
     t_max: f32,
-    active: &[bool; N],
-) -> [bool; N] {
+) -> u32 {
     let (e1, e2) = (tri.e1, tri.e2);
     let tvec = origin - tri.v0;
     let qvec = tvec.cross(e1);
     let t_num = e2.dot(qvec);
-    let mut hit = [false; N];
+    let mut hit = 0;
     for i in 0..N {
         let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
         // pvec = dir × e2, as glam's cross product.
@@ -160,7 +150,7 @@ fn triangle<const N: usize>(
             & !(b1 + b2 > 1.0)
             & (t > 0.0)
             & (t < t_max);
-        hit[i] = active[i] & ok;
+        hit |= (ok as u32) << i;
     }
     hit
 }
