@@ -1,57 +1,14 @@
 //! The Wavefront OBJ/MTL loader through the public API: small files written into a temporary
 //! folder per test, plus the real assets under `assets/` at the repository root.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Vec2, Vec3};
 use penumbra::TextureKind;
 use penumbra::{Scene, SceneError, SceneFile, SceneFormat};
-
-/// A folder of its own under the system's temporary folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let dir = std::env::temp_dir().join(format!(
-            "penumbra-obj-{}-{}-{name}",
-            std::process::id(),
-            COUNTER.fetch_add(1, Ordering::Relaxed)
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-
-    /// Writes `contents` to `name` (folders created as needed) and returns the full path.
-    fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(&path, contents).unwrap();
-        path
-    }
-
-    /// Writes a `width`×`height` PNG filled with `color`.
-    fn png(&self, name: &str, width: u32, height: u32, color: [u8; 3]) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        image::RgbImage::from_pixel(width, height, image::Rgb(color))
-            .save(&path)
-            .unwrap();
-        path
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use support::TempDir;
 
 /// A scene with a tiny film and a camera, then `body` (materials, textures, objects).
 fn scene_text(body: &str) -> String {
@@ -225,7 +182,7 @@ fn corner_forms_v_vt_vn() {
         ("v_vt_vn", "f 1/1/1 2/2/2 3/3/3", true, true),
     ];
     for (name, face, has_uv, has_normal) in cases {
-        dir.write(&format!("{name}.obj"), format!("{head}{face}\n"));
+        dir.write(format!("{name}.obj"), format!("{head}{face}\n"));
         let scene = mesh(dir.path(), &format!("{name}.obj"));
         assert_eq!(scene.world.stats().triangles, 1, "{name}");
         let want_uv = if has_uv { uvs } else { [Vec2::ZERO; 3] };
@@ -375,7 +332,7 @@ fn usemtl_switches_materials_per_face() {
 #[test]
 fn mtl_colors_shininess_and_texture() {
     let dir = TempDir::new("mtl");
-    dir.png("tex.png", 3, 2, [255, 0, 0]);
+    dir.png("tex.png", 3, 2, |_, _| [255, 0, 0]);
     dir.write(
         "m.mtl",
         "# a comment\nnewmtl full\n  Ka 0.1 0.2 0.3\n  Kd 0.4 0.5 0.6 # inline comment\n\
@@ -409,9 +366,9 @@ fn mtl_colors_shininess_and_texture() {
 fn mtllib_in_a_subfolder_resolves_map_kd_against_the_mtl_folder() {
     let dir = TempDir::new("subfolder");
     // A decoy of the same name next to the OBJ: the MTL's own folder must win.
-    dir.png("tex.png", 1, 1, [0, 0, 255]);
-    dir.png("sub/tex.png", 5, 4, [0, 255, 0]);
-    dir.png("sub/maps/with space.png", 7, 1, [0, 255, 0]);
+    dir.png("tex.png", 1, 1, |_, _| [0, 0, 255]);
+    dir.png("sub/tex.png", 5, 4, |_, _| [0, 255, 0]);
+    dir.png("sub/maps/with space.png", 7, 1, |_, _| [0, 255, 0]);
     dir.write(
         "sub/x.mtl",
         "newmtl a\nmap_Kd tex.png\nnewmtl b\nmap_Kd -s 2 2 1 -clamp on -mm 0 1 maps/with space.png\n",
@@ -625,7 +582,7 @@ fn unused_material_with_a_missing_texture_is_not_an_error() {
 #[test]
 fn map_kd_with_windows_separators() {
     let dir = TempDir::new("backslash");
-    dir.png("maps/t.png", 2, 2, [9, 9, 9]);
+    dir.png("maps/t.png", 2, 2, |_, _| [9, 9, 9]);
     dir.write("w.mtl", "newmtl m\nmap_Kd maps\\t.png\n");
     dir.write(
         "w.obj",

@@ -19,12 +19,15 @@
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 use std::fmt::Display;
-use std::path::{Path, PathBuf};
+mod support;
+
+use std::path::Path;
 
 use glam::{DMat3, DVec2, DVec3, Vec3};
 use penumbra::{
     render, write_image, Film, PixelBounds, RenderOptions, Scene, SceneFile, SceneFormat,
 };
+use support::TempDir;
 
 /// Relative tolerance of plain f32 arithmetic against f64 (floored, see [`assert_close`]).
 const TOL: f64 = 1e-4;
@@ -55,16 +58,6 @@ fn render_in(text: &str, base_dir: &Path) -> Film {
 
 fn render_text(text: &str) -> Film {
     render_in(text, Path::new("."))
-}
-
-/// A fresh folder for files a test writes.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("render-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn bits(film: &Film) -> Vec<[u32; 3]> {
@@ -1474,12 +1467,11 @@ fn checker_texture() {
 /// A 2×2 PNG, row 0 at the top: red, green / blue, orange-ish.
 const TEXELS: [[[u8; 3]; 2]; 2] = [[[255, 0, 0], [0, 128, 0]], [[0, 0, 64], [200, 100, 50]]];
 
-fn write_texture(dir: &Path) {
-    let bytes: Vec<u8> = TEXELS.iter().flatten().flatten().copied().collect();
-    image::RgbImage::from_raw(2, 2, bytes)
-        .unwrap()
-        .save(dir.join("tex.png"))
-        .unwrap();
+/// A fresh folder holding the texture [`TEXELS`] as `tex.png`.
+fn texture_dir(name: &str) -> TempDir {
+    let dir = TempDir::new(name);
+    dir.png("tex.png", 2, 2, |x, y| TEXELS[y as usize][x as usize]);
+    dir
 }
 
 /// Texel (column x, row y from the top), decoded to linear.
@@ -1499,15 +1491,14 @@ fn texel(x: usize, y: usize, srgb: bool) -> DVec3 {
 fn image_texture_nearest_across_the_quad() {
     // uv_scale 2 and offset −½ make st run over [−½, 1½]: the image repeats (Euclidean modulo,
     // negative st included) or clamps. SPEC §6 `nearest`: texel (floor(s·W), floor((1 − t)·H)).
-    let dir = temp_dir("nearest");
-    write_texture(&dir);
+    let dir = texture_dir("nearest");
     let scene = TexScene::new(20);
     for (wrap, colorspace) in [("repeat", "srgb"), ("clamp", "srgb"), ("repeat", "linear")] {
         let texture = format!(
             "type = \"image\"\nfile = \"tex.png\"\nfilter = \"nearest\"\nwrap = \"{wrap}\"\n\
              colorspace = \"{colorspace}\"\nuv_scale = [2, 2]\nuv_offset = [-0.5, -0.5]"
         );
-        let film = render_in(&scene.toml(&texture), &dir);
+        let film = render_in(&scene.toml(&texture), dir.path());
         let index = |i: i64| -> usize {
             if wrap == "repeat" {
                 i.rem_euclid(2) as usize
@@ -1533,15 +1524,14 @@ fn image_texture_bilinear_across_the_quad() {
     // SPEC §6 `bilinear`: x = s·W − ½, y = (1 − t)·H − ½; the four texels around (x, y),
     // wrapped or clamped, each decoded to linear, weighted by x − floor(x) and y − floor(y).
     // The blend is continuous in uv, so every pixel on the quad is checked.
-    let dir = temp_dir("bilinear-quad");
-    write_texture(&dir);
+    let dir = texture_dir("bilinear-quad");
     let scene = TexScene::new(20);
     for (wrap, colorspace) in [("repeat", "srgb"), ("clamp", "srgb"), ("clamp", "linear")] {
         let texture = format!(
             "type = \"image\"\nfile = \"tex.png\"\nfilter = \"bilinear\"\nwrap = \"{wrap}\"\n\
              colorspace = \"{colorspace}\"\nuv_scale = [1.5, 2]\nuv_offset = [-0.3, -0.6]"
         );
-        let film = render_in(&scene.toml(&texture), &dir);
+        let film = render_in(&scene.toml(&texture), dir.path());
         let index = |i: f64| -> usize {
             let i = i as i64;
             if wrap == "repeat" {
@@ -1573,8 +1563,7 @@ fn image_texture_bilinear_across_the_quad() {
 fn image_texture_t_zero_is_the_bottom_row() {
     // Probes at the centers of the four quadrants of the quad (uv ¼ or ¾), where the nearest
     // texel is plain; t = 0 is the bottom row of the image (as in OBJ).
-    let dir = temp_dir("bottom-row");
-    write_texture(&dir);
+    let dir = texture_dir("bottom-row");
     let mat = Mat::diffuse(grey(0.5), rgb(0.9, 0.8, 0.7));
     let ia = grey(0.2);
     for (uv, name, (x, y)) in [
@@ -1610,7 +1599,7 @@ fn image_texture_t_zero_is_the_bottom_row() {
             let t = texel(x, y, colorspace == "srgb");
             // The light at the eye: n·l = 1.
             let want = t * mat.ka * ia + t * mat.kd;
-            let got = render_in(&text, &dir).get(0, 0);
+            let got = render_in(&text, dir.path()).get(0, 0);
             assert_abs(got, want, TEX_TOL, format!("{name}, {colorspace}"));
         }
     }
@@ -1620,8 +1609,7 @@ fn image_texture_t_zero_is_the_bottom_row() {
 fn image_texture_bilinear_blends_decoded_texels() {
     // At uv (½, ½) the bilinear lookup (x = s·W − ½ = ½, y = (1 − t)·H − ½ = ½) weighs all four
     // texels equally, after decoding each to linear; at (¼, ¾), a texel center, it is that texel.
-    let dir = temp_dir("bilinear");
-    write_texture(&dir);
+    let dir = texture_dir("bilinear");
     let ia = grey(1.0);
     for (uv, want) in [
         (
@@ -1642,7 +1630,7 @@ fn image_texture_bilinear_blends_decoded_texels() {
                 rgb(2.0, 0.0, 0.0),
                 rgb(0.0, 2.0, 0.0),
             );
-        let got = render_in(&text, &dir).get(0, 0);
+        let got = render_in(&text, dir.path()).get(0, 0);
         assert_abs(got, want, TEX_TOL, format!("uv {uv}"));
     }
 }
@@ -1970,7 +1958,7 @@ fn cube_and_sphere_turn_and_scale_in_place_then_move_to_center() {
 fn output_files_encode_as_the_spec_says() {
     // PNG: round(255·encode(clamp(c, 0, 1))), row 0 at the top; gamma: c^(1/gamma).
     // PFM: linear floats, unclamped, scanlines bottom to top. EXR: linear floats, unclamped.
-    let dir = temp_dir("output");
+    let dir = TempDir::new("output");
     let values = [
         [0.0, 0.5, 1.0],
         [0.18, 0.0031308, 0.002],
