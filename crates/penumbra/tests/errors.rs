@@ -119,6 +119,18 @@ fn table() -> Vec<Case> {
         toml("vector of two numbers", edit(BASE, "position = [0, 1, 5]", "position = [0, 1]"))
             .parse_error(BadValue, value_of("position = [0, 1]"), Some("camera.position"),
                          &["length 2", "3"]),
+        // serde's own fixed arrays stop after N elements and TOML dropped the rest silently.
+        toml("vector of four numbers", edit(BASE, "position = [0, 1, 5]", "position = [0, 1, 5, 6]"))
+            .parse_error(BadValue, value_of("position = [0, 1, 5, 6]"), Some("camera.position"),
+                         &["length 4", "3"]),
+        toml("triangle with four vertices",
+             with_triangle("[0, 1, 0], [1, 1, 0]"))
+            .parse_error(BadValue, value_of("vertices = [[0, 0, 0]"), Some("objects[2].vertices"),
+                         &["length 4", "3"]),
+        toml("uv with three numbers",
+             format!("{}uvs = [[0, 0, 9], [1, 0], [0, 1]]\n", with_triangle("[0, 1, 0]")))
+            .parse_error(BadValue, at("[0, 0, 9]"), Some("objects[2].uvs[0]"),
+                         &["length 3", "2"]),
         toml("string in a vector", edit(BASE, "position = [0, 1, 5]", "position = [0, \"1\", 5]"))
             .parse_error(BadValue, at("\"1\""), Some("camera.position[1]"), &["string", "number"]),
         toml("string deep in a triangle's vertices", with_triangle("[0, \"y\", 0]"))
@@ -333,6 +345,9 @@ fn table() -> Vec<Case> {
         json("JSON: string in a vector",
              edit(BASE_JSON, "\"position\": [0, 1, 5]", "\"position\": [0, \"1\", 5]"))
             .parse_error(BadValue, end_of("\"1\""), Some("camera.position[1]"), &["string", "number"]),
+        json("JSON: vector of four numbers",
+             edit(BASE_JSON, "\"position\": [0, 1, 5]", "\"position\": [0, 1, 5, 6]"))
+            .parse_error(BadValue, end_of("[0, 1, 5, 6]"), Some("camera.position"), &["length 4", "3"]),
         json("JSON: string deep in a triangle's vertices", with_triangle_json("[0, \"y\", 0]"))
             .parse_error(BadValue, end_of("\"y\""), Some("objects[2].vertices[2][1]"), &["string", "number"]),
         json("JSON: unknown sampler",

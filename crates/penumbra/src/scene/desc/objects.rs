@@ -26,7 +26,7 @@ use serde::de::{Deserializer, MapAccess};
 use serde::Deserialize;
 
 use super::tagged::{self, Tagged};
-use super::values::{ColorDesc, Num, Vec2Desc, Vec3Desc};
+use super::values::{ColorDesc, Exact, Num, Vec2Desc, Vec3Desc};
 
 /// `[[objects]]`: a shape, its material and its placement (`T·Rz·Ry·Rx·S`).
 #[derive(Clone, Debug, PartialEq)]
@@ -177,9 +177,9 @@ impl Tagged for ObjectDesc {
             "scale" => f.scale = Some(map.next_value()?),
             "rotate" => f.rotate = Some(map.next_value()?),
             "translate" => f.translate = Some(map.next_value()?),
-            "vertices" => f.vertices = Some(map.next_value()?),
-            "uvs" => f.uvs = Some(map.next_value()?),
-            "normals" => f.normals = Some(map.next_value()?),
+            "vertices" => f.vertices = Some(map.next_value::<Exact<_, 3>>()?.0),
+            "uvs" => f.uvs = Some(map.next_value::<Exact<_, 3>>()?.0),
+            "normals" => f.normals = Some(map.next_value::<Exact<_, 3>>()?.0),
             "corner" => f.corner = Some(map.next_value()?),
             "u" => f.u = Some(map.next_value()?),
             "v" => f.v = Some(map.next_value()?),

@@ -36,8 +36,45 @@ pub struct Vec3Desc(pub [f64; 3]);
 
 impl<'de> Deserialize<'de> for Vec3Desc {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [x, y, z] = <[Num; 3]>::deserialize(d)?;
+        let Exact([x, y, z]) = Exact::<Num, 3>::deserialize(d)?;
         Ok(Vec3Desc([x.0, y.0, z.0]))
+    }
+}
+
+/// An array of exactly `N` values. serde's own `[T; N]` stops reading after `N` elements,
+/// and TOML then drops the rest without a word (`position = [0, 1, 5, 6]`); this one counts
+/// them all and reports an array of the wrong length either way.
+pub(super) struct Exact<T, const N: usize>(pub(super) [T; N]);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T, const N: usize>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for V<T, N> {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "an array of length {N}")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Exact<T, N>, A::Error> {
+                let mut items = Vec::with_capacity(N);
+                while let Some(item) = seq.next_element()? {
+                    if items.len() == N {
+                        // Count the rest for the message without keeping them.
+                        let mut len = N + 1;
+                        while seq.next_element::<de::IgnoredAny>()?.is_some() {
+                            len += 1;
+                        }
+                        return Err(de::Error::invalid_length(len, &self));
+                    }
+                    items.push(item);
+                }
+                let len = items.len();
+                items
+                    .try_into()
+                    .map(Exact)
+                    .map_err(|_| de::Error::invalid_length(len, &self))
+            }
+        }
+        d.deserialize_seq(V::<T, N>(std::marker::PhantomData))
     }
 }
 
@@ -47,7 +84,7 @@ pub struct Vec2Desc(pub [f64; 2]);
 
 impl<'de> Deserialize<'de> for Vec2Desc {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [x, y] = <[Num; 2]>::deserialize(d)?;
+        let Exact([x, y]) = Exact::<Num, 2>::deserialize(d)?;
         Ok(Vec2Desc([x.0, y.0]))
     }
 }
