@@ -43,15 +43,17 @@ pub(super) fn occlude_packet<const N: usize>(
     }
     let o = origin.to_array();
 
-    let mut stack = [0u32; STACK_SIZE];
-    let mut sp = 1;
-    stack[0] = 0;
-    'nodes: while sp > 0 {
-        sp -= 1;
-        let node = &bvh.nodes[stack[sp] as usize];
-        if slab(node, &o, &inv, t_max) & active == 0 {
-            continue;
-        }
+    // Children are tested at their parent and the one the first live lane enters first is
+    // visited first, so that occluders near the shading point end the packet early; the other
+    // waits on the stack with the lanes that entered it.
+    let mut stack = [(0u32, 0u32); STACK_SIZE];
+    let mut sp = 0;
+    let root = &bvh.nodes[0];
+    let mut node = root;
+    if slab(root, &o, &inv, t_max).0 & active == 0 {
+        return;
+    }
+    'nodes: loop {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
@@ -61,9 +63,42 @@ pub(super) fn occlude_packet<const N: usize>(
                 }
             }
         } else {
-            stack[sp] = node.first;
-            stack[sp + 1] = node.first + 1;
-            sp += 2;
+            let (l, r) = (
+                &bvh.nodes[node.first as usize],
+                &bvh.nodes[node.first as usize + 1],
+            );
+            let ((ml, nl), (mr, nr)) = (slab(l, &o, &inv, t_max), slab(r, &o, &inv, t_max));
+            let (ml, mr) = (ml & active, mr & active);
+            if ml != 0 && mr != 0 {
+                let lane = active.trailing_zeros() as usize;
+                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
+                    (l, node.first + 1, mr)
+                } else {
+                    (r, node.first, ml)
+                };
+                stack[sp] = (far, far_mask);
+                sp += 1;
+                node = near;
+                continue;
+            } else if ml != 0 {
+                node = l;
+                continue;
+            } else if mr != 0 {
+                node = r;
+                continue;
+            }
+        }
+        // The next waiting subtree that a lane still live entered.
+        loop {
+            if sp == 0 {
+                break 'nodes;
+            }
+            sp -= 1;
+            let (index, mask) = stack[sp];
+            if mask & active != 0 {
+                node = &bvh.nodes[index as usize];
+                break;
+            }
         }
     }
     for (i, b) in blocked.iter_mut().enumerate() {
@@ -90,15 +125,22 @@ fn max(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max)`.
+/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max)`, and each
+/// lane's entry distance.
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize>(node: &BvhNode, o: &[f32; 3], inv: &[[f32; N]; 3], t_max: f32) -> u32 {
+fn slab<const N: usize>(
+    node: &BvhNode,
+    o: &[f32; 3],
+    inv: &[[f32; N]; 3],
+    t_max: f32,
+) -> (u32, [f32; N]) {
     // The box relative to the shared origin, once for all lanes.
     let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
     let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
     let mut hit = 0;
+    let mut entry = [0.0; N];
     for i in 0..N {
         let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
         let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
@@ -106,8 +148,9 @@ fn slab<const N: usize>(node: &BvhNode, o: &[f32; 3], inv: &[[f32; N]; 3], t_max
         let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
         let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max);
         hit |= ((near <= far) as u32) << i;
+        entry[i] = near;
     }
-    hit
+    (hit, entry)
 }
 
 /// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`: Möller–Trumbore exactly as
