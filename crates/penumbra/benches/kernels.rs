@@ -1,0 +1,90 @@
+//! Kernel benchmarks on the seed's room (`scenes/cornell.toml`): the shadow rays of one
+//! shading point (the 25 segments to its 5×5 light samples) traced as packets on every SIMD
+//! path this machine has, against the same segments traced one ray at a time; and camera
+//! rays through the closest-hit traversal.
+//!
+//! ```text
+//! cargo bench -p penumbra --bench kernels
+//! ```
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use glam::Vec3;
+use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, World};
+
+/// The seed's room, built once.
+fn world() -> std::sync::Arc<World> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
+    SceneFile::load(path).unwrap().build(1).unwrap().world
+}
+
+/// 64 points just above the floor (under the cubes, beside them, in the open) and the 25
+/// sample points of the room's light.
+fn shadow_setup(world: &World) -> (Vec<Vec3>, Vec<Vec3>) {
+    let origins = (0..64)
+        .map(|i| {
+            let (x, z) = ((i % 8) as f32 / 7.0, (i / 8) as f32 / 7.0);
+            Vec3::new(-2.8 + 5.6 * x, 1e-3, -0.2 - 5.6 * z)
+        })
+        .collect();
+    let Light::Area(light) = &world.lights()[0] else {
+        panic!("the room has an area light")
+    };
+    let mut ends = Vec::new();
+    light.sample_points(&mut Rng::new(0, &[]), &mut ends);
+    (origins, ends)
+}
+
+fn bench_shadow(c: &mut Criterion) {
+    let world = world();
+    let bvh = world.accel();
+    let (origins, ends) = shadow_setup(&world);
+    let t_max = 1.0 - 1e-4;
+    let mut group = c.benchmark_group("shadow_64_points_x_25_segments");
+    for path in supported_paths() {
+        group.bench_function(format!("packets_{}", path.name()), |b| {
+            let mut blocked = vec![false; ends.len()];
+            b.iter(|| {
+                let mut occluded = 0;
+                for &o in &origins {
+                    blocked.fill(false);
+                    bvh.occlude_from_on(path, o, &ends, t_max, &mut blocked);
+                    occluded += blocked.iter().filter(|&&b| b).count();
+                }
+                black_box(occluded)
+            })
+        });
+    }
+    group.bench_function("single_rays", |b| {
+        b.iter(|| {
+            let mut occluded = 0;
+            for &o in &origins {
+                for &e in &ends {
+                    occluded += bvh.occluded(&Ray::new(o, e - o), 0.0, t_max) as usize;
+                }
+            }
+            black_box(occluded)
+        })
+    });
+    group.finish();
+}
+
+fn bench_camera(c: &mut Criterion) {
+    let world = world();
+    let camera = PinholeCamera::new(&world.cameras()[0].1, 64, 64);
+    let rays: Vec<Ray> = (0..64 * 64)
+        .map(|i| camera.ray((i % 64) as f32 + 0.5, (i / 64) as f32 + 0.5))
+        .collect();
+    c.bench_function("closest_hit_4096_camera_rays", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| world.intersect(r, 1e-4, f32::INFINITY).is_some())
+                .count()
+        })
+    });
+}
+
+criterion_group!(benches, bench_shadow, bench_camera);
+criterion_main!(benches);
