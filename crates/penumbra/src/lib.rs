@@ -41,7 +41,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-// `unsafe` is denied everywhere but `accel::simd`, which dispatches the packet kernels to the
+// `unsafe` is denied everywhere but `simd`, which dispatches the hot kernels to the
 // instruction set the CPU has (each block with its SAFETY note).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
@@ -59,6 +59,7 @@ mod pool;
 mod render;
 mod sampling;
 mod scene;
+mod simd;
 mod texture;
 mod world;
 
@@ -67,9 +68,7 @@ pub mod shapes {
     pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 }
 
-pub use accel::{
-    intersect_brute_force, occluded_brute_force, simd_path, supported_paths, Bvh, SimdPath,
-};
+pub use accel::{intersect_brute_force, occluded_brute_force, Bvh};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
@@ -86,6 +85,7 @@ pub use sampling::{Rng, Sampler};
 pub use scene::{
     desc, AssetKind, ErrorKind, Location, Scene, SceneDesc, SceneError, SceneFile, SceneFormat,
 };
+pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};
 

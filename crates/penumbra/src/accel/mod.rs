@@ -17,17 +17,16 @@ use glam::Vec3;
 
 use crate::geometry::{Geometry, Hit};
 use crate::math::{Aabb, Ray};
+use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
 mod packet;
-mod simd;
 mod traverse;
 mod validate;
 
 #[cfg(test)]
 mod tests;
 
-pub use simd::{simd_path, supported_paths, SimdPath};
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at
@@ -145,7 +144,7 @@ impl Bvh {
     /// that cannot contribute (below the surface, facing away) as blocked and traces the rest
     /// in one call.
     pub fn occlude_from(&self, origin: Vec3, ends: &[Vec3], t_max: f32, blocked: &mut [bool]) {
-        simd::occlude_from(simd_path(), self, origin, ends, t_max, blocked);
+        self.occlude_from_on(simd_path(), origin, ends, t_max, blocked);
     }
 
     /// [`Bvh::occlude_from`] on a given SIMD path (the portable one when `path` is not
@@ -158,7 +157,14 @@ impl Bvh {
         t_max: f32,
         blocked: &mut [bool],
     ) {
-        simd::occlude_from(path, self, origin, ends, t_max, blocked);
+        let kernel = packet::Occlude {
+            bvh: self,
+            origin,
+            ends,
+            t_max,
+            blocked,
+        };
+        dispatch(path, kernel);
     }
 
     /// Checks the structure's invariants against the geometry it was built from: every

@@ -2,8 +2,8 @@
 //! of its lights) traced together through the BVH, `N` lanes at a time.
 //!
 //! Each node is fetched once per packet and its slab test runs for all lanes in one loop, which
-//! the compiler turns into vector instructions (`simd` compiles this file's code once per
-//! instruction set and picks one at run time). A lane leaves the packet at its first occluder;
+//! the compiler turns into vector instructions (`crate::simd` compiles this file's code once
+//! per instruction set and picks one at run time). A lane leaves the packet at its first occluder;
 //! the packet stops when no lane is left.
 //!
 //! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
@@ -14,7 +14,53 @@
 
 use glam::Vec3;
 
-use super::{Bvh, BvhNode, STACK_SIZE};
+use super::{traverse, Bvh, BvhNode, STACK_SIZE};
+use crate::math::Ray;
+use crate::simd::Kernel;
+
+/// [`Bvh::occlude_from`] as a [`Kernel`]: the segments in packets of `N` lanes.
+pub(super) struct Occlude<'a> {
+    pub(super) bvh: &'a Bvh,
+    pub(super) origin: Vec3,
+    pub(super) ends: &'a [Vec3],
+    pub(super) t_max: f32,
+    pub(super) blocked: &'a mut [bool],
+}
+
+impl Kernel for Occlude<'_> {
+    type Output = ();
+
+    /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
+    #[inline(always)]
+    fn run<const N: usize>(self) {
+        let Occlude {
+            bvh,
+            origin,
+            ends,
+            t_max,
+            blocked,
+        } = self;
+        assert_eq!(ends.len(), blocked.len(), "one mask slot per segment");
+        if bvh.nodes.is_empty() {
+            return;
+        }
+        for (ends, blocked) in ends.chunks(N).zip(blocked.chunks_mut(N)) {
+            let live = blocked.iter().filter(|&&b| !b).count();
+            if live == 0 {
+                continue;
+            }
+            if live * 4 <= N {
+                for (&end, b) in ends.iter().zip(blocked) {
+                    if !*b {
+                        *b = traverse::occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
+                    }
+                }
+            } else {
+                occlude_packet::<N>(bvh, origin, ends, t_max, blocked);
+            }
+        }
+    }
+}
 
 /// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
 /// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.

@@ -9,6 +9,7 @@ use std::sync::OnceLock;
 use super::*;
 use crate::geometry::{intersect_triangle, Mesh};
 use crate::math::Transform;
+use crate::simd::supported_paths;
 
 mod edges;
 mod props;

@@ -18,6 +18,7 @@ use glam::Vec3;
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
+use crate::simd::{dispatch, simd_path, Kernel, SimdPath};
 use crate::world::World;
 use model::{Lanes, Lobe, Model, Physical, Seed};
 use plan::{plan, Directions, LightPlan, Points, Source};
@@ -93,6 +94,26 @@ pub(crate) struct Integrator<'w> {
     world: &'w World,
     settings: ShadingSettings,
     lights: Vec<LightPlan>,
+    path: SimdPath,
+}
+
+/// [`Integrator::shade`] as a [`Kernel`], to be compiled per instruction set.
+struct Shade<'a, 'w> {
+    integrator: &'a Integrator<'w>,
+    ray: &'a Ray,
+    surface: &'a Surface,
+    rng: &'a mut Rng,
+    scratch: &'a mut Scratch,
+}
+
+impl Kernel for Shade<'_, '_> {
+    type Output = (Rgb, u64);
+
+    #[inline(always)]
+    fn run<const N: usize>(self) -> (Rgb, u64) {
+        self.integrator
+            .shade_lanes(self.ray, self.surface, self.rng, self.scratch)
+    }
 }
 
 impl<'w> Integrator<'w> {
@@ -108,12 +129,32 @@ impl<'w> Integrator<'w> {
             world,
             settings,
             lights,
+            path: simd_path(),
         }
     }
 
     /// The radiance leaving `surface` back along `ray`, and the number of shadow rays traced.
-    /// `rng` supplies the jitter of jittered area lights.
+    /// `rng` supplies the jitter of jittered area lights. Runs compiled for this process's
+    /// SIMD path, so that the light-sample lanes use its vector width.
     pub(crate) fn shade(
+        &self,
+        ray: &Ray,
+        surface: &Surface,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) -> (Rgb, u64) {
+        let kernel = Shade {
+            integrator: self,
+            ray,
+            surface,
+            rng,
+            scratch,
+        };
+        dispatch(self.path, kernel)
+    }
+
+    #[inline(always)]
+    fn shade_lanes(
         &self,
         ray: &Ray,
         surface: &Surface,
@@ -173,6 +214,7 @@ impl<'w> Integrator<'w> {
     }
 
     /// Fills `scratch` with every sample of every light, in light and sample order.
+    #[inline(always)]
     fn gather<M: Model>(
         &self,
         x: Vec3,

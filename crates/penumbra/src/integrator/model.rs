@@ -73,7 +73,7 @@ pub(super) trait Model {
 pub(super) struct Seed;
 
 impl Model for Seed {
-    #[inline]
+    #[inline(always)]
     fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
         let n = out.r.len();
         let (w, kd, ks) = (plan.weight, lobe.kd, lobe.ks);
@@ -103,7 +103,7 @@ impl Model for Seed {
 pub(super) struct Physical;
 
 impl Model for Physical {
-    #[inline]
+    #[inline(always)]
     fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
         let n = out.r.len();
         let (w, kd, ks, norm) = (plan.weight, lobe.kd, lobe.ks, lobe.specular_norm);

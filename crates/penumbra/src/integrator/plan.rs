@@ -69,6 +69,7 @@ impl Directions {
     /// The directions from `x` to every point of `points`, and their cosines with `n`. The
     /// lanes are independent, so the loop vectorizes; each lane computes exactly what
     /// `to = y − x; d2 = to·to; l = to / √d2; cos = n·l` does with glam's scalar `Vec3`.
+    #[inline(always)]
     pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
         let count = points.len();
         for v in [

@@ -1,0 +1,117 @@
+//! Instruction-set dispatch: the crate's only `unsafe` code.
+#![allow(unsafe_code)]
+//!
+//! The hot kernels (shadow packets in `accel::packet`, the light-sample lanes of the
+//! integrator) are plain safe Rust over fixed-size lane arrays and slices. A [`Kernel`] is
+//! compiled once per instruction set here (`#[target_feature]` functions into which its
+//! `run::<N>` is inlined: 16 lanes for AVX-512, 8 for AVX2, 8 on the portable baseline, which
+//! is SSE2 on x86-64), and one of those is chosen once per process: the best the CPU
+//! supports, or the one named by the environment variable `PENUMBRA_SIMD` (`avx512`, `avx2` or
+//! `portable`) when the CPU supports it. Rust never fuses a multiply and an add on its own, so
+//! every path computes the same results bit for bit.
+
+use std::sync::OnceLock;
+
+/// An instruction set the kernels are compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimdPath {
+    /// AVX-512 (F, VL, BW, DQ): 16 lanes.
+    Avx512,
+    /// AVX2: 8 lanes.
+    Avx2,
+    /// No extension beyond the target's baseline (SSE2 on x86-64): 8 lanes.
+    Portable,
+}
+
+impl SimdPath {
+    /// The name `PENUMBRA_SIMD` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            SimdPath::Avx512 => "avx512",
+            SimdPath::Avx2 => "avx2",
+            SimdPath::Portable => "portable",
+        }
+    }
+
+    /// True when this CPU can run the path.
+    pub fn is_supported(self) -> bool {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            SimdPath::Avx512 => {
+                is_x86_feature_detected!("avx512f")
+                    && is_x86_feature_detected!("avx512vl")
+                    && is_x86_feature_detected!("avx512bw")
+                    && is_x86_feature_detected!("avx512dq")
+            }
+            #[cfg(target_arch = "x86_64")]
+            SimdPath::Avx2 => is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            SimdPath::Avx512 | SimdPath::Avx2 => false,
+            SimdPath::Portable => true,
+        }
+    }
+}
+
+/// Every path this CPU supports, best first.
+pub fn supported_paths() -> Vec<SimdPath> {
+    [SimdPath::Avx512, SimdPath::Avx2, SimdPath::Portable]
+        .into_iter()
+        .filter(|p| p.is_supported())
+        .collect()
+}
+
+/// The path this process uses, chosen on first use: `PENUMBRA_SIMD` if it names a supported
+/// path, else the best supported one.
+pub fn simd_path() -> SimdPath {
+    static PATH: OnceLock<SimdPath> = OnceLock::new();
+    *PATH.get_or_init(|| {
+        let supported = supported_paths();
+        let forced = std::env::var("PENUMBRA_SIMD").ok();
+        supported
+            .iter()
+            .copied()
+            .find(|p| forced.as_deref() == Some(p.name()))
+            .unwrap_or(supported[0])
+    })
+}
+
+/// Work to compile per instruction set: `run::<N>` with `N` lanes per vector group. Its
+/// implementation, and every function it calls that should use the instruction set, must be
+/// `#[inline(always)]`: code that is not inlined into the dispatching function is compiled
+/// for the baseline only.
+pub(crate) trait Kernel {
+    /// What the work returns.
+    type Output;
+    /// Does the work with `N` lanes.
+    fn run<const N: usize>(self) -> Self::Output;
+}
+
+/// Runs `kernel` compiled for `path` (the portable build when the CPU lacks `path`).
+#[inline]
+pub(crate) fn dispatch<K: Kernel>(path: SimdPath, kernel: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    if path.is_supported() {
+        match path {
+            // SAFETY: the CPU supports AVX-512 F/VL/BW/DQ (checked just above), all that
+            // `run_avx512` is compiled for.
+            SimdPath::Avx512 => return unsafe { run_avx512(kernel) },
+            // SAFETY: the CPU supports AVX2 (checked just above), all that `run_avx2` is
+            // compiled for.
+            SimdPath::Avx2 => return unsafe { run_avx2(kernel) },
+            SimdPath::Portable => {}
+        }
+    }
+    kernel.run::<8>()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
+unsafe fn run_avx512<K: Kernel>(kernel: K) -> K::Output {
+    kernel.run::<16>()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2<K: Kernel>(kernel: K) -> K::Output {
+    kernel.run::<8>()
+}
