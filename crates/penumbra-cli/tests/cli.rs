@@ -761,6 +761,38 @@ fn check_reports_a_bad_scene() {
 // ---------------------------------------------------------------------------------------------
 
 #[test]
+fn images_do_not_depend_on_the_simd_path() {
+    // PENUMBRA_SIMD picks the kernels' instruction set; every path must give the same bits.
+    // A path this CPU lacks falls back to the best it has, which then compares to itself.
+    let sb = TempDir::new("simd");
+    let noisy = sb.write("noisy.toml", noisy_scene(48, 36));
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
+    for (name, scene) in [("noisy", noisy.as_path()), ("room", room.as_path())] {
+        let mut images = Vec::new();
+        for path in ["avx512", "avx2", "portable"] {
+            let out = sb.join(format!("{name}-{path}.pfm"));
+            let status = command()
+                .args([
+                    "render".as_ref(),
+                    scene.as_os_str(),
+                    "-o".as_ref(),
+                    out.as_os_str(),
+                ])
+                .args(["--width", "64", "--height", "48", "--quiet"])
+                .env("PENUMBRA_SIMD", path)
+                .stdin(Stdio::null())
+                .status()
+                .expect("run the penumbra binary");
+            assert!(status.success(), "{name} on {path}");
+            images.push((path, std::fs::read(&out).unwrap()));
+        }
+        for (path, bytes) in &images[1..] {
+            assert!(*bytes == images[0].1, "{name}: {path} differs from avx512");
+        }
+    }
+}
+
+#[test]
 fn images_do_not_depend_on_the_thread_count() {
     let sb = TempDir::new("threads");
     let scene = sb.write("s.toml", noisy_scene(40, 30));
