@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Geometry, Hit};
+use crate::geometry::{intersect_triangle, Geometry, Hit, TriangleHit};
 use crate::math::{Aabb, Ray};
 use crate::simd::{dispatch, simd_path, SimdPath};
 
@@ -60,6 +60,22 @@ struct TriAccel {
     v0: Vec3,
     e1: Vec3,
     e2: Vec3,
+}
+
+impl TriAccel {
+    /// Möller–Trumbore of the ray against this triangle, `t` in `(t_min, t_max)`.
+    #[inline(always)]
+    fn hit(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<TriangleHit> {
+        intersect_triangle(
+            ray.origin,
+            ray.direction,
+            self.v0,
+            self.e1,
+            self.e2,
+            t_min,
+            t_max,
+        )
+    }
 }
 
 /// The triangle with corners `corners` in the form the intersection test takes. The BVH and

@@ -7,7 +7,7 @@
 use std::sync::OnceLock;
 
 use super::*;
-use crate::geometry::{intersect_triangle, Mesh};
+use crate::geometry::Mesh;
 use crate::math::Transform;
 use crate::simd::supported_paths;
 
@@ -87,16 +87,9 @@ fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
         (Some(a), Some(b)) => {
             assert_eq!(a.t, b.t, "closest distance differs for {ray:?}");
             let tri = accel(g.corners(a.triangle as usize));
-            let own = intersect_triangle(
-                ray.origin,
-                ray.direction,
-                tri.v0,
-                tri.e1,
-                tri.e2,
-                t_min,
-                t_max,
-            )
-            .expect("the reported triangle is hit");
+            let own = tri
+                .hit(ray, t_min, t_max)
+                .expect("the reported triangle is hit");
             assert_eq!((a.t, a.b1, a.b2), (own.t, own.b1, own.b2));
         }
         (a, b) => panic!("bvh {a:?} vs brute force {b:?} for {ray:?} in ({t_min}, {t_max})"),

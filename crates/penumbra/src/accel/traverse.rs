@@ -5,7 +5,7 @@
 use glam::Vec3A;
 
 use super::{Bvh, BvhNode, STACK_SIZE};
-use crate::geometry::{intersect_triangle, Hit};
+use crate::geometry::Hit;
 use crate::math::Ray;
 
 /// The closest hit with `t` in `(t_min, t_max)`, if any.
@@ -24,15 +24,7 @@ pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Opt
             let first = node.first as usize;
             for i in first..first + node.count as usize {
                 let tri = &bvh.tris[i];
-                let hit = intersect_triangle(
-                    ray.origin,
-                    ray.direction,
-                    tri.v0,
-                    tri.e1,
-                    tri.e2,
-                    t_min,
-                    t_max,
-                );
+                let hit = tri.hit(ray, t_min, t_max);
                 if let Some(h) = hit {
                     t_max = h.t;
                     best = Some((i, h.b1, h.b2));
@@ -99,15 +91,7 @@ pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                let hit = intersect_triangle(
-                    ray.origin,
-                    ray.direction,
-                    tri.v0,
-                    tri.e1,
-                    tri.e2,
-                    t_min,
-                    t_max,
-                );
+                let hit = tri.hit(ray, t_min, t_max);
                 if hit.is_some() {
                     return true;
                 }

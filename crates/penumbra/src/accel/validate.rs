@@ -3,7 +3,7 @@
 //! [`occluded_brute_force`]), which test each triangle of the scene in turn.
 
 use super::{accel, Bvh, STACK_SIZE};
-use crate::geometry::{intersect_triangle, Geometry, Hit};
+use crate::geometry::{Geometry, Hit};
 use crate::math::Ray;
 
 /// Checks `bvh` against the geometry it was built from; see [`Bvh::validate`].
@@ -79,15 +79,7 @@ pub fn intersect_brute_force(
     let mut t_max = t_max;
     for i in 0..geometry.len() {
         let tri = accel(geometry.corners(i));
-        if let Some(h) = intersect_triangle(
-            ray.origin,
-            ray.direction,
-            tri.v0,
-            tri.e1,
-            tri.e2,
-            t_min,
-            t_max,
-        ) {
+        if let Some(h) = tri.hit(ray, t_min, t_max) {
             t_max = h.t;
             best = Some(Hit {
                 t: h.t,
@@ -105,15 +97,6 @@ pub fn intersect_brute_force(
 pub fn occluded_brute_force(geometry: &Geometry, ray: &Ray, t_min: f32, t_max: f32) -> bool {
     (0..geometry.len()).any(|i| {
         let tri = accel(geometry.corners(i));
-        intersect_triangle(
-            ray.origin,
-            ray.direction,
-            tri.v0,
-            tri.e1,
-            tri.e2,
-            t_min,
-            t_max,
-        )
-        .is_some()
+        tri.hit(ray, t_min, t_max).is_some()
     })
 }
