@@ -58,7 +58,7 @@ fn bench_bvh_build(c: &mut Criterion) {
 fn bench_obj_parse(c: &mut Criterion) {
     let meshes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes");
     let text =
-        "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+        "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n\
                 [[objects]]\ntype = \"mesh\"\nfile = \"nefertiti_70k.obj\"\n";
     let file = SceneFile::from_str(text, SceneFormat::Toml, "bench.toml", &meshes).unwrap();
     let mut group = c.benchmark_group("obj_parse_nefertiti_70k");

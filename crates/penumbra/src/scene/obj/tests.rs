@@ -105,8 +105,39 @@ fn varied_obj(rows: usize) -> Vec<u8> {
     bytes
 }
 
+/// A grid of quads whose every `v` has one `vt` and one `vn`, as most exported meshes.
+fn grid_obj(size: usize) -> Vec<u8> {
+    let mut s = String::from("mtllib lib.mtl\n");
+    for y in 0..=size {
+        for x in 0..=size {
+            s += &format!(
+                "v {x} {y} {}\nvt {} {}\nvn 0 0.{} 1\n",
+                (x * y) % 3,
+                x,
+                y,
+                x % 10
+            );
+        }
+    }
+    for y in 0..size {
+        for x in 0..size {
+            let v = y * (size + 1) + x + 1;
+            let corners = [v, v + 1, v + size + 2, v + size + 1].map(|i| format!("{i}/{i}/{i}"));
+            if x == 0 {
+                s += ["usemtl red\n", "usemtl blue\n", "usemtl\n"][y % 3];
+            }
+            s += &format!("f {}\n", corners.join(" "));
+        }
+    }
+    s.into_bytes()
+}
+
 #[test]
 fn chunked_reading_equals_a_single_chunk() {
+    let model = assert_chunking_agrees(&grid_obj(12)).unwrap();
+    assert_eq!(model.mesh.positions.len(), 13 * 13);
+    assert_eq!(model.mesh.indices.len(), 2 * 12 * 12);
+    assert_eq!(model.materials.len(), 2);
     let model = assert_chunking_agrees(&varied_obj(40)).unwrap();
     assert!(model.mesh.indices.len() > 40);
     assert_eq!(model.materials.len(), 2);
