@@ -244,7 +244,10 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     };
     let load_start = Instant::now();
     let file = SceneFile::load(&args.scene).map_err(invalid)?;
+    let file_time = load_start.elapsed();
     let scene = file.build(args.threads).map_err(invalid)?;
+    // The scene file, then its meshes and textures: everything of loading but the BVH.
+    let parse_time = file_time + scene.load_time;
     let settings = settings(&args, &file, &scene);
     // Settings from flags are checked before anything is written or rendered.
     settings
@@ -352,6 +355,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             "light_samples": light_samples(&scene.world, settings.light_samples),
             "triangles": world_stats.triangles,
             "load_seconds": load_time.as_secs_f64(),
+            "parse_seconds": parse_time.as_secs_f64(),
             "bvh_build_seconds": world_stats.bvh_build_time.as_secs_f64(),
             "render_seconds": stats.time.as_secs_f64(),
             "camera_rays": stats.camera_rays,

@@ -545,6 +545,14 @@ fn json_summary_on_stdout() {
     assert_eq!(v["height"], 12);
     assert_eq!(v["triangles"], BASE_TRIANGLES);
     assert!(v["rays_per_second"].as_f64().unwrap() > 0.0, "{v}");
+    // Loading is parsing (scene file, meshes, textures) then the BVH build.
+    let seconds = |key: &str| v[key].as_f64().unwrap_or_else(|| panic!("no {key}: {v}"));
+    let (load, parse, bvh) = (
+        seconds("load_seconds"),
+        seconds("parse_seconds"),
+        seconds("bvh_build_seconds"),
+    );
+    assert!(parse > 0.0 && bvh > 0.0 && parse + bvh <= load, "{v}");
     assert!(sb.out().exists());
 }
 

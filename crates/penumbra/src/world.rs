@@ -314,12 +314,18 @@ impl WorldBuilder {
     /// Builds the acceleration structure with `threads` workers (0: all cores) and returns
     /// the finished world.
     pub fn build(self, threads: usize) -> World {
-        let start = Instant::now();
         // Without a pool of its own (the system refused threads) the build runs serially: the
         // library never borrows rayon's global pool.
-        let accel = match thread_pool(threads) {
-            Ok((pool, _)) => Bvh::build_parallel(&self.geometry, &pool),
-            Err(_) => Bvh::build(&self.geometry),
+        let pool = thread_pool(threads).ok().map(|(pool, _)| pool);
+        self.build_on(pool.as_ref())
+    }
+
+    /// [`WorldBuilder::build`] on the threads of `pool`, or on the calling thread without one.
+    pub(crate) fn build_on(self, pool: Option<&rayon::ThreadPool>) -> World {
+        let start = Instant::now();
+        let accel = match pool {
+            Some(pool) => Bvh::build_parallel(&self.geometry, pool),
+            None => Bvh::build(&self.geometry),
         };
         World {
             geometry: self.geometry,

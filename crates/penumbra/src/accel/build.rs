@@ -1,61 +1,87 @@
-//! Binned-SAH construction of the [`Bvh`], on the calling thread or with large subtrees built
-//! in parallel on a rayon pool; both give the same nodes. Also owns the box padding that keeps
-//! the slab test conservative (see `node`).
+//! Binned-SAH construction of the [`Bvh`], on the calling thread or on a rayon pool; both give
+//! the same nodes. On a pool, the steps over all primitives run in parallel chunks, the top
+//! splits bin in parallel (see `split`), and large subtrees are built on separate threads.
+//! Also owns the box padding that keeps the slab test conservative (see `node`).
 
 use glam::Vec3;
+use rayon::prelude::*;
 
-use super::{accel, Bvh, BvhNode, BINS, MAX_DEPTH, MAX_LEAF, PARALLEL_MIN};
+use super::split::{bounds_of, split, Bins};
+use super::{accel, Bvh, BvhNode, PARALLEL_MIN};
 use crate::geometry::Geometry;
 use crate::math::Aabb;
 
+/// Nodes with at least this many primitives bin them in parallel (when building on a pool).
+const PARALLEL_BINNING_MIN: usize = 128 * 1024;
+
+/// A primitive as the build sees it: its box, the box's center and its triangle index.
 #[derive(Clone, Copy)]
-struct BuildPrim {
-    bounds: Aabb,
-    centroid: Vec3,
-    index: u32,
+pub(super) struct BuildPrim {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub index: u32,
 }
 
-/// Builds the hierarchy over every triangle of `geometry`, splitting large subtrees across the
-/// threads of `pool` when there is one.
+/// Builds the hierarchy over every triangle of `geometry`, on the threads of `pool` when there
+/// is one and the mesh is large enough to gain from it.
 pub(super) fn build(geometry: &Geometry, pool: Option<&rayon::ThreadPool>) -> Bvh {
-    let mut prims: Vec<BuildPrim> = (0..geometry.len())
-        .map(|i| {
-            let bounds = geometry
-                .corners(i)
-                .into_iter()
-                .fold(Aabb::EMPTY, Aabb::grow);
-            BuildPrim {
-                bounds,
-                centroid: bounds.center(),
-                index: i as u32,
-            }
-        })
-        .collect();
-    if prims.is_empty() {
+    if geometry.is_empty() {
         return Bvh::default();
     }
-    let nodes = match pool {
-        Some(pool) if prims.len() >= 2 * PARALLEL_MIN => {
-            pool.install(|| build_subtree(&mut prims, 0, 0, true))
+    match pool {
+        Some(pool) if geometry.len() >= 2 * PARALLEL_MIN => {
+            pool.install(|| build_with(geometry, true))
         }
-        _ => build_subtree(&mut prims, 0, 0, false),
+        _ => build_with(geometry, false),
+    }
+}
+
+/// The build, either all on the calling thread or, when `parallel`, with every step over all
+/// primitives (their boxes, the top splits' binning, the final arrays) and every pair of large
+/// subtrees spread over the current rayon pool. Both give the same nodes.
+fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
+    let prim = |i: usize| {
+        let bounds = geometry
+            .corners(i)
+            .into_iter()
+            .fold(Aabb::EMPTY, Aabb::grow);
+        BuildPrim {
+            bounds,
+            centroid: bounds.center(),
+            index: i as u32,
+        }
     };
-    let prim_ids: Vec<u32> = prims.iter().map(|p| p.index).collect();
-    let tris = prim_ids
-        .iter()
-        .map(|&i| accel(geometry.corners(i as usize)))
-        .collect();
+    let n = geometry.len();
+    let mut prims: Vec<BuildPrim>;
+    let (bounds, centroids);
+    if parallel {
+        prims = (0..n).into_par_iter().map(prim).collect();
+        (bounds, centroids) = prims.par_chunks(PARALLEL_MIN).map(bounds_of).reduce(
+            || (Aabb::EMPTY, Aabb::EMPTY),
+            |(b0, c0), (b1, c1)| (b0.union(b1), c0.union(c1)),
+        );
+    } else {
+        prims = (0..n).map(prim).collect();
+        (bounds, centroids) = bounds_of(&prims);
+    }
+    let nodes = build_subtree(&mut prims, 0, 0, (bounds, centroids), parallel);
+    let tri = |p: &BuildPrim| accel(geometry.corners(p.index as usize));
+    let (prim_ids, tris) = if parallel {
+        (
+            prims.par_iter().map(|p| p.index).collect(),
+            prims.par_iter().map(tri).collect(),
+        )
+    } else {
+        (
+            prims.iter().map(|p| p.index).collect(),
+            prims.iter().map(tri).collect(),
+        )
+    };
     Bvh {
         nodes,
         tris,
         prim_ids,
     }
-}
-
-fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
-    prims.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
-        (b.union(p.bounds), c.grow(p.centroid))
-    })
 }
 
 /// A node whose box is `bounds` grown outward by a relative 2⁻²⁰ (and at least the smallest
@@ -72,35 +98,57 @@ fn node(bounds: Aabb, first: usize, count: usize) -> BvhNode {
     }
 }
 
-/// Builds the subtree over `prims` (which sit at `offset` in the final permutation), reordering
-/// them in place, with large halves built in parallel when `parallel` (on the current rayon
-/// pool). The returned nodes have the subtree's root at index 0.
+/// Builds the subtree over `prims` (which sit at `offset` in the final permutation, and whose
+/// boxes and centroids `bounds` bounds), reordering them in place. When `parallel`, the split
+/// bins in parallel while the node is large and large children are built on the current rayon
+/// pool, both at once when both are large. The returned nodes have the subtree's root at
+/// index 0 and are laid out as the serial build lays them out.
 fn build_subtree(
     prims: &mut [BuildPrim],
     offset: usize,
     depth: usize,
+    bounds: (Aabb, Aabb),
     parallel: bool,
 ) -> Vec<BvhNode> {
-    let (bounds, centroids) = bounds_of(prims);
-    let Some(mid) = split(prims, bounds, centroids, depth) else {
-        return vec![node(bounds, offset, prims.len())];
-    };
-    let root = node(bounds, 1, 0);
     let n = prims.len();
-    let (left, right) = prims.split_at_mut(mid);
-    if parallel && left.len().min(right.len()) >= PARALLEL_MIN {
+    let bin_in_parallel = parallel && n >= PARALLEL_BINNING_MIN;
+    let mut bins = Box::new(Bins::EMPTY);
+    let Some(s) = split(prims, bounds, depth, bin_in_parallel, &mut bins) else {
+        return vec![node(bounds.0, offset, n)];
+    };
+    let root = node(bounds.0, 1, 0);
+    let (left, right) = prims.split_at_mut(s.mid);
+    let (left_large, right_large) = (
+        parallel && left.len() >= PARALLEL_MIN,
+        parallel && right.len() >= PARALLEL_MIN,
+    );
+    let (mid, depth) = (s.mid, depth + 1);
+    if left_large && right_large {
         let (l, r) = rayon::join(
-            || build_subtree(left, offset, depth + 1, true),
-            || build_subtree(right, offset + mid, depth + 1, true),
+            || build_subtree(left, offset, depth, s.left, true),
+            || build_subtree(right, offset + mid, depth, s.right, true),
         );
         join_subtrees(root, l, r)
+    } else if left_large || right_large {
+        // A small side (a few outlying triangles cut off) must not make the large side serial.
+        let l = build_subtree(left, offset, depth, s.left, left_large);
+        let r = build_subtree(right, offset + mid, depth, s.right, right_large);
+        join_subtrees(root, l, r)
     } else {
-        let mut nodes = Vec::with_capacity(n);
+        let mut nodes = Vec::with_capacity(2 * n);
         nodes.push(root);
         nodes.push(BvhNode { count: 0, ..root });
         nodes.push(BvhNode { count: 0, ..root });
-        build_into(&mut nodes, 1, left, offset, depth + 1);
-        build_into(&mut nodes, 2, right, offset + mid, depth + 1);
+        build_into(&mut nodes, 1, left, offset, depth, s.left, &mut bins);
+        build_into(
+            &mut nodes,
+            2,
+            right,
+            offset + mid,
+            depth,
+            s.right,
+            &mut bins,
+        );
         nodes
     }
 }
@@ -125,102 +173,34 @@ fn join_subtrees(mut root: BvhNode, l: Vec<BvhNode>, r: Vec<BvhNode>) -> Vec<Bvh
     nodes
 }
 
-/// Builds the subtree over `prims` into `nodes[index]`, appending its descendants.
+/// Builds the subtree over `prims` (bounded by `bounds`) into `nodes[index]`, appending its
+/// descendants; `bins` is the splits' scratch space.
 fn build_into(
     nodes: &mut Vec<BvhNode>,
     index: usize,
     prims: &mut [BuildPrim],
     offset: usize,
     depth: usize,
+    bounds: (Aabb, Aabb),
+    bins: &mut Bins,
 ) {
-    let (bounds, centroids) = bounds_of(prims);
-    let Some(mid) = split(prims, bounds, centroids, depth) else {
-        nodes[index] = node(bounds, offset, prims.len());
+    let Some(s) = split(prims, bounds, depth, false, bins) else {
+        nodes[index] = node(bounds.0, offset, prims.len());
         return;
     };
     let first = nodes.len();
-    nodes[index] = node(bounds, first, 0);
+    nodes[index] = node(bounds.0, first, 0);
     nodes.push(nodes[index]);
     nodes.push(nodes[index]);
-    let (left, right) = prims.split_at_mut(mid);
-    build_into(nodes, first, left, offset, depth + 1);
-    build_into(nodes, first + 1, right, offset + mid, depth + 1);
-}
-
-/// Chooses a split by binned SAH over all three axes and partitions `prims` by it. Returns the
-/// size of the left part, or `None` when a leaf is cheaper.
-fn split(prims: &mut [BuildPrim], bounds: Aabb, centroids: Aabb, depth: usize) -> Option<usize> {
-    let n = prims.len();
-    // Past MAX_DEPTH (only reached by adversarial inputs, such as triangles spread over
-    // hundreds of orders of magnitude) a leaf, however large, keeps traversal in its stack.
-    if n <= 2 || depth >= MAX_DEPTH {
-        return None;
-    }
-    let extent = centroids.extent();
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin)
-    for axis in 0..3 {
-        if extent[axis] <= 0.0 {
-            continue;
-        }
-        let bin_of = |p: &BuildPrim| bin_index(p, axis, centroids.min[axis], extent[axis]);
-        let mut bin_bounds = [Aabb::EMPTY; BINS];
-        let mut bin_counts = [0usize; BINS];
-        for p in prims.iter() {
-            let b = bin_of(p);
-            bin_bounds[b] = bin_bounds[b].union(p.bounds);
-            bin_counts[b] += 1;
-        }
-        // Sweep from the right to get the cost of every split plane's right side.
-        let mut right_cost = [0.0f32; BINS];
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        for b in (1..BINS).rev() {
-            acc = acc.union(bin_bounds[b]);
-            count += bin_counts[b];
-            right_cost[b] = acc.half_area() * count as f32;
-        }
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        for b in 0..BINS - 1 {
-            acc = acc.union(bin_bounds[b]);
-            count += bin_counts[b];
-            if count == 0 || count == n {
-                continue;
-            }
-            let cost = acc.half_area() * count as f32 + right_cost[b + 1];
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
-            }
-        }
-    }
-    // SAH with traversal cost 1 and intersection cost 1, relative to the parent's area.
-    let leaf_cost = n as f32;
-    let area = bounds.half_area().max(f32::MIN_POSITIVE);
-    match best {
-        Some((cost, axis, bin)) if n > MAX_LEAF || 1.0 + cost / area < leaf_cost => {
-            let (min, extent) = (centroids.min[axis], extent[axis]);
-            let mid = partition(prims, |p| bin_index(p, axis, min, extent) <= bin);
-            Some(mid)
-        }
-        Some(_) => None,
-        // Every centroid coincides: SAH cannot separate them, so split by count to keep
-        // leaves small.
-        None if n > MAX_LEAF => Some(n / 2),
-        None => None,
-    }
-}
-
-/// The SAH bin of `p`'s centroid along `axis`, for centroids starting at `min` over `extent`.
-fn bin_index(p: &BuildPrim, axis: usize, min: f32, extent: f32) -> usize {
-    (((p.centroid[axis] - min) * (BINS as f32 / extent)) as usize).min(BINS - 1)
-}
-
-/// Moves the elements satisfying `pred` to the front; returns how many there are.
-fn partition(prims: &mut [BuildPrim], pred: impl Fn(&BuildPrim) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..prims.len() {
-        if pred(&prims[j]) {
-            prims.swap(i, j);
-            i += 1;
-        }
-    }
-    i
+    let (left, right) = prims.split_at_mut(s.mid);
+    build_into(nodes, first, left, offset, depth + 1, s.left, bins);
+    build_into(
+        nodes,
+        first + 1,
+        right,
+        offset + s.mid,
+        depth + 1,
+        s.right,
+        bins,
+    );
 }

@@ -10,6 +10,8 @@
 //! the public API, whose methods delegate to the submodules:
 //!
 //! - `build`: binned-SAH construction, serial and parallel;
+//! - `split`: one node's split: binning (in parallel chunks for large nodes), the SAH sweep
+//!   and the partition;
 //! - `traverse`: the slab test and the closest-hit, any-hit and batch queries;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
@@ -21,6 +23,7 @@ use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
 mod packet;
+mod split;
 mod traverse;
 mod validate;
 
@@ -100,7 +103,7 @@ pub struct Bvh {
 const BINS: usize = 16;
 /// Largest leaf the SAH may keep when a split would be cheaper.
 const MAX_LEAF: usize = 8;
-/// Subtrees with more triangles than this are built on separate threads.
+/// Subtrees with at least this many triangles are built on separate threads.
 const PARALLEL_MIN: usize = 32 * 1024;
 /// Entries of the fixed traversal stacks.
 const STACK_SIZE: usize = 64;
@@ -113,8 +116,9 @@ impl Bvh {
         build::build(geometry, None)
     }
 
-    /// Builds the hierarchy, splitting large subtrees across the threads of `pool`. The result
-    /// is the same as [`Bvh::build`]'s.
+    /// Builds the hierarchy on the threads of `pool`: the per-triangle steps and the binning of
+    /// the top splits run in parallel chunks, and large subtrees are built on separate
+    /// threads. The result is the same as [`Bvh::build`]'s, node for node.
     pub fn build_parallel(geometry: &Geometry, pool: &rayon::ThreadPool) -> Bvh {
         build::build(geometry, Some(pool))
     }

@@ -2,7 +2,7 @@
 //! [`occluded_brute_force`]: the shared helpers, and unit tests of the structure (node layout,
 //! validation, depth cap, serial against parallel build) and of the queries on empty scenes and
 //! batches. Edge cases of the geometry are in `edges`, property tests over random scenes in
-//! `props`.
+//! `props`, and the reference build every build must agree with in `reference`.
 
 use std::sync::OnceLock;
 
@@ -13,6 +13,7 @@ use crate::simd::supported_paths;
 
 mod edges;
 mod props;
+mod reference;
 
 /// The `t_max` of shadow segments: short of the end point, so a surface there is not a blocker.
 const T_MAX: f32 = 1.0 - 1e-4;
@@ -53,7 +54,8 @@ fn pool() -> &'static rayon::ThreadPool {
     })
 }
 
-/// Builds serially and on a pool, validates both, checks they are the same tree, and returns it.
+/// Builds serially and on a pool, validates both, checks they are the reference build's tree,
+/// and returns it.
 fn build_checked(g: &Geometry) -> Bvh {
     let bvh = Bvh::build(g);
     bvh.validate(g)
@@ -63,6 +65,7 @@ fn build_checked(g: &Geometry) -> Bvh {
         .validate(g)
         .unwrap_or_else(|e| panic!("parallel build: {e}"));
     assert_same_tree(&bvh, &parallel);
+    assert_same_tree(&bvh, &reference::reference_build(g));
     bvh
 }
 
@@ -336,6 +339,7 @@ fn large_soup_takes_the_parallel_path_and_agrees() {
     bvh.validate(&g).unwrap();
     let serial = Bvh::build(&g);
     assert_same_tree(&bvh, &serial);
+    assert_same_tree(&bvh, &reference::reference_build(&g));
     // The root's halves are both big enough to have been built on separate threads.
     let first = bvh.nodes[0].first as usize;
     let halves = [

@@ -11,6 +11,7 @@ mod parse;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
 use crate::render::RenderSettings;
 use crate::world::World;
@@ -63,6 +64,11 @@ pub struct Scene {
     pub output: Option<PathBuf>,
     /// The file's `film.gamma`: a power-law encoding exponent, or `None` for the sRGB curve.
     pub gamma: Option<f32>,
+    /// Time [`SceneFile::build`] spent before the BVH build: reading and parsing meshes (OBJ,
+    /// MTL) and textures and adding everything to the world. The BVH build's own time is
+    /// `world.stats().bvh_build_time`; the scene file's parsing happens before, in
+    /// [`SceneFile::load`] or [`SceneFile::from_str`].
+    pub load_time: Duration,
 }
 
 impl SceneFile {
@@ -112,7 +118,7 @@ impl SceneFile {
     }
 
     /// Builds the scene the file describes (loading every mesh and texture) with `threads`
-    /// workers for the BVH (0: all cores).
+    /// workers for reading meshes and building the BVH (0: all cores).
     pub fn build(&self, threads: usize) -> Result<Scene, SceneError> {
         build::build(self, threads)
     }

@@ -11,18 +11,22 @@ mod settings;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Instant;
 
 use super::error::{ErrorKind, KeyPath, SceneError};
 use super::{Scene, SceneFile};
+use crate::pool::thread_pool;
 use crate::texture::Image;
 use crate::world::WorldBuilder;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
-/// Builder state: the file for locating errors, caches shared across entries, and the world
-/// being built.
+/// Builder state: the file for locating errors, caches shared across entries, the world being
+/// built and the threads that read meshes and build the BVH.
 struct Builder<'a> {
     file: &'a SceneFile,
+    /// `None` when the system refused threads: everything then runs on the calling thread.
+    pool: Option<rayon::ThreadPool>,
     /// Decoded images by canonical path and color space, shared by every texture using one.
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     /// OBJ files read once per scene.
@@ -31,9 +35,11 @@ struct Builder<'a> {
 }
 
 pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
+    let start = Instant::now();
     let desc = &file.desc;
     let mut b = Builder {
         file,
+        pool: thread_pool(threads).ok().map(|(pool, _)| pool),
         images: HashMap::new(),
         meshes: HashMap::new(),
         world: WorldBuilder::new(),
@@ -61,8 +67,11 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     for (i, o) in desc.objects.iter().enumerate() {
         b.object(&KeyPath::root("objects").index(i), o)?;
     }
+    let load_time = start.elapsed();
+    let world = b.world.build_on(b.pool.as_ref());
     Ok(Scene {
-        world: Arc::new(b.world.build(threads)),
+        world: Arc::new(world),
+        load_time,
         settings,
         output: film.output,
         gamma: film.gamma,

@@ -104,7 +104,7 @@ impl Builder<'_> {
         let loaded = match self.meshes.get(&key) {
             Some(loaded) => loaded,
             None => {
-                let model = load_obj(&obj_path).map_err(|e| {
+                let model = load_obj(&obj_path, self.pool.as_ref()).map_err(|e| {
                     self.err(
                         ErrorKind::Asset(AssetKind::Mesh),
                         path,

@@ -10,23 +10,35 @@ use std::borrow::Cow;
 /// `\`-continued lines joined (numbered by their first line).
 pub(super) fn for_each_line(
     text: &str,
-    mut f: impl FnMut(usize, &str) -> Result<(), String>,
+    f: impl FnMut(usize, &str) -> Result<(), String>,
 ) -> Result<(), String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    for_each_line_from(text, 1, f)
+}
+
+/// [`for_each_line`] for a part of a file that starts with its line `first_line` (a byte-order
+/// mark is kept: only the file's start may have one). The part must not begin inside a
+/// `\`-continued line (see [`continues`]).
+pub(super) fn for_each_line_from(
+    text: &str,
+    first_line: usize,
+    mut f: impl FnMut(usize, &str) -> Result<(), String>,
+) -> Result<(), String> {
     let mut pending = String::new();
     let mut pending_line = 0;
     for (i, raw) in text.split('\n').enumerate() {
-        let line = raw.find('#').map_or(raw, |k| &raw[..k]).trim_end();
+        let n = first_line + i;
+        let line = content(raw);
         if let Some(head) = line.strip_suffix('\\') {
             if pending.is_empty() {
-                pending_line = i + 1;
+                pending_line = n;
             }
             pending.push_str(head);
             pending.push(' ');
             continue;
         }
         let (n, line) = if pending.is_empty() {
-            (i + 1, Cow::Borrowed(line))
+            (n, Cow::Borrowed(line))
         } else {
             pending.push_str(line);
             (pending_line, Cow::Owned(std::mem::take(&mut pending)))
@@ -37,6 +49,16 @@ pub(super) fn for_each_line(
         f(pending_line, &pending)?;
     }
     Ok(())
+}
+
+/// A physical line (without its `\n`) with its comment and trailing whitespace removed.
+fn content(raw: &str) -> &str {
+    raw.find('#').map_or(raw, |k| &raw[..k]).trim_end()
+}
+
+/// True when the physical line `raw` (without its `\n`) continues on the next one.
+pub(super) fn continues(raw: &str) -> bool {
+    content(raw).ends_with('\\')
 }
 
 /// The first `N` numbers of `words`, at least `min` of them present; missing ones are 0.

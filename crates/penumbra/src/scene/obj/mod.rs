@@ -2,6 +2,11 @@
 //! indexed triangle mesh. Their MTL material libraries are read by [`mtl`], and the line rules
 //! both file kinds share (comments, continuations) live in [`lines`].
 //!
+//! Large files are read in parallel: cut into chunks at line ends, each chunk parsed on its own
+//! (see [`chunk`]), then merged in file order, which resolves what a chunk cannot know alone
+//! (relative indices reaching before it, the material current at its start, `mtllib` files,
+//! which error comes first). The result, errors included, is the one a serial reading gives.
+//!
 //! A small reader of its own rather than a general OBJ crate, so that every face keeps exactly
 //! the data it has and every problem is an error message with a line number, never a panic:
 //!
@@ -21,17 +26,22 @@
 //! - `#` starts a comment anywhere on a line; a line ending in `\` continues on the next one;
 //!   CRLF line endings, tabs, a UTF-8 byte-order mark and bytes that are not UTF-8 are fine.
 
+mod chunk;
 mod lines;
 mod mtl;
+#[cfg(test)]
+mod tests;
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 use crate::geometry::Mesh;
 
-use lines::{for_each_line, numbers, rest_of_line};
+use chunk::{Chunk, Deferred, Face, INHERITED};
 use mtl::{resolve, Library};
 
 /// A material from an MTL file.
@@ -61,34 +71,64 @@ const MAX_TRIANGLES: usize = (u32::MAX / 4) as usize;
 /// "No index": a corner without `vt` or `vn`, a face without `usemtl`.
 const NONE: u32 = u32::MAX;
 
-/// One polygon: `corners[first..first + len]`, its `usemtl` name (an index into the names
-/// seen, or `NONE`) and the line it was read from.
-struct Face {
-    first: usize,
-    len: u32,
-    material: u32,
-    line: u32,
-}
+/// Bytes of an OBJ file per chunk parsed in parallel: small enough that a few-megabyte mesh
+/// keeps two threads busy, large enough that the per-chunk work is negligible.
+const CHUNK_BYTES: usize = 512 << 10;
 
-/// Everything read from an OBJ file, indices already 0-based but not yet checked against the
-/// final counts (a positive index may refer to a vertex defined further down).
+/// Everything read from an OBJ file, indices 0-based but not yet checked against the final
+/// counts (a positive index may refer to a vertex defined further down).
 #[derive(Default)]
 struct ObjData {
     positions: Vec<Vec3>,
     uvs: Vec<Vec2>,
     normals: Vec<Vec3>,
-    /// (v, vt, vn) per face corner; `NONE` for a missing vt or vn.
-    corners: Vec<[u32; 3]>,
-    faces: Vec<Face>,
+    /// The faces, chunk by chunk in file order.
+    parts: Vec<Part>,
     triangles: usize,
     /// Names given to `usemtl`, in order of first appearance.
     material_names: Vec<String>,
     library: Library,
 }
 
-/// Loads `path`. Errors are messages that do not repeat the OBJ file's path (the caller adds
-/// it) but do name any other file involved.
-pub(crate) fn load_obj(path: &Path) -> Result<ObjModel, String> {
+/// The faces of one chunk, with what turns their materials into indices of `material_names`.
+struct Part {
+    corners: Vec<[u32; 3]>,
+    faces: Vec<Face>,
+    /// The file-wide index of each of the chunk's `usemtl` names.
+    materials: Vec<u32>,
+    /// The material current where the chunk starts.
+    inherited: u32,
+}
+
+/// A face as [`build_mesh`] sees it: its (v, vt, vn) corners, its material (an index into the
+/// names given to `usemtl`, or `NONE`) and its line.
+struct FaceRef<'a> {
+    corners: &'a [[u32; 3]],
+    material: u32,
+    line: u32,
+}
+
+impl ObjData {
+    /// Every face in file order.
+    fn faces(&self) -> impl Iterator<Item = FaceRef<'_>> {
+        self.parts.iter().flat_map(|part| {
+            part.faces.iter().map(move |f| FaceRef {
+                corners: &part.corners[f.first..f.first + f.len as usize],
+                material: match f.material {
+                    NONE => NONE,
+                    INHERITED => part.inherited,
+                    m => part.materials[m as usize],
+                },
+                line: f.line,
+            })
+        })
+    }
+}
+
+/// Loads `path`, parsing its chunks on the threads of `pool` when there is one. Errors are
+/// messages that do not repeat the OBJ file's path (the caller adds it) but do name any other
+/// file involved.
+pub(crate) fn load_obj(path: &Path, pool: Option<&rayon::ThreadPool>) -> Result<ObjModel, String> {
     let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
     if size > MAX_FILE_BYTES {
         return Err(format!(
@@ -96,107 +136,146 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjModel, String> {
         ));
     }
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    let text = String::from_utf8_lossy(&bytes);
     let dir = path.parent().unwrap_or(Path::new(""));
+    build_mesh(read(&bytes, dir, pool, CHUNK_BYTES)?)
+}
+
+/// Parses the OBJ file `bytes`, whose `mtllib` names are relative to `dir`, in chunks of
+/// about `chunk_bytes` bytes (in parallel on `pool` when there is one), and merges them.
+fn read(
+    bytes: &[u8],
+    dir: &Path,
+    pool: Option<&rayon::ThreadPool>,
+    chunk_bytes: usize,
+) -> Result<ObjData, String> {
+    // A byte-order mark, once converted, is U+FEFF at the start of the text.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let ranges = chunk::split(bytes, chunk_bytes.max(1));
+    let lines = |r: &Range<usize>| bytes[r.clone()].iter().filter(|&&b| b == b'\n').count();
+    let parse = |(r, first_line): (&Range<usize>, usize)| {
+        chunk::parse(&String::from_utf8_lossy(&bytes[r.clone()]), first_line)
+    };
+    // The line each chunk starts on.
+    let first_lines = |counts: Vec<usize>| -> Vec<usize> {
+        counts
+            .iter()
+            .scan(1, |line, &n| Some(std::mem::replace(line, *line + n)))
+            .collect()
+    };
+    let chunks: Vec<Chunk> = match pool {
+        Some(pool) if ranges.len() > 1 => pool.install(|| {
+            let starts = first_lines(ranges.par_iter().map(lines).collect());
+            ranges.par_iter().zip(starts).map(parse).collect()
+        }),
+        _ => {
+            let starts = first_lines(ranges.iter().map(lines).collect());
+            ranges.iter().zip(starts).map(parse).collect()
+        }
+    };
+    merge(chunks, dir)
+}
+
+/// Joins the chunks in file order: loads the `mtllib` files, resolves relative indices and
+/// materials against the chunks before, checks the mesh size, and returns the first error a
+/// serial reading meets.
+fn merge(chunks: Vec<Chunk>, dir: &Path) -> Result<ObjData, String> {
+    let too_large = || "the mesh is too large (more than a billion triangles)".to_owned();
     let mut data = ObjData::default();
+    let total = |f: fn(&Chunk) -> usize| chunks.iter().map(f).sum::<usize>();
+    data.positions.reserve(total(|c| c.positions.len()));
+    data.uvs.reserve(total(|c| c.uvs.len()));
+    data.normals.reserve(total(|c| c.normals.len()));
     let mut names: HashMap<String, u32> = HashMap::new();
     let mut current_material = NONE;
-    for_each_line(&text, |n, line| {
-        let at = |message: String| format!("line {n}: {message}");
-        let mut words = line.split_ascii_whitespace();
-        let Some(keyword) = words.next() else {
-            return Ok(());
-        };
-        match keyword {
-            "v" => {
-                let p = numbers::<3>(&mut words, 3)
-                    .ok_or_else(|| at("a vertex `v` needs three numbers (x y z)".into()))?;
-                if !p.iter().all(|c| c.is_finite()) {
-                    return Err(at("a vertex coordinate is not a finite number".into()));
+    for mut chunk in chunks {
+        let before = [data.positions.len(), data.uvs.len(), data.normals.len()];
+        for deferred in std::mem::take(&mut chunk.deferred) {
+            match deferred {
+                Deferred::Mtllib { triangles, rest } => {
+                    if data.triangles + triangles > MAX_TRIANGLES {
+                        return Err(too_large());
+                    }
+                    // One file name with spaces, or several names separated by spaces.
+                    let files: Vec<&str> = if dir.join(&rest).is_file() {
+                        vec![&rest]
+                    } else {
+                        rest.split_ascii_whitespace().collect()
+                    };
+                    for f in files {
+                        data.library.load(resolve(dir, f))?;
+                    }
                 }
-                data.positions.push(Vec3::from(p));
-            }
-            "vt" => {
-                let t = numbers::<2>(&mut words, 1)
-                    .ok_or_else(|| at("a texture coordinate `vt` needs numbers (u [v])".into()))?;
-                if !t.iter().all(|c| c.is_finite()) {
-                    return Err(at("a texture coordinate is not a finite number".into()));
-                }
-                data.uvs.push(Vec2::from(t));
-            }
-            "vn" => {
-                let v = numbers::<3>(&mut words, 3)
-                    .ok_or_else(|| at("a normal `vn` needs three numbers (x y z)".into()))?;
-                // A non-finite normal is kept and makes its faces flat (see `usable`).
-                data.normals.push(Vec3::from(v));
-            }
-            "f" | "fo" => {
-                let first = data.corners.len();
-                for word in words {
-                    let corner = parse_corner(
-                        word,
-                        [data.positions.len(), data.uvs.len(), data.normals.len()],
-                    )
-                    .map_err(at)?;
-                    data.corners.push(corner);
-                }
-                let len = data.corners.len() - first;
-                if len < 3 {
-                    return Err(at(format!(
-                        "a face needs at least 3 vertices, this one has {len}"
-                    )));
-                }
-                data.triangles += len - 2;
-                if data.triangles > MAX_TRIANGLES {
-                    return Err("the mesh is too large (more than a billion triangles)".to_owned());
-                }
-                data.faces.push(Face {
-                    first,
-                    len: u32::try_from(len).map_err(|_| at("the face is too large".into()))?,
-                    material: current_material,
-                    line: n as u32,
-                });
-            }
-            "usemtl" => {
-                let name = rest_of_line(line, keyword);
-                current_material = if name.is_empty() {
-                    NONE
-                } else {
-                    let next = data.material_names.len() as u32;
-                    *names.entry(name.to_owned()).or_insert_with(|| {
-                        data.material_names.push(name.to_owned());
-                        next
-                    })
-                };
-            }
-            "mtllib" => {
-                let rest = rest_of_line(line, keyword);
-                if rest.is_empty() {
-                    return Ok(());
-                }
-                // One file name with spaces, or several names separated by spaces.
-                let files: Vec<&str> = if dir.join(rest).is_file() {
-                    vec![rest]
-                } else {
-                    rest.split_ascii_whitespace().collect()
-                };
-                for f in files {
-                    data.library.load(resolve(dir, f))?;
+                Deferred::Relative {
+                    triangles,
+                    line,
+                    word,
+                    corner,
+                    kind,
+                    x,
+                    defined,
+                } => {
+                    if data.triangles + triangles > MAX_TRIANGLES {
+                        return Err(too_large());
+                    }
+                    let defined = before[kind] + defined;
+                    let Ok(index) = u32::try_from(defined as i64 + x) else {
+                        let what = ["vertex", "texture coordinate", "normal"][kind];
+                        return Err(format!(
+                            "line {line}: face corner \"{word}\": relative {what} index {x} is \
+                             out of range (only {defined} defined so far)"
+                        ));
+                    };
+                    chunk.corners[corner][kind] = index;
                 }
             }
-            _ => {}
         }
-        Ok(())
-    })?;
-    build_mesh(data)
+        if data.triangles + chunk.triangles > MAX_TRIANGLES {
+            return Err(too_large());
+        }
+        if let Some(error) = chunk.error {
+            return Err(error);
+        }
+        data.triangles += chunk.triangles;
+        // The sums stay below the element counts, themselves far below 2³² (MAX_FILE_BYTES).
+        for &(corner, kind) in &chunk.rebase {
+            chunk.corners[corner as usize][kind as usize] += before[kind as usize] as u32;
+        }
+        let materials: Vec<u32> = chunk
+            .material_names
+            .into_iter()
+            .map(|name| {
+                let next = data.material_names.len() as u32;
+                *names.entry(name).or_insert_with_key(|name| {
+                    data.material_names.push(name.clone());
+                    next
+                })
+            })
+            .collect();
+        let inherited = current_material;
+        current_material = match chunk.last_material {
+            INHERITED => current_material,
+            NONE => NONE,
+            m => materials[m as usize],
+        };
+        data.positions.extend_from_slice(&chunk.positions);
+        data.uvs.extend_from_slice(&chunk.uvs);
+        data.normals.extend_from_slice(&chunk.normals);
+        data.parts.push(Part {
+            corners: chunk.corners,
+            faces: chunk.faces,
+            materials,
+            inherited,
+        });
+    }
+    Ok(data)
 }
 
 /// Checks every index, then turns the faces into an indexed triangle mesh: one vertex per
 /// distinct (v, vt, vn) corner, fan triangulation, per-triangle material slots.
 fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
     let counts = [data.positions.len(), data.uvs.len(), data.normals.len()];
-    for face in &data.faces {
-        for c in &data.corners[face.first..face.first + face.len as usize] {
+    for face in data.faces() {
+        for c in face.corners {
             for (k, what) in ["vertex", "texture coordinate", "normal"]
                 .iter()
                 .enumerate()
@@ -220,19 +299,15 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
             n.is_finite() && n.length_squared() > 0.0
         }
     };
-    let smooth_face = |face: &Face| {
-        data.corners[face.first..face.first + face.len as usize]
-            .iter()
-            .all(|c| usable(c[2]))
-    };
-    let any_smooth = data.faces.iter().any(smooth_face);
-    let any_uv = data.corners.iter().any(|c| c[1] != NONE);
+    let smooth_face = |face: &FaceRef| face.corners.iter().all(|c| usable(c[2]));
+    let any_smooth = data.faces().any(|f| smooth_face(&f));
+    let any_uv = data.faces().any(|f| f.corners.iter().any(|c| c[1] != NONE));
 
     // Materials in order of first use; slot `used.len()` is "no material".
     let mut slot_of_name = vec![NONE; data.material_names.len()];
     let mut slot_of_library = vec![NONE; data.library.len()];
     let mut materials = Vec::new();
-    for face in &data.faces {
+    for face in data.faces() {
         let m = face.material;
         if m == NONE || slot_of_name[m as usize] != NONE {
             continue;
@@ -259,10 +334,10 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
     let mut next: Vec<u32> = Vec::new();
     let mut keys: Vec<(u32, u32)> = Vec::new();
     let mut face_vertices: Vec<u32> = Vec::new();
-    for face in &data.faces {
-        let smooth = any_smooth && smooth_face(face);
+    for face in data.faces() {
+        let smooth = any_smooth && smooth_face(&face);
         face_vertices.clear();
-        for &[v, vt, vn] in &data.corners[face.first..face.first + face.len as usize] {
+        for &[v, vt, vn] in face.corners {
             let key = (vt, if smooth { vn } else { NONE });
             let mut i = head[v as usize];
             while i != NONE && keys[i as usize] != key {
@@ -308,53 +383,4 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
         }
     }
     Ok(ObjModel { mesh, materials })
-}
-
-/// Parses one face corner `v`, `v/vt`, `v//vn` or `v/vt/vn` into 0-based indices, given how
-/// many positions, texture coordinates and normals are defined so far (for negative indices).
-fn parse_corner(word: &str, defined: [usize; 3]) -> Result<[u32; 3], String> {
-    let mut out = [NONE; 3];
-    let mut parts = word.split('/');
-    for (k, slot) in out.iter_mut().enumerate() {
-        let Some(part) = parts.next() else { break };
-        if part.is_empty() {
-            if k == 0 {
-                return Err(format!("face corner \"{word}\" has no vertex index"));
-            }
-            continue;
-        }
-        let what = ["vertex", "texture coordinate", "normal"][k];
-        let x: i64 = part
-            .parse()
-            .map_err(|_| format!("face corner \"{word}\": \"{part}\" is not an index"))?;
-        let index = match x {
-            0 => {
-                return Err(format!(
-                    "face corner \"{word}\": {what} index 0 is invalid (indices start at 1)"
-                ))
-            }
-            x if x > 0 => x - 1,
-            x => {
-                let i = defined[k] as i64 + x;
-                if i < 0 {
-                    return Err(format!(
-                        "face corner \"{word}\": relative {what} index {x} is out of range \
-                         (only {} defined so far)",
-                        defined[k]
-                    ));
-                }
-                i
-            }
-        };
-        *slot = u32::try_from(index)
-            .ok()
-            .filter(|&i| i != NONE)
-            .ok_or_else(|| format!("face corner \"{word}\": {what} index {x} is out of range"))?;
-    }
-    if parts.next().is_some() {
-        return Err(format!(
-            "face corner \"{word}\" has more than three indices"
-        ));
-    }
-    Ok(out)
 }
