@@ -331,7 +331,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             )
         };
         eprintln!(
-            "penumbra: {size}, {spp} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {mrays:.2} Mrays/s, {} threads -> {}",
+            "penumbra: {size}, {spp} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {mrays:.2} Mrays/s, {} thread{} -> {}",
             settings.sampler.name(),
             light_samples(&scene.world, settings.light_samples),
             world_stats.triangles,
@@ -339,6 +339,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             world_stats.bvh_build_time.as_secs_f64(),
             stats.time.as_secs_f64(),
             stats.threads,
+            if stats.threads == 1 { "" } else { "s" },
             out.display()
         );
     }

@@ -769,6 +769,16 @@ fn check_reports_a_bad_scene() {
 // ---------------------------------------------------------------------------------------------
 
 #[test]
+fn the_summary_says_thread_or_threads() {
+    let sb = TempDir::new("summary-threads");
+    let scene = sb.write("s.toml", noisy_scene(8, 6));
+    let one = ok(render(&scene, &sb.join("one.png"), &["-t", "1"]));
+    assert!(one.stderr.contains(", 1 thread -> "), "{}", one.stderr);
+    let two = ok(render(&scene, &sb.join("two.png"), &["-t", "2"]));
+    assert!(two.stderr.contains(", 2 threads -> "), "{}", two.stderr);
+}
+
+#[test]
 fn images_do_not_depend_on_the_simd_path() {
     // PENUMBRA_SIMD picks the kernels' instruction set; every path must give the same bits.
     // A path this CPU lacks falls back to the best it has, which then compares to itself.
