@@ -1,7 +1,7 @@
 //! The `penumbra` command: parse flags, load, build, render, write. The only place where errors
 //! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 130 interrupted.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -128,6 +128,21 @@ fn runtime(e: impl std::fmt::Display) -> Failure {
     }
 }
 
+/// Writes `text` and a newline to stdout. A closed pipe or a full device is a runtime
+/// failure, never a panic (which `println!` would be).
+fn say(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{text}")
+        .and_then(|()| out.flush())
+        .map_err(|e| runtime(format!("cannot write to standard output: {e}")))
+}
+
+/// Writes `text` and a newline to stderr, if it can: with stderr closed or full there is
+/// nowhere left to report to, and the exit code still tells what happened.
+fn note(text: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -138,7 +153,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
             if !f.message.is_empty() {
-                eprintln!("error: {}", f.message);
+                note(&format!("error: {}", f.message));
             }
             ExitCode::from(f.code)
         }
@@ -233,7 +248,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             if rendering.load(Ordering::SeqCst) {
                 cancel.store(true, Ordering::SeqCst);
             } else {
-                eprintln!("error: interrupted; no image written");
+                note("error: interrupted; no image written");
                 std::process::exit(130);
             }
         });
@@ -330,7 +345,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
                 film.width, film.height, settings.width, settings.height
             )
         };
-        eprintln!(
+        note(&format!(
             "penumbra: {size}, {spp} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {mrays:.2} Mrays/s, {} thread{} -> {}",
             settings.sampler.name(),
             light_samples(&scene.world, settings.light_samples),
@@ -341,7 +356,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             stats.threads,
             if stats.threads == 1 { "" } else { "s" },
             out.display()
-        );
+        ));
     }
     if args.json {
         let summary = json!({
@@ -364,7 +379,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
             "rays_per_second": stats.rays_per_second(),
             "threads": stats.threads,
         });
-        println!("{summary}");
+        say(&summary.to_string())?;
     }
     Ok(())
 }
@@ -397,29 +412,31 @@ fn run_check(path: &Path, json: bool) -> Result<(), Failure> {
             "cameras": cameras,
             "bounds": { "min": min, "max": max },
         });
-        println!("{summary}");
+        say(&summary.to_string())
     } else {
-        println!("{}: ok", path.display());
-        println!(
-            "  film       {}x{}, {} spp {}",
-            settings.width,
-            settings.height,
-            settings.spp,
-            settings.sampler.name()
-        );
-        println!("  triangles  {}", s.triangles);
-        println!(
-            "  lights     {} ({} light samples per shading point)",
-            s.lights,
-            light_samples(world, None)
-        );
-        println!("  materials  {}", s.materials);
-        println!("  textures   {}", s.textures);
-        println!("  cameras    {}", cameras.join(", "));
-        println!(
-            "  bounds     [{:.4}, {:.4}, {:.4}] to [{:.4}, {:.4}, {:.4}]",
-            min[0], min[1], min[2], max[0], max[1], max[2]
-        );
+        let lines = [
+            format!("{}: ok", path.display()),
+            format!(
+                "  film       {}x{}, {} spp {}",
+                settings.width,
+                settings.height,
+                settings.spp,
+                settings.sampler.name()
+            ),
+            format!("  triangles  {}", s.triangles),
+            format!(
+                "  lights     {} ({} light samples per shading point)",
+                s.lights,
+                light_samples(world, None)
+            ),
+            format!("  materials  {}", s.materials),
+            format!("  textures   {}", s.textures),
+            format!("  cameras    {}", cameras.join(", ")),
+            format!(
+                "  bounds     [{:.4}, {:.4}, {:.4}] to [{:.4}, {:.4}, {:.4}]",
+                min[0], min[1], min[2], max[0], max[1], max[2]
+            ),
+        ];
+        say(&lines.join("\n"))
     }
-    Ok(())
 }

@@ -768,6 +768,99 @@ fn check_reports_a_bad_scene() {
 // Determinism (SPEC §7, §9)
 // ---------------------------------------------------------------------------------------------
 
+/// Runs `penumbra ARGS` with stdout and stderr sent where `stdout` and `stderr` say.
+fn run_with_streams(args: &[&OsStr], stdout: Stdio, stderr: Stdio) -> std::process::Output {
+    command()
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(stdout)
+        .stderr(stderr)
+        .output()
+        .expect("run the penumbra binary")
+}
+
+fn dev_full() -> Stdio {
+    Stdio::from(
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap(),
+    )
+}
+
+#[test]
+fn a_full_or_closed_stdout_is_an_error_not_a_panic() {
+    let sb = TempDir::new("streams");
+    let scene = sb.write("s.toml", noisy_scene(8, 6));
+    let image = sb.join("out.png");
+    let check_json: Vec<&OsStr> = vec!["check".as_ref(), scene.as_os_str(), "--json".as_ref()];
+    let check_text: Vec<&OsStr> = vec!["check".as_ref(), scene.as_os_str()];
+    let render_json: Vec<&OsStr> = vec![
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        image.as_os_str(),
+        "--json".as_ref(),
+        "--quiet".as_ref(),
+    ];
+    for args in [&check_json, &check_text, &render_json] {
+        let out = run_with_streams(args, dev_full(), Stdio::piped());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("cannot write to standard output"),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    // A pipe whose reader has gone, like `| head -c0`.
+    let mut child = command()
+        .args(&check_json)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_full_stderr_keeps_the_exit_code() {
+    let sb = TempDir::new("stderr-full");
+    let good = sb.write("good.toml", noisy_scene(8, 6));
+    let bad = sb.write("bad.toml", "[film]\nwidth = 0\n");
+    let image = sb.join("out.png");
+    let render: Vec<&OsStr> = vec![
+        "render".as_ref(),
+        good.as_os_str(),
+        "-o".as_ref(),
+        image.as_os_str(),
+    ];
+    let out = run_with_streams(&render, Stdio::null(), dev_full());
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "the summary cannot be written, the image was"
+    );
+    assert!(image.exists());
+    let failing: Vec<&OsStr> = vec![
+        "render".as_ref(),
+        bad.as_os_str(),
+        "-o".as_ref(),
+        image.as_os_str(),
+    ];
+    let out = run_with_streams(&failing, Stdio::null(), dev_full());
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "the error cannot be written, the code says it"
+    );
+}
+
 #[test]
 fn the_summary_says_thread_or_threads() {
     let sb = TempDir::new("summary-threads");
