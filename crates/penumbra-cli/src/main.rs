@@ -13,7 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use penumbra::{
     render, write_image, Light, OutputFormat, PixelBounds, RenderError, RenderOptions,
-    RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World,
+    RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World, MAX_THREADS,
 };
 use serde_json::json;
 
@@ -257,6 +257,12 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         code: 130,
         message: "interrupted; no image written".into(),
     };
+    if args.threads > MAX_THREADS {
+        return Err(invalid(format!(
+            "--threads: at most {MAX_THREADS} worker threads, not {}",
+            args.threads
+        )));
+    }
     let load_start = Instant::now();
     let file = SceneFile::load(&args.scene).map_err(invalid)?;
     let file_time = load_start.elapsed();
@@ -274,11 +280,24 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     }
 
     let out = output_path(&args, &scene);
-    if OutputFormat::from_path(&out).is_none() {
+    let Some(format) = OutputFormat::from_path(&out) else {
         return Err(invalid(format!(
             "{}: unknown image format (use .png, .jpg, .exr or .pfm)",
             out.display()
         )));
+    };
+    // Refused before rendering: an image the format cannot hold would be lost after the work.
+    let (image_w, image_h) = match args.pixelbounds {
+        Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),
+        None => (settings.width, settings.height),
+    };
+    if let Some(max) = format.max_dimension() {
+        if image_w > max || image_h > max {
+            return Err(invalid(format!(
+                "{}: a {image_w}x{image_h} image is too large for this format (at most {max} pixels wide and high)",
+                out.display()
+            )));
+        }
     }
     let out_dir = out.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(dir) = out_dir {

@@ -475,6 +475,44 @@ fn unknown_output_extension() {
 }
 
 #[test]
+fn absurd_thread_counts_are_refused_at_once() {
+    let sb = TempDir::new("threads-bound");
+    let scene = sb.write("s.toml", BASE);
+    let out = sb.join("out.png");
+    let start = std::time::Instant::now();
+    let r = render(&scene, &out, &["-t", "100000"]);
+    expect_usage_error(&sb, &r, 2, &["--threads", "1024", "100000"]);
+    assert!(
+        start.elapsed().as_secs() < 5,
+        "refused before starting threads"
+    );
+    assert!(!out.exists());
+    ok(render(&scene, &out, &["-t", "1024", "--quiet"]));
+}
+
+#[test]
+fn a_jpeg_wider_than_the_format_allows_is_refused_before_rendering() {
+    let sb = TempDir::new("jpeg-limit");
+    let scene = sb.write("s.toml", BASE);
+    let out = sb.join("wide.jpg");
+    let r = render(&scene, &out, &["--width", "70000", "--height", "1"]);
+    expect_usage_error(&sb, &r, 2, &["wide.jpg", "70000x1", "65535"]);
+    assert!(!out.exists());
+    // A region of such a film fits, and PNG has no such limit.
+    let region = sb.join("region.jpg");
+    let bounds = [
+        "--width",
+        "70000",
+        "--height",
+        "1",
+        "--pixelbounds",
+        "0,16,0,1",
+        "--quiet",
+    ];
+    ok(render(&scene, &region, &bounds));
+}
+
+#[test]
 fn unknown_camera_name() {
     let sb = TempDir::new("camera-name");
     let text = edit(BASE, "[camera]", "[cameras.front]");

@@ -27,6 +27,15 @@ pub enum OutputFormat {
 }
 
 impl OutputFormat {
+    /// The largest width and height the format can store (JPEG: 65535), or `None` when only
+    /// memory limits it.
+    pub fn max_dimension(self) -> Option<u32> {
+        match self {
+            OutputFormat::Jpeg => Some(u16::MAX as u32),
+            OutputFormat::Png | OutputFormat::Exr | OutputFormat::Pfm => None,
+        }
+    }
+
     /// The format named by `path`'s extension (case-insensitive).
     pub fn from_path(path: &Path) -> Option<OutputFormat> {
         Some(

@@ -77,6 +77,7 @@ pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
+pub use pool::MAX_THREADS;
 pub use render::{
     render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
     View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,

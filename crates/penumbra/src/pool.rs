@@ -2,10 +2,18 @@
 //! rayon's global pool, so that callers (a Python process, a Ray worker) keep control of their
 //! threads.
 
-/// A pool of `threads` workers (0: one per available core), and how many that is.
-pub(crate) fn thread_pool(
-    threads: usize,
-) -> Result<(rayon::ThreadPool, usize), rayon::ThreadPoolBuildError> {
+/// Most worker threads a pool may have: far beyond any core count, and small enough that
+/// starting them takes no noticeable time.
+pub const MAX_THREADS: usize = 1024;
+
+/// A pool of `threads` workers (0: one per available core), and how many that is. More than
+/// [`MAX_THREADS`] is refused.
+pub(crate) fn thread_pool(threads: usize) -> Result<(rayon::ThreadPool, usize), String> {
+    if threads > MAX_THREADS {
+        return Err(format!(
+            "at most {MAX_THREADS} worker threads, not {threads}"
+        ));
+    }
     let threads = if threads == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -13,6 +21,21 @@ pub(crate) fn thread_pool(
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()?;
+        .build()
+        .map_err(|e| e.to_string())?;
     Ok((pool, threads))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_thread_counts_are_refused_without_starting_threads() {
+        let start = std::time::Instant::now();
+        let e = thread_pool(MAX_THREADS + 1).err().unwrap();
+        assert!(e.contains("1024") && e.contains("1025"), "{e}");
+        assert!(start.elapsed().as_millis() < 100);
+        assert_eq!(thread_pool(2).unwrap().1, 2);
+    }
 }

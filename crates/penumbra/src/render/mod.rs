@@ -154,7 +154,7 @@ pub fn render(
 
     let (pool, threads) = thread_pool(options.threads).map_err(|e| RenderError::Threads {
         threads: options.threads,
-        message: e.to_string(),
+        message: e,
     })?;
     let job = Job {
         camera: PinholeCamera::new(&camera, width, height),
