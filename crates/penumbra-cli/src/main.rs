@@ -12,8 +12,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use penumbra::{
-    render, write_image, Light, OutputFormat, PixelBounds, RenderError, RenderOptions,
-    RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World, MAX_THREADS,
+    escape_controls, render, write_image, Light, OutputFormat, PixelBounds, RenderError,
+    RenderOptions, RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World,
+    MAX_THREADS,
 };
 use serde_json::json;
 
@@ -153,7 +154,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
             if !f.message.is_empty() {
-                note(&format!("error: {}", f.message));
+                // One message, one line: nothing from a file or path drives the terminal.
+                note(&format!("error: {}", escape_controls(&f.message)));
             }
             ExitCode::from(f.code)
         }

@@ -475,6 +475,27 @@ fn unknown_output_extension() {
 }
 
 #[test]
+fn names_from_the_file_cannot_drive_the_terminal() {
+    // A material name with ESC, BEL and a newline (TOML escapes), and a mesh path with them.
+    let sb = TempDir::new("escapes");
+    let text = edit(
+        BASE,
+        "material = \"red\"",
+        "material = \"r\\u001b[31m\\u0007\\nX\"",
+    );
+    let scene = sb.write("s.toml", &text);
+    let r = render(&scene, &sb.out(), &[]);
+    let line = error_line(&r, 2);
+    assert_eq!(r.stderr.lines().count(), 1, "one line: {:?}", r.stderr);
+    assert!(
+        !r.stderr.contains('\u{1b}') && !r.stderr.contains('\u{7}'),
+        "{:?}",
+        r.stderr
+    );
+    assert!(line.contains("\\u{1b}[31m\\u{7}\\nX"), "{line}");
+}
+
+#[test]
 fn absurd_thread_counts_are_refused_at_once() {
     let sb = TempDir::new("threads-bound");
     let scene = sb.write("s.toml", BASE);

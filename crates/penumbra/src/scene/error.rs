@@ -71,9 +71,27 @@ pub struct Location {
     pub key: Option<String>,
 }
 
+/// `text` with every control character (newline, ESC, BEL, ...) written as a Rust escape
+/// such as `\n` or `\u{1b}`: names and strings from a file reach messages this way, so one
+/// message stays one line and cannot drive the terminal that shows it.
+pub fn escape_controls(text: &str) -> String {
+    if !text.chars().any(char::is_control) {
+        return text.to_owned();
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
+        write!(f, "{}", escape_controls(&self.file.display().to_string()))?;
         if let Some(line) = self.line {
             write!(f, ":{line}")?;
             if let Some(col) = self.column {
@@ -81,7 +99,7 @@ impl fmt::Display for Location {
             }
         }
         if let Some(key) = &self.key {
-            write!(f, ": {key}")?;
+            write!(f, ": {}", escape_controls(key))?;
         }
         Ok(())
     }
@@ -119,7 +137,7 @@ pub enum AssetKind {
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// The scene file could not be read.
-    #[error("{}: cannot read scene file: {source}", path.display())]
+    #[error("{}: cannot read scene file: {source}", escape_controls(&path.display().to_string()))]
     Read {
         /// The file.
         path: PathBuf,
@@ -127,13 +145,16 @@ pub enum SceneError {
         source: std::io::Error,
     },
     /// The file name does not say TOML or JSON.
-    #[error("{}: unknown scene format (the file name must end in .toml or .json)", path.display())]
+    #[error(
+        "{}: unknown scene format (the file name must end in .toml or .json)",
+        escape_controls(&path.display().to_string())
+    )]
     UnknownFormat {
         /// The file.
         path: PathBuf,
     },
     /// Something in the file is wrong, located in it.
-    #[error("{location}: {message}")]
+    #[error("{location}: {}", escape_controls(message))]
     Invalid {
         /// What kind of mistake.
         kind: ErrorKind,
@@ -189,6 +210,15 @@ pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(escape_controls("plain é"), "plain é");
+        assert_eq!(
+            escape_controls("a\nb\u{1b}[31m\u{7}"),
+            "a\\nb\\u{1b}[31m\\u{7}"
+        );
+    }
 
     #[test]
     fn key_paths_read_like_the_file() {

@@ -17,7 +17,7 @@ use crate::render::RenderSettings;
 use crate::world::World;
 
 pub use desc::SceneDesc;
-pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
 use parse::Source;
 
 /// The syntax of a scene file.
