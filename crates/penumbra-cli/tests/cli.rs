@@ -495,6 +495,71 @@ fn names_from_the_file_cannot_drive_the_terminal() {
     assert!(line.contains("\\u{1b}[31m\\u{7}\\nX"), "{line}");
 }
 
+/// Runs `penumbra ARGS` for at most 10 s (killing it then), and returns its exit code and
+/// stderr; `None` as the code when it had to be killed.
+fn run_bounded(args: &[&OsStr]) -> (Option<i32>, String) {
+    let mut child = command()
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while Instant::now() < deadline {
+        if child.try_wait().unwrap().is_some() {
+            let out = child.wait_with_output().unwrap();
+            return (
+                out.status.code(),
+                String::from_utf8_lossy(&out.stderr).into_owned(),
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    (None, String::new())
+}
+
+#[test]
+fn files_that_are_not_files_are_refused_at_once() {
+    let sb = TempDir::new("not-files");
+    let out = sb.join("out.png");
+    let render_args = |scene: &Path| -> (Option<i32>, String) {
+        run_bounded(&[
+            "render".as_ref(),
+            scene.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ])
+    };
+    // A folder and a named pipe as the scene file.
+    let folder = sb.join("folder.toml");
+    std::fs::create_dir_all(&folder).unwrap();
+    let fifo = sb.join("pipe.toml");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    let mut scenes = vec![(folder, "folder")];
+    if made {
+        scenes.push((fifo, "not a regular file"));
+    }
+    // /dev/zero as a mesh and a folder as a texture.
+    let mesh = sb.write("mesh.toml", with_mesh("/dev/zero"));
+    std::fs::create_dir_all(sb.join("tex.png")).unwrap();
+    let texture = sb.write("texture.toml", with_texture("tex.png"));
+    scenes.push((mesh, "not a regular file"));
+    scenes.push((texture, "folder"));
+    for (scene, words) in &scenes {
+        let (code, stderr) = render_args(scene);
+        assert_eq!(code, Some(2), "{}: {stderr}", scene.display());
+        assert!(stderr.contains(words), "{}: {stderr}", scene.display());
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    assert!(!out.exists());
+}
+
 #[test]
 fn absurd_thread_counts_are_refused_at_once() {
     let sb = TempDir::new("threads-bound");

@@ -165,6 +165,9 @@ pub const MAX_TEXELS: u64 = 1 << 26;
 /// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
 /// through the sRGB curve when `srgb` is true, else as value/max.
 pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
+    // A compressed image over 1 GiB is not a texture; a folder, device or pipe is refused
+    // before it is opened.
+    crate::files::check_regular(path, 1 << 30).map_err(|e| e.to_string())?;
     let reader = || {
         image::ImageReader::open(path)
             .map_err(|e| e.to_string())?

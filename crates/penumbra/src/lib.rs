@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod files;
 mod film;
 mod geometry;
 mod image_io;

@@ -13,12 +13,16 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::files::read_bounded;
 use crate::render::RenderSettings;
 use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
 use parse::Source;
+
+/// Largest scene file read: 256 MiB of text, far beyond any hand-written or exported scene.
+pub const MAX_SCENE_BYTES: u64 = 256 << 20;
 
 /// The syntax of a scene file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,10 +82,13 @@ impl SceneFile {
         let format = SceneFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
             path: path.to_owned(),
         })?;
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        let read = |source| SceneError::Read {
             path: path.to_owned(),
             source,
-        })?;
+        };
+        let bytes = read_bounded(path, MAX_SCENE_BYTES).map_err(read)?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| read(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
         SceneFile::from_str(&text, format, path, base_dir)
     }

@@ -39,6 +39,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::files::read_bounded;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
@@ -65,7 +66,7 @@ pub(crate) struct ObjModel {
 }
 
 /// Largest OBJ file read: 4 GiB of text is some 100 million triangles, about what memory holds.
-const MAX_FILE_BYTES: u64 = 4 << 30;
+pub(super) const MAX_FILE_BYTES: u64 = 4 << 30;
 /// The most triangles a mesh may have: indices are 32-bit.
 const MAX_TRIANGLES: usize = (u32::MAX / 4) as usize;
 /// "No index": a corner without `vt` or `vn`, a face without `usemtl`.
@@ -129,13 +130,7 @@ impl ObjData {
 /// messages that do not repeat the OBJ file's path (the caller adds it) but do name any other
 /// file involved.
 pub(crate) fn load_obj(path: &Path, pool: Option<&rayon::ThreadPool>) -> Result<ObjModel, String> {
-    let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
-    if size > MAX_FILE_BYTES {
-        return Err(format!(
-            "the file is too large for memory ({size} bytes; at most {MAX_FILE_BYTES})"
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let bytes = read_bounded(path, MAX_FILE_BYTES).map_err(|e| e.to_string())?;
     let dir = path.parent().unwrap_or(Path::new(""));
     build_mesh(read(&bytes, dir, pool, CHUNK_BYTES)?)
 }

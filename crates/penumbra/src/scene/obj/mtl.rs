@@ -11,7 +11,8 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use super::lines::{for_each_line, numbers, rest_of_line};
-use super::ObjMaterial;
+use super::{ObjMaterial, MAX_FILE_BYTES};
+use crate::files::read_bounded;
 
 /// The materials of every `mtllib`, later definitions of a name replacing earlier ones.
 #[derive(Default)]
@@ -45,7 +46,7 @@ impl Library {
 
 /// Reads an MTL file into `library`. Errors name the MTL file.
 fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
-    let bytes = std::fs::read(path)
+    let bytes = read_bounded(path, MAX_FILE_BYTES)
         .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
     parse_mtl(&String::from_utf8_lossy(&bytes), path, library)
 }
