@@ -26,6 +26,13 @@ pub(crate) fn thread_pool(threads: usize) -> Result<(rayon::ThreadPool, usize), 
     Ok((pool, threads))
 }
 
+/// One 2-thread pool shared by the unit tests that need a pool.
+#[cfg(test)]
+pub(crate) fn test_pool() -> &'static rayon::ThreadPool {
+    static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| thread_pool(2).expect("a 2-thread pool").0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -27,17 +27,6 @@ impl Sampler {
             Sampler::Jittered => "jittered",
         }
     }
-
-    /// Parses a scene-file name.
-    pub fn from_name(name: &str) -> Option<Sampler> {
-        Some(match name {
-            "center" => Sampler::Center,
-            "grid" => Sampler::Grid,
-            "rgss" => Sampler::Rgss,
-            "jittered" => Sampler::Jittered,
-            _ => return None,
-        })
-    }
 }
 
 /// The integer square root of `samples` when it is a perfect square.

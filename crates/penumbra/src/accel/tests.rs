@@ -4,7 +4,6 @@
 //! batches. Edge cases of the geometry are in `edges`, property tests over random scenes in
 //! `props`, and the reference build every build must agree with in `reference`.
 
-use std::sync::OnceLock;
 
 use super::*;
 use crate::geometry::Mesh;
@@ -45,13 +44,7 @@ fn parallelogram(corner: Vec3, u: Vec3, v: Vec3) -> [[[f32; 3]; 3]; 2] {
 }
 
 fn pool() -> &'static rayon::ThreadPool {
-    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
-    POOL.get_or_init(|| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap()
-    })
+    crate::pool::test_pool()
 }
 
 /// Builds serially and on a pool, validates both, checks they are the reference build's tree,

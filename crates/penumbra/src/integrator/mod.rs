@@ -69,8 +69,7 @@ pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 /// Buffers one worker reuses from one shading point to the next.
 #[derive(Default)]
 pub(crate) struct Scratch {
-    /// Jittered sample points, as drawn and by coordinate.
-    drawn: Vec<Vec3>,
+    /// Jittered sample points.
     points: Points,
     directions: Directions,
     spec: Vec<f32>,
@@ -228,9 +227,7 @@ impl<'w> Integrator<'w> {
             let points = match &plan.source {
                 Source::Fixed(points) => points,
                 Source::Jittered(light) => {
-                    scratch.drawn.clear();
-                    light.sample_points(rng, &mut scratch.drawn);
-                    scratch.points.set(&scratch.drawn);
+                    scratch.points.fill(|all| light.sample_points(rng, all));
                     &scratch.points
                 }
             };

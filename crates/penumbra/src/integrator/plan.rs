@@ -36,15 +36,16 @@ pub(super) struct Points {
 }
 
 impl Points {
-    pub(super) fn set(&mut self, points: &[Vec3]) {
+    /// Replaces the points with those `fill` appends, and their coordinates.
+    pub(super) fn fill(&mut self, fill: impl FnOnce(&mut Vec<Vec3>)) {
         self.all.clear();
-        self.all.extend_from_slice(points);
+        fill(&mut self.all);
         self.x.clear();
         self.y.clear();
         self.z.clear();
-        self.x.extend(points.iter().map(|p| p.x));
-        self.y.extend(points.iter().map(|p| p.y));
-        self.z.extend(points.iter().map(|p| p.z));
+        self.x.extend(self.all.iter().map(|p| p.x));
+        self.y.extend(self.all.iter().map(|p| p.y));
+        self.z.extend(self.all.iter().map(|p| p.z));
     }
 
     pub(super) fn len(&self) -> usize {
@@ -107,7 +108,7 @@ pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) ->
     match light {
         Light::Point(pl) => {
             let mut points = Points::default();
-            points.set(&[pl.position]);
+            points.fill(|all| all.push(pl.position));
             LightPlan {
                 weight: pl.intensity,
                 facing: None,
@@ -128,11 +129,9 @@ pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) ->
             let source = if al.jitter {
                 Source::Jittered(al)
             } else {
-                let mut grid = Vec::with_capacity(al.sample_count() as usize);
-                // A fixed grid draws nothing from the generator.
-                al.sample_points(&mut Rng::new(0, &[]), &mut grid);
                 let mut points = Points::default();
-                points.set(&grid);
+                // A fixed grid draws nothing from the generator.
+                points.fill(|all| al.sample_points(&mut Rng::new(0, &[]), all));
                 Source::Fixed(points)
             };
             LightPlan {

@@ -9,13 +9,7 @@ use std::sync::OnceLock;
 use super::*;
 
 fn pool() -> &'static rayon::ThreadPool {
-    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
-    POOL.get_or_init(|| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap()
-    })
+    crate::pool::test_pool()
 }
 
 /// A folder of the system's temporary folder holding `lib.mtl`, for `mtllib` statements.
