@@ -4,7 +4,6 @@
 //! batches. Edge cases of the geometry are in `edges`, property tests over random scenes in
 //! `props`, and the reference build every build must agree with in `reference`.
 
-
 use super::*;
 use crate::geometry::Mesh;
 use crate::math::Transform;
