@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod encode8;
 mod files;
 mod film;
 mod geometry;
