@@ -3,22 +3,23 @@
 //! its coordinates in the full film, so any thread count, scheduling or region gives the same
 //! bits.
 
+mod job;
 mod settings;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::Vec2;
 use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::camera::PinholeCamera;
 use crate::film::Film;
-use crate::integrator::{Integrator, Scratch, CAMERA_T_MIN};
+use crate::integrator::Integrator;
 use crate::math::Rgb;
 use crate::pool::thread_pool;
-use crate::sampling::{fixed_offsets, jittered_offset, Rng};
+use crate::sampling::fixed_offsets;
 use crate::world::World;
+use job::{Buffers, Job};
 
 pub use settings::{RenderSettings, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 
@@ -192,17 +193,13 @@ pub fn render(
                 let mut out =
                     Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
                 let mut shadow = 0;
-                let mut scratch = Scratch::default();
+                let mut buffers = Buffers::default();
                 for y in tile.y0..tile.y1 {
                     // A row of a tile can take long at high sample counts: check per row.
                     if cancelled() {
                         return None;
                     }
-                    for x in tile.x0..tile.x1 {
-                        let (c, s) = job.pixel(x, y, &mut scratch);
-                        out.push(c);
-                        shadow += s;
-                    }
+                    shadow += job.row(y, tile.x0..tile.x1, &mut buffers, &mut out);
                 }
                 let n = out.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;
@@ -241,45 +238,4 @@ pub fn render(
         pixels,
     };
     Ok((film, stats))
-}
-
-/// One render's fixed parts, shared by its workers.
-struct Job<'a> {
-    world: &'a World,
-    settings: &'a RenderSettings,
-    camera: PinholeCamera,
-    integrator: Integrator<'a>,
-    /// The pixel offsets of a deterministic sampler; `None` for jittered.
-    offsets: Option<Vec<Vec2>>,
-}
-
-impl Job<'_> {
-    /// The value of pixel `(x, y)` of the full film and the shadow rays it took.
-    fn pixel(&self, x: u32, y: u32, scratch: &mut Scratch) -> (Rgb, u64) {
-        let settings = self.settings;
-        let n = settings.samples_per_axis();
-        let pixel_index = y as u64 * settings.width as u64 + x as u64;
-        let mut sum = Rgb::ZERO;
-        let mut shadow = 0;
-        for s in 0..n * n {
-            let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
-            let offset = match &self.offsets {
-                Some(o) => o[s as usize],
-                None => jittered_offset(n, s / n, s % n, rng.uniform2()),
-            };
-            let ray = self
-                .camera
-                .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-            match self.world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) {
-                Some(hit) => {
-                    let surface = self.world.surface(&hit);
-                    let (c, rays) = self.integrator.shade(&ray, &surface, &mut rng, scratch);
-                    sum += c;
-                    shadow += rays;
-                }
-                None => sum += settings.background,
-            }
-        }
-        (sum / (n * n) as f32, shadow)
-    }
 }
