@@ -16,7 +16,7 @@ use glam::Vec3;
 use super::packet::{max, min, moller_trumbore};
 use super::{Bvh, BvhNode, STACK_SIZE};
 use crate::geometry::Hit;
-use crate::simd::Kernel;
+use crate::simd::{Isa, Kernel};
 
 /// [`Bvh::intersect_from`] as a [`Kernel`]: the rays in packets of `N` lanes.
 pub(super) struct Closest<'a> {
@@ -32,7 +32,7 @@ impl Kernel for Closest<'_> {
     type Output = ();
 
     #[inline(always)]
-    fn run<const N: usize>(self) {
+    fn run<const N: usize, I: Isa>(self) {
         let Closest {
             bvh,
             origin,
@@ -43,7 +43,7 @@ impl Kernel for Closest<'_> {
         } = self;
         assert_eq!(dirs.len(), hits.len(), "one hit slot per ray");
         for (dirs, hits) in dirs.chunks(N).zip(hits.chunks_mut(N)) {
-            closest_packet::<N>(bvh, origin, dirs, t_min, t_max, hits);
+            closest_packet::<N, I>(bvh, origin, dirs, t_min, t_max, hits);
         }
     }
 }
@@ -60,7 +60,7 @@ struct Best<const N: usize> {
 /// Writes to `hits[i]` the closest hit of the ray `origin + t·dirs[i]` with `t` in
 /// `(t_min, t_max)` (`dirs.len() <= N`).
 #[inline(always)]
-fn closest_packet<const N: usize>(
+fn closest_packet<const N: usize, I: Isa>(
     bvh: &Bvh,
     origin: Vec3,
     dirs: &[Vec3],
@@ -104,7 +104,7 @@ fn closest_packet<const N: usize>(
     let mut stack = [(0u32, 0u32); STACK_SIZE];
     let mut sp = 0;
     let mut node = &bvh.nodes[0];
-    let mut mask = slab(node, &o, &inv, t_min, &best.t).0 & lanes;
+    let mut mask = slab::<N, I>(node, &o, &inv, t_min, &best.t).0 & lanes;
     if mask == 0 {
         return;
     }
@@ -120,8 +120,8 @@ fn closest_packet<const N: usize>(
                 &bvh.nodes[node.first as usize],
                 &bvh.nodes[node.first as usize + 1],
             );
-            let (ml, nl) = slab(l, &o, &inv, t_min, &best.t);
-            let (mr, nr) = slab(r, &o, &inv, t_min, &best.t);
+            let (ml, nl) = slab::<N, I>(l, &o, &inv, t_min, &best.t);
+            let (mr, nr) = slab::<N, I>(r, &o, &inv, t_min, &best.t);
             let (ml, mr) = (ml & mask, mr & mask);
             if ml != 0 && mr != 0 {
                 let lane = mask.trailing_zeros() as usize;
@@ -163,7 +163,7 @@ fn closest_packet<const N: usize>(
             sp -= 1;
             let (index, entered) = stack[sp];
             let candidate = &bvh.nodes[index as usize];
-            let m = slab(candidate, &o, &inv, t_min, &best.t).0 & entered;
+            let m = slab::<N, I>(candidate, &o, &inv, t_min, &best.t).0 & entered;
             if m != 0 {
                 node = candidate;
                 mask = m;
@@ -178,7 +178,7 @@ fn closest_packet<const N: usize>(
 /// triangle at that `t` with a smaller index.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize>(
+fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
     o: &[f32; 3],
     inv: &[[f32; N]; 3],
@@ -198,7 +198,7 @@ fn slab<const N: usize>(
         inside[i] = -((near <= far) as i32);
         entry[i] = near;
     }
-    (super::packet::lane_bits(&inside), entry)
+    (I::mask(&inside), entry)
 }
 
 /// Tests the triangle (scene index `id`) on every lane and keeps it where it is closer than

@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use super::{traverse, Bvh, BvhNode, STACK_SIZE};
 use crate::math::Ray;
-use crate::simd::Kernel;
+use crate::simd::{Isa, Kernel};
 
 /// [`Bvh::occlude_from`] as a [`Kernel`]: the segments in packets of `N` lanes.
 pub(super) struct Occlude<'a> {
@@ -32,7 +32,7 @@ impl Kernel for Occlude<'_> {
 
     /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
     #[inline(always)]
-    fn run<const N: usize>(self) {
+    fn run<const N: usize, I: Isa>(self) {
         let Occlude {
             bvh,
             origin,
@@ -56,7 +56,7 @@ impl Kernel for Occlude<'_> {
                     }
                 }
             } else {
-                occlude_packet::<N>(bvh, origin, ends, t_max, blocked);
+                occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
             }
         }
     }
@@ -65,7 +65,7 @@ impl Kernel for Occlude<'_> {
 /// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
 /// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-pub(super) fn occlude_packet<const N: usize>(
+pub(super) fn occlude_packet<const N: usize, I: Isa>(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
@@ -100,14 +100,14 @@ pub(super) fn occlude_packet<const N: usize>(
     let mut sp = 0;
     let root = &bvh.nodes[0];
     let mut node = root;
-    if slab(root, &o, &inv, t_max).0 & active == 0 {
+    if slab::<N, I>(root, &o, &inv, t_max).0 & active == 0 {
         return;
     }
     'nodes: loop {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !triangle(tri, origin, &dir, t_max);
+                active &= !triangle::<N, I>(tri, origin, &dir, t_max);
                 if active == 0 {
                     break 'nodes;
                 }
@@ -117,7 +117,10 @@ pub(super) fn occlude_packet<const N: usize>(
                 &bvh.nodes[node.first as usize],
                 &bvh.nodes[node.first as usize + 1],
             );
-            let ((ml, nl), (mr, nr)) = (slab(l, &o, &inv, t_max), slab(r, &o, &inv, t_max));
+            let ((ml, nl), (mr, nr)) = (
+                slab::<N, I>(l, &o, &inv, t_max),
+                slab::<N, I>(r, &o, &inv, t_max),
+            );
             let (ml, mr) = (ml & active, mr & active);
             if ml != 0 && mr != 0 {
                 let lane = active.trailing_zeros() as usize;
@@ -180,7 +183,7 @@ pub(super) fn max(a: f32, b: f32) -> f32 {
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize>(
+fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
     o: &[f32; 3],
     inv: &[[f32; N]; 3],
@@ -200,25 +203,13 @@ fn slab<const N: usize>(
         inside[i] = -((near <= far) as i32);
         entry[i] = near;
     }
-    (lane_bits(&inside), entry)
-}
-
-/// Bit i set where lane i is all ones: written so that it compiles to one move-mask
-/// instruction.
-#[allow(clippy::needless_range_loop)]
-#[inline(always)]
-pub(super) fn lane_bits<const N: usize>(lanes: &[i32; N]) -> u32 {
-    let mut bits = 0;
-    for i in 0..N {
-        bits |= ((lanes[i] as u32) >> 31) << i;
-    }
-    bits
+    (I::mask(&inside), entry)
 }
 
 /// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn triangle<const N: usize>(
+fn triangle<const N: usize, I: Isa>(
     tri: &super::TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],
@@ -232,7 +223,7 @@ fn triangle<const N: usize>(
         let (inside, t, _, _) = moller_trumbore(tri, tvec, qvec, t_num, dir, i);
         hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
     }
-    lane_bits(&hit)
+    I::mask(&hit)
 }
 
 /// Lane `i` of Möller–Trumbore exactly as `geometry::intersect_triangle` computes it, with the
