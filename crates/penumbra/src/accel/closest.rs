@@ -13,8 +13,8 @@
 
 use glam::Vec3;
 
-use super::packet::{max, min, moller_trumbore};
-use super::{Bvh, BvhNode, STACK_SIZE};
+use super::packet::{moller_trumbore, slab};
+use super::{Bvh, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::simd::{Isa, Kernel};
 
@@ -171,34 +171,6 @@ fn closest_packet<const N: usize, I: Isa>(
             }
         }
     }
-}
-
-/// The lanes (bit i for lane i) that enter the node's box within `(t_min, best[i])`, and each
-/// lane's entry distance. A box entered exactly at a lane's best `t` counts: it may hold a
-/// triangle at that `t` with a smaller index.
-#[allow(clippy::needless_range_loop)]
-#[inline(always)]
-fn slab<const N: usize, I: Isa>(
-    node: &BvhNode,
-    o: &[f32; 3],
-    inv: &[[f32; N]; 3],
-    t_min: f32,
-    best: &[f32; N],
-) -> (u32, [f32; N]) {
-    let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
-    let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
-    let mut inside = [0i32; N];
-    let mut entry = [0.0; N];
-    for i in 0..N {
-        let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
-        let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
-        let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), best[i]);
-        inside[i] = -((near <= far) as i32);
-        entry[i] = near;
-    }
-    (I::mask(&inside), entry)
 }
 
 /// Tests the triangle (scene index `id`) on every lane and keeps it where it is closer than

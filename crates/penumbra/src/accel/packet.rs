@@ -92,6 +92,7 @@ pub(super) fn occlude_packet<const N: usize, I: Isa>(
         }
     }
     let o = origin.to_array();
+    let far = [t_max; N];
 
     // Children are tested at their parent and the one the first live lane enters first is
     // visited first, so that occluders near the shading point end the packet early; the other
@@ -100,7 +101,7 @@ pub(super) fn occlude_packet<const N: usize, I: Isa>(
     let mut sp = 0;
     let root = &bvh.nodes[0];
     let mut node = root;
-    if slab::<N, I>(root, &o, &inv, t_max).0 & active == 0 {
+    if slab::<N, I>(root, &o, &inv, 0.0, &far).0 & active == 0 {
         return;
     }
     'nodes: loop {
@@ -118,8 +119,8 @@ pub(super) fn occlude_packet<const N: usize, I: Isa>(
                 &bvh.nodes[node.first as usize + 1],
             );
             let ((ml, nl), (mr, nr)) = (
-                slab::<N, I>(l, &o, &inv, t_max),
-                slab::<N, I>(r, &o, &inv, t_max),
+                slab::<N, I>(l, &o, &inv, 0.0, &far),
+                slab::<N, I>(r, &o, &inv, 0.0, &far),
             );
             let (ml, mr) = (ml & active, mr & active);
             if ml != 0 && mr != 0 {
@@ -178,16 +179,17 @@ pub(super) fn max(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max)`, and each
-/// lane's entry distance.
+/// The lanes (bit i for lane i) that enter the node's box within `(t_min, t_max[i])`, and each
+/// lane's entry distance. A box entered exactly at `t_max[i]` counts.
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize, I: Isa>(
+pub(super) fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
     o: &[f32; 3],
     inv: &[[f32; N]; 3],
-    t_max: f32,
+    t_min: f32,
+    t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
     // The box relative to the shared origin, once for all lanes.
     let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
@@ -198,8 +200,8 @@ fn slab<const N: usize, I: Isa>(
         let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
         let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
         let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max);
+        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
+        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max[i]);
         inside[i] = -((near <= far) as i32);
         entry[i] = near;
     }
