@@ -6,6 +6,7 @@
 
 use pyo3::prelude::*;
 
+mod camera;
 mod errors;
 mod image;
 mod render;
@@ -19,7 +20,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::CoreScene>()?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::loads, m)?)?;
-    m.add_function(wrap_pyfunction!(scene::check_camera, m)?)?;
+    m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
     m.add("AOV_NAMES", render::AOV_NAMES.to_vec())?;

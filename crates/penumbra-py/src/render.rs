@@ -16,8 +16,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::camera::camera;
 use crate::errors::render_error;
-use crate::scene::camera;
 
 /// How often the calling thread checks for signals and reports progress while a render runs.
 const POLL: Duration = Duration::from_millis(20);
