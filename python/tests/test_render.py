@@ -46,13 +46,17 @@ def test_the_image_is_the_command_lines_bit_for_bit(tmp_path, cornell, cli_args,
     assert mine.read_bytes() == out.read_bytes()
 
 
-def test_png_bytes_match_the_command_lines(tmp_path, cornell):
-    out = tmp_path / "cli.png"
+@pytest.mark.parametrize("ext", ["png", "exr", "jpg"])
+def test_image_files_match_the_command_lines(tmp_path, cornell, ext):
+    out = tmp_path / f"cli.{ext}"
     run_cli("render", CORNELL, "--width", 24, "--height", 16, "--quiet", "-o", out)
-    image = cornell.render(width=24, height=16)
-    mine = tmp_path / "mine.png"
-    penumbra.write_image(mine, image)
+    mine = tmp_path / f"mine.{ext}"
+    penumbra.write_image(mine, cornell.render(width=24, height=16))
     assert mine.read_bytes() == out.read_bytes()
+
+
+def test_to_srgb8_is_the_srgb_curve(cornell):
+    image = cornell.render(width=24, height=16)
     srgb = penumbra.to_srgb8(image)
     assert srgb.dtype == np.uint8 and srgb.shape == image.shape
     # The sRGB curve by hand, in float64.
