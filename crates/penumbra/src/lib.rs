@@ -81,8 +81,9 @@ pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use pool::MAX_THREADS;
 pub use render::{
-    render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
-    View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
+    render, render_with_aovs, AovFilm, AovPixel, PixelBounds, RenderError, RenderOptions,
+    RenderSettings, RenderStats, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
+    NO_ID,
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{

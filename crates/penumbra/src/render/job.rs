@@ -5,6 +5,7 @@ use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
+use super::aov::{self, AovContext, AovPixel};
 use super::RenderSettings;
 use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
@@ -25,6 +26,8 @@ pub(super) struct Job<'a> {
     pub(super) integrator: Integrator<'a>,
     /// The pixel offsets of a deterministic sampler; `None` for jittered.
     pub(super) offsets: Option<Vec<Vec2>>,
+    /// Present when the render computes AOVs.
+    pub(super) aovs: Option<AovContext>,
 }
 
 /// Buffers one worker reuses from one batch of pixels to the next.
@@ -39,14 +42,15 @@ pub(super) struct Buffers {
 }
 
 impl Job<'_> {
-    /// Appends to `out` the values of the pixels `xs` of row `y` of the full film, and returns
-    /// the shadow rays they took.
+    /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their
+    /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took.
     pub(super) fn row(
         &self,
         y: u32,
         xs: Range<u32>,
         buffers: &mut Buffers,
         out: &mut Vec<Rgb>,
+        aovs: &mut Vec<AovPixel>,
     ) -> u64 {
         let spp = self.settings.samples_per_axis().pow(2);
         let per_batch = (BATCH_RAYS / spp).max(1);
@@ -54,7 +58,7 @@ impl Job<'_> {
         let mut x0 = xs.start;
         while x0 < xs.end {
             let x1 = (x0 + per_batch).min(xs.end);
-            shadow += self.pixels(y, x0..x1, buffers, out);
+            shadow += self.pixels(y, x0..x1, buffers, out, aovs);
             x0 = x1;
         }
         shadow
@@ -62,7 +66,14 @@ impl Job<'_> {
 
     /// [`Job::row`] for a few pixels: every sample's camera ray first, traced in one call,
     /// then each pixel's mean in sample order.
-    fn pixels(&self, y: u32, xs: Range<u32>, buffers: &mut Buffers, out: &mut Vec<Rgb>) -> u64 {
+    fn pixels(
+        &self,
+        y: u32,
+        xs: Range<u32>,
+        buffers: &mut Buffers,
+        out: &mut Vec<Rgb>,
+        aovs: &mut Vec<AovPixel>,
+    ) -> u64 {
         let settings = self.settings;
         let n = settings.samples_per_axis();
         let spp = (n * n) as usize;
@@ -96,13 +107,17 @@ impl Job<'_> {
             .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
 
         let mut shadow = 0;
-        for pixel in 0..xs.len() {
+        for (pixel, x) in xs.enumerate() {
             let mut sum = Rgb::ZERO;
+            let mut albedo = Rgb::ZERO;
             for i in pixel * spp..(pixel + 1) * spp {
                 match &hits[i] {
                     Some(hit) => {
                         let ray = Ray::new(eye, dirs[i]);
                         let surface = self.world.surface(hit);
+                        if self.aovs.is_some() {
+                            albedo += aov::albedo(self.world, &surface);
+                        }
                         let (c, rays) =
                             self.integrator.shade(&ray, &surface, &mut rngs[i], scratch);
                         sum += c;
@@ -112,6 +127,11 @@ impl Job<'_> {
                 }
             }
             out.push(sum / spp as f32);
+            if let Some(ctx) = &self.aovs {
+                let mut px = ctx.center(self.world, &self.camera, x, y);
+                px.albedo = albedo / spp as f32;
+                aovs.push(px);
+            }
         }
         shadow
     }
