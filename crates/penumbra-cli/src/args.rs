@@ -1,0 +1,103 @@
+//! The command line's grammar: subcommands, flags and the parsers of their values. Nothing
+//! here loads or renders.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use penumbra::PixelBounds;
+
+#[derive(Parser)]
+#[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
+    Render(RenderArgs),
+    /// Validate a scene file and print a summary.
+    Check(CheckArgs),
+}
+
+/// `penumbra check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// The scene file (.toml or .json).
+    pub scene: PathBuf,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SamplerArg {
+    Center,
+    Grid,
+    Rgss,
+    Jittered,
+}
+
+/// `penumbra render`.
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// The scene file (.toml or .json).
+    pub scene: PathBuf,
+    /// Output image; the extension picks the format. Default: film.output, else
+    /// <scene stem>.png next to the scene.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Film width in pixels.
+    #[arg(long, value_name = "W")]
+    pub width: Option<u32>,
+    /// Film height in pixels.
+    #[arg(long, value_name = "H")]
+    pub height: Option<u32>,
+    /// Pixel sampler (center means 1 sample unless --spp is given).
+    #[arg(long, value_enum, value_name = "S")]
+    pub sampler: Option<SamplerArg>,
+    /// Samples per pixel, a perfect square.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// N for every area light (N×N samples), overriding the scene's values.
+    #[arg(long, value_name = "N")]
+    pub light_samples: Option<u32>,
+    /// Render the camera with this name.
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
+    /// Worker threads (0: all cores).
+    #[arg(short, long, value_name = "N", default_value_t = 0)]
+    pub threads: usize,
+    /// Seed for every random choice.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+    /// Render only the pixels [x0, x1) × [y0, y1) of the full film.
+    // Hyphen values are taken so that "-1,..." is reported as a bad region, not a bad flag.
+    #[arg(
+        long,
+        value_name = "x0,x1,y0,y1",
+        value_parser = parse_bounds,
+        allow_hyphen_values = true
+    )]
+    pub pixelbounds: Option<PixelBounds>,
+    /// Print the summary as one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar and no summary on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_bounds(s: &str) -> Result<PixelBounds, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| "expected four non-negative integers x0,x1,y0,y1".to_owned())?;
+    match v[..] {
+        [x0, x1, y0, y1] if x0 < x1 && y0 < y1 => Ok(PixelBounds { x0, x1, y0, y1 }),
+        [_, _, _, _] => Err("the region is empty (need x0 < x1 and y0 < y1)".to_owned()),
+        _ => Err("expected four non-negative integers x0,x1,y0,y1".to_owned()),
+    }
+}

@@ -1,0 +1,92 @@
+//! What a finished render reports: the one-line summary on stderr and the `--json` object on
+//! stdout.
+
+use std::path::Path;
+use std::time::Duration;
+
+use penumbra::{Film, Light, RenderSettings, RenderStats, World};
+use serde_json::{json, Value};
+
+/// Light samples per shading point: N² for each area light (N from `n`, else the light's
+/// own), 1 for each point light.
+pub fn light_samples(world: &World, n: Option<u32>) -> u64 {
+    world
+        .lights()
+        .iter()
+        .map(|l| match l {
+            Light::Area(a) => n.unwrap_or(a.n) as u64 * n.unwrap_or(a.n) as u64,
+            Light::Point(_) => 1,
+        })
+        .sum()
+}
+
+/// One finished render, as the summaries describe it.
+pub struct Report<'a> {
+    pub scene: &'a Path,
+    pub output: &'a Path,
+    pub film: &'a Film,
+    pub settings: &'a RenderSettings,
+    pub world: &'a World,
+    pub stats: &'a RenderStats,
+    /// Reading the scene file, its meshes and textures, and building the BVH.
+    pub load_time: Duration,
+    /// Everything of loading but the BVH.
+    pub parse_time: Duration,
+}
+
+impl Report<'_> {
+    /// The one-line summary for stderr.
+    pub fn line(&self) -> String {
+        let (film, settings, stats) = (self.film, self.settings, self.stats);
+        // "640x480", or "64x48 of 640x480" for a --pixelbounds region.
+        let size = if (film.width, film.height) == (settings.width, settings.height) {
+            format!("{}x{}", film.width, film.height)
+        } else {
+            format!(
+                "{}x{} of {}x{}",
+                film.width, film.height, settings.width, settings.height
+            )
+        };
+        let world_stats = self.world.stats();
+        format!(
+            "penumbra: {size}, {} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {:.2} Mrays/s, {} thread{} -> {}",
+            settings.spp,
+            settings.sampler.name(),
+            light_samples(self.world, settings.light_samples),
+            world_stats.triangles,
+            self.load_time.as_secs_f64(),
+            world_stats.bvh_build_time.as_secs_f64(),
+            stats.time.as_secs_f64(),
+            stats.rays_per_second() / 1e6,
+            stats.threads,
+            if stats.threads == 1 { "" } else { "s" },
+            self.output.display()
+        )
+    }
+
+    /// The `--json` object.
+    pub fn json(&self) -> Value {
+        let (film, settings, stats) = (self.film, self.settings, self.stats);
+        let world_stats = self.world.stats();
+        json!({
+            "scene": self.scene.display().to_string(),
+            "output": self.output.display().to_string(),
+            "width": film.width,
+            "height": film.height,
+            "film_width": settings.width,
+            "film_height": settings.height,
+            "spp": settings.spp,
+            "sampler": settings.sampler.name(),
+            "light_samples": light_samples(self.world, settings.light_samples),
+            "triangles": world_stats.triangles,
+            "load_seconds": self.load_time.as_secs_f64(),
+            "parse_seconds": self.parse_time.as_secs_f64(),
+            "bvh_build_seconds": world_stats.bvh_build_time.as_secs_f64(),
+            "render_seconds": stats.time.as_secs_f64(),
+            "camera_rays": stats.camera_rays,
+            "shadow_rays": stats.shadow_rays,
+            "rays_per_second": stats.rays_per_second(),
+            "threads": stats.threads,
+        })
+    }
+}
