@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use clap::{Parser, Subcommand, ValueEnum};
-use penumbra::PixelBounds;
+use clap::{ArgAction, Parser, Subcommand, ValueEnum};
+use penumbra::{Override, PixelBounds};
 
 #[derive(Parser)]
 #[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
@@ -26,6 +26,9 @@ pub enum Command {
 pub struct CheckArgs {
     /// The scene file (.toml or .json).
     pub scene: PathBuf,
+    /// Override a scene key: KEY.PATH=VALUE (repeatable).
+    #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
+    pub set: Vec<Override>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -48,6 +51,11 @@ pub struct RenderArgs {
     /// <scene stem>.png next to the scene.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// Override a scene key, as if the file said so: KEY.PATH=VALUE, such as film.width=640,
+    /// render.sampler=rgss or objects[0].material=red. Repeatable; the VALUE is read as TOML,
+    /// else taken as a string.
+    #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
+    pub set: Vec<Override>,
     /// Film width in pixels.
     #[arg(long, value_name = "W")]
     pub width: Option<u32>,
@@ -87,6 +95,10 @@ pub struct RenderArgs {
     /// No progress bar and no summary on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+fn parse_override(s: &str) -> Result<Override, String> {
+    Override::parse(s).map_err(|e| e.to_string())
 }
 
 fn parse_bounds(s: &str) -> Result<PixelBounds, String> {

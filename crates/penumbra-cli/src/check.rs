@@ -11,7 +11,7 @@ use crate::summary::light_samples;
 
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
-    let file = SceneFile::load(path).map_err(invalid)?;
+    let file = SceneFile::load_with(path, &args.set).map_err(invalid)?;
     let scene = file.build(0).map_err(invalid)?;
     let world = &scene.world;
     let bounds = world.bounds();

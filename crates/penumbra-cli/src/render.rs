@@ -21,7 +21,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         )));
     }
     let load_start = Instant::now();
-    let file = SceneFile::load(&args.scene).map_err(invalid)?;
+    let file = SceneFile::load_with(&args.scene, &args.set).map_err(invalid)?;
     let file_time = load_start.elapsed();
     let scene = file.build(args.threads).map_err(invalid)?;
     // The scene file, then its meshes and textures: everything of loading but the BVH.
