@@ -2,16 +2,16 @@
 
 use std::path::Path;
 
-use penumbra::SceneFile;
 use serde_json::json;
 
 use crate::args::CheckArgs;
 use crate::failure::{invalid, say, Failure};
+use crate::input;
 use crate::summary::light_samples;
 
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
-    let file = SceneFile::load_with(path, &args.set).map_err(invalid)?;
+    let file = input::load(path, &args.set)?;
     let scene = file.build(0).map_err(invalid)?;
     let world = &scene.world;
     let bounds = world.bounds();

@@ -2,12 +2,17 @@
 //! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 130 interrupted.
 //!
 //! One module per concept: `args` (the grammar), `render` and `check` (the subcommands),
-//! `settings` (flags over the file's settings), `summary` (what a run reports), `signals`
-//! (Ctrl-C) and `failure` (exit codes and writing to stdout and stderr).
+//! `input` (the scene from a file or stdin), `cameras` (`--camera` selection), `settings`
+//! (flags over the file's settings), `output` (output names, formats, folders, stdout),
+//! `summary` (what a run reports), `signals` (Ctrl-C) and `failure` (exit codes and writing
+//! to stdout and stderr).
 
 mod args;
+mod cameras;
 mod check;
 mod failure;
+mod input;
+mod output;
 mod render;
 mod settings;
 mod signals;

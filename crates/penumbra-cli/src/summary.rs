@@ -23,7 +23,7 @@ pub fn light_samples(world: &World, n: Option<u32>) -> u64 {
 /// One finished render, as the summaries describe it.
 pub struct Report<'a> {
     pub scene: &'a Path,
-    pub output: &'a Path,
+    pub output: &'a str,
     pub film: &'a Film,
     pub settings: &'a RenderSettings,
     pub world: &'a World,
@@ -60,7 +60,7 @@ impl Report<'_> {
             stats.rays_per_second() / 1e6,
             stats.threads,
             if stats.threads == 1 { "" } else { "s" },
-            self.output.display()
+            self.output
         )
     }
 
@@ -70,7 +70,7 @@ impl Report<'_> {
         let world_stats = self.world.stats();
         json!({
             "scene": self.scene.display().to_string(),
-            "output": self.output.display().to_string(),
+            "output": self.output,
             "width": film.width,
             "height": film.height,
             "film_width": settings.width,
