@@ -1,7 +1,8 @@
 //! The `penumbra` command: parse flags, load, build, render, write. The only place where errors
 //! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 130 interrupted.
 //!
-//! One module per concept: `args` (the grammar), `render` and `check` (the subcommands),
+//! One module per concept: `args` (the grammar), `render`, `check` and `check_obj` (the subcommands),
+//! `warnings` (what `check` flags),
 //! `input` (the scene from a file or stdin), `cameras` (`--camera` selection), `settings`
 //! (flags over the file's settings), `output` (output names, formats, folders, stdout),
 //! `summary` (what a run reports), `signals` (Ctrl-C) and `failure` (exit codes and writing
@@ -10,6 +11,7 @@
 mod args;
 mod cameras;
 mod check;
+mod check_obj;
 mod failure;
 mod input;
 mod output;
@@ -17,6 +19,7 @@ mod render;
 mod settings;
 mod signals;
 mod summary;
+mod warnings;
 
 use std::process::ExitCode;
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use penumbra::{Film, Light, RenderSettings, RenderStats, World};
+use penumbra::{Aabb, Film, Light, RenderSettings, RenderStats, World};
 use serde_json::{json, Value};
 
 /// Light samples per shading point: N² for each area light (N from `n`, else the light's
@@ -88,5 +88,28 @@ impl Report<'_> {
             "rays_per_second": stats.rays_per_second(),
             "threads": stats.threads,
         })
+    }
+}
+
+/// `[x, y, z] to [x, y, z]`, four decimals; zeros for nothing.
+pub fn bounds_text(b: Aabb) -> String {
+    let (min, max) = min_max(b);
+    format!(
+        "[{:.4}, {:.4}, {:.4}] to [{:.4}, {:.4}, {:.4}]",
+        min[0], min[1], min[2], max[0], max[1], max[2]
+    )
+}
+
+/// `{"min": [..], "max": [..]}`.
+pub fn bounds_json(b: Aabb) -> Value {
+    let (min, max) = min_max(b);
+    json!({ "min": min, "max": max })
+}
+
+fn min_max(b: Aabb) -> ([f32; 3], [f32; 3]) {
+    if b.is_empty() {
+        ([0.0; 3], [0.0; 3])
+    } else {
+        (b.min.to_array(), b.max.to_array())
     }
 }

@@ -85,8 +85,8 @@ pub use render::{
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{
-    desc, escape_controls, AssetKind, ErrorKind, Location, Override, OverrideError, Scene,
-    SceneDesc, SceneError, SceneFile, SceneFormat, MAX_SCENE_BYTES,
+    desc, escape_controls, inspect_obj, AssetKind, ErrorKind, Location, ObjInfo, Override,
+    OverrideError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, MAX_SCENE_BYTES,
 };
 pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};

@@ -20,6 +20,7 @@ use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use obj::{inspect_obj, ObjInfo};
 pub use overrides::{Override, OverrideError};
 use parse::Source;
 
