@@ -77,6 +77,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
 
         let report = Report {
             scene: &scene_name(&args.scene),
+            camera: camera_name(&job.settings.view, &scene.world),
             output: &job.output.display(),
             film: &film,
             settings: &job.settings,

@@ -23,6 +23,8 @@ pub fn light_samples(world: &World, n: Option<u32>) -> u64 {
 /// One finished render, as the summaries describe it.
 pub struct Report<'a> {
     pub scene: &'a Path,
+    /// The camera's name.
+    pub camera: &'a str,
     pub output: &'a str,
     pub film: &'a Film,
     pub settings: &'a RenderSettings,
@@ -70,6 +72,7 @@ impl Report<'_> {
         let world_stats = self.world.stats();
         json!({
             "scene": self.scene.display().to_string(),
+            "camera": self.camera,
             "output": self.output,
             "width": film.width,
             "height": film.height,

@@ -57,7 +57,12 @@ fn all_cameras_render_into_the_expanded_pattern() {
     );
     // One summary line and one JSON object per render.
     assert_eq!(r.stderr.lines().count(), 3, "{}", r.stderr);
-    assert_eq!(r.out().lines().count(), 3, "{}", r.out());
+    let cameras: Vec<String> = r
+        .out()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["camera"].to_string())
+        .collect();
+    assert_eq!(cameras, ["\"front\"", "\"side_left\"", "\"top\""]);
     // Each image is what rendering that camera alone gives.
     for cam in ["front", "side_left", "top"] {
         let single = format!("{cam}.png");
