@@ -151,6 +151,11 @@ fn a_bad_override_is_an_error_naming_it() {
         let e = error(text, format, &[set]);
         assert_override_error(&e, ErrorKind::BadValue, "camera.fov", set, &["fov"]);
 
+        // A table the override made: what it lacks is the override's mistake too.
+        let set = "cameras.top.fov=30";
+        let e = error(text, format, &[set]);
+        assert_override_error(&e, ErrorKind::MissingKey, "cameras.top", set, &["position"]);
+
         // A path the file's values cannot take.
         let set = "objects[5].material=red";
         let e = error(text, format, &[set]);

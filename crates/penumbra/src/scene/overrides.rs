@@ -145,7 +145,10 @@ fn parse_key(key: &str) -> Result<Vec<Step>, String> {
 /// Why an override could not be applied: the path of the value in the way, and the message.
 pub(crate) type ApplyError = (KeyPath, String);
 
-/// Sets `o`'s value in `root`; returns the path it set, with every index resolved.
+/// Sets `o`'s value in `root`; returns the path of what it owns, with every index resolved:
+/// the value it set, or the first table it had to create on the way (`cameras.top` for
+/// `cameras.top.fov=30` in a file without that camera), since everything under it comes from
+/// the override.
 pub(crate) fn apply(root: &mut Table, o: &Override) -> Result<KeyPath, ApplyError> {
     // `parse_key` always starts with a name.
     let Some((Step::Name(first), rest)) = o.steps.split_first() else {
@@ -155,16 +158,20 @@ pub(crate) fn apply(root: &mut Table, o: &Override) -> Result<KeyPath, ApplyErro
         ));
     };
     let mut path = KeyPath::root(first);
+    let mut created = (!root.contains_key(first)).then(|| path.clone());
     let mut slot = root
         .entry(first.clone())
         .or_insert_with(|| placeholder(rest.is_empty()));
     for (i, step) in rest.iter().enumerate() {
-        let (next, next_path) = child(slot, step, &path, i + 1 == rest.len())?;
+        let (next, next_path, existed) = child(slot, step, &path, i + 1 == rest.len())?;
+        if !existed && created.is_none() {
+            created = Some(next_path.clone());
+        }
         slot = next;
         path = next_path;
     }
     *slot = o.value.clone();
-    Ok(path)
+    Ok(created.unwrap_or(path))
 }
 
 /// What a missing key holds until it is set: a new table on the way, anything at the end.
@@ -177,20 +184,21 @@ fn placeholder(is_last: bool) -> Value {
 }
 
 /// The value `step` names inside `slot` (a table entry made when missing: a new table on the
-/// way, a placeholder for the last step), and its path.
+/// way, a placeholder for the last step), its path, and whether it was there before.
 fn child<'v>(
     slot: &'v mut Value,
     step: &Step,
     path: &KeyPath,
     is_last: bool,
-) -> Result<(&'v mut Value, KeyPath), ApplyError> {
+) -> Result<(&'v mut Value, KeyPath, bool), ApplyError> {
     let kind = slot.type_str();
     match (slot, step) {
         (Value::Table(t), Step::Name(name)) => {
+            let existed = t.contains_key(name);
             let entry = t
                 .entry(name.clone())
                 .or_insert_with(|| placeholder(is_last));
-            Ok((entry, path.key(name)))
+            Ok((entry, path.key(name), existed))
         }
         (Value::Array(a), step) => {
             let index = match step {
@@ -212,7 +220,7 @@ fn child<'v>(
                 };
                 (path.clone(), m)
             })?;
-            Ok((entry, path.index(index)))
+            Ok((entry, path.index(index), true))
         }
         (Value::Table(_), Step::Index(_)) => {
             Err((path.clone(), format!("`{path}` is a table, not an array")))
@@ -319,10 +327,11 @@ mod tests {
             (t["film"]["width"].as_integer(), p.as_str()),
             (Some(64), "film.width")
         );
+        // A table the override made is the override's, all of it.
         let (t, p) = applied(text, "render.seed=7").unwrap();
         assert_eq!(
             (t["render"]["seed"].as_integer(), p.as_str()),
-            (Some(7), "render.seed")
+            (Some(7), "render")
         );
         let (t, p) = applied(text, "objects.0.material=red").unwrap();
         assert_eq!(t["objects"][0]["material"].as_str(), Some("red"));
