@@ -128,6 +128,28 @@ fn lists_and_patterns_choose_cameras_in_order() {
 }
 
 #[test]
+fn the_default_camera_fills_the_pattern_too() {
+    let dir = TempDir::new("cams-default-pattern");
+    dir.write("room.toml", three_cameras());
+    ok(run_in(
+        dir.path(),
+        ["render", "room.toml", "-o", "{camera}.png", "-q"],
+    ));
+    assert!(dir.join("front.png").exists());
+    // film.output is a pattern as well.
+    let with_output = three_cameras().replace(
+        "height = 12\n",
+        "height = 12\noutput = \"o/{camera}.png\"\n",
+    );
+    dir.write("out.toml", with_output);
+    ok(run_in(
+        dir.path(),
+        ["render", "out.toml", "--camera", "all", "-q"],
+    ));
+    assert_eq!(files(&dir, "o"), ["front.png", "side_left.png", "top.png"]);
+}
+
+#[test]
 fn without_o_several_cameras_go_beside_the_scene() {
     let dir = TempDir::new("cams-default");
     dir.write("room.toml", three_cameras());

@@ -5,7 +5,7 @@ mod harness;
 #[path = "../../penumbra/tests/support/mod.rs"]
 mod support;
 
-use harness::{error_line, ok, run_in};
+use harness::{error_line, ok, run_in, run_with};
 use serde_json::Value;
 use support::{TempDir, BASE_TOML};
 
@@ -127,4 +127,16 @@ fn check_warns_about_lights_that_light_nothing() {
         r.stderr
     );
     assert!(r.out().contains("flat.toml: ok"));
+}
+
+#[test]
+fn check_reads_a_scene_from_stdin() {
+    let dir = TempDir::new("check-stdin");
+    let r = ok(run_with(
+        dir.path(),
+        ["check", "-"],
+        Some(BASE_TOML.as_bytes()),
+    ));
+    assert!(r.out().starts_with("<stdin>: ok"), "{}", r.out());
+    assert!(r.out().contains("triangles  14"), "{}", r.out());
 }
