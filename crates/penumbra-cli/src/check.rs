@@ -70,9 +70,14 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
         ),
         format!("  triangles  {}", s.triangles),
         format!(
-            "  lights     {} ({} light samples per shading point)",
+            "  lights     {} ({} light sample{} per shading point)",
             s.lights,
-            light_samples(world, None)
+            light_samples(world, None),
+            if light_samples(world, None) == 1 {
+                ""
+            } else {
+                "s"
+            }
         ),
         format!("  materials  {}", s.materials),
         format!("  textures   {}", s.textures),

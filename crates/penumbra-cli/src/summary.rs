@@ -50,11 +50,13 @@ impl Report<'_> {
             )
         };
         let world_stats = self.world.stats();
+        let samples = light_samples(self.world, settings.light_samples);
         format!(
-            "penumbra: {size}, {} spp {}, {} light samples, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {:.2} Mrays/s, {} thread{} -> {}",
+            "penumbra: {size}, {} spp {}, {} light sample{}, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {:.2} Mrays/s, {} thread{} -> {}",
             settings.spp,
             settings.sampler.name(),
-            light_samples(self.world, settings.light_samples),
+            samples,
+            if samples == 1 { "" } else { "s" },
             world_stats.triangles,
             self.load_time.as_secs_f64(),
             world_stats.bvh_build_time.as_secs_f64(),

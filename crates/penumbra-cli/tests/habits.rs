@@ -30,7 +30,7 @@ fn quick_is_a_quarter_size_one_sample_preview() {
     let dir = scene_dir("quick");
     let r = ok(render(&dir, &["--quick", "-o", "quick.png"]));
     assert!(
-        r.stderr.contains("16x12, 1 spp center, 1 light samples"),
+        r.stderr.contains("16x12, 1 spp center, 1 light sample, "),
         "{}",
         r.stderr
     );
