@@ -331,4 +331,33 @@ mod tests {
         assert_eq!(OutputFormat::from_path(Path::new("a.bmp")), None);
         assert_eq!(OutputFormat::from_path(Path::new("a")), None);
     }
+
+    #[test]
+    fn encoded_bytes_are_the_bytes_written() {
+        let film = Film {
+            width: 3,
+            height: 2,
+            pixels: (0..6)
+                .map(|i| crate::math::Rgb::new(i as f32 / 5.0, 0.5, 2.0))
+                .collect(),
+        };
+        let dir = std::env::temp_dir().join(format!("penumbra-encode-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, format) in [
+            ("a.png", OutputFormat::Png),
+            ("a.pfm", OutputFormat::Pfm),
+            ("a.exr", OutputFormat::Exr),
+            ("a.jpg", OutputFormat::Jpeg),
+        ] {
+            let path = dir.join(name);
+            write_image(&film, &path, None).unwrap();
+            let written = std::fs::read(&path).unwrap();
+            assert_eq!(
+                encode_image(&film, format, None).unwrap(),
+                written,
+                "{name}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
