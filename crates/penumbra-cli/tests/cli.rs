@@ -619,14 +619,25 @@ fn light_samples_out_of_range() {
 }
 
 #[test]
-fn output_folder_does_not_exist() {
-    // Valid input, but the image cannot be written: a runtime failure, exit 1.
+fn missing_output_folders_are_made() {
     let sb = TempDir::new("out-folder");
     let scene = sb.write("s.toml", BASE);
-    let out = sb.join("nosuch/out.png");
+    let out = sb.join("new/deeper/out.png");
+    ok(render(&scene, &out, &["-q"]));
+    assert_eq!(decode(&out).dimensions(), (16, 12));
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_made_is_a_runtime_failure() {
+    // Valid input, but the image cannot be written (a file stands where the folder would
+    // go): a runtime failure, exit 1, before rendering.
+    let sb = TempDir::new("out-folder-blocked");
+    let scene = sb.write("s.toml", BASE);
+    sb.write("blocked", "a file");
+    let out = sb.join("blocked/out.png");
     let line = error_line(&render(&scene, &out, &[]), 1);
     assert!(line.contains(&out.display().to_string()), "{line}");
-    assert!(!sb.join("nosuch").exists());
+    assert!(line.contains("cannot make folder"), "{line}");
     sb.assert_no_output();
 }
 

@@ -77,11 +77,13 @@ pub(crate) fn render_error(e: RenderError) -> PyErr {
     }
 }
 
-/// An image error as Python sees it: an unknown extension is a `ValueError`, a failed write an
-/// `OSError`.
+/// An image error as Python sees it: an unknown extension or an image that cannot be encoded is
+/// a `ValueError`, a failed write an `OSError`.
 pub(crate) fn image_error(e: ImageError) -> PyErr {
     match e {
-        ImageError::UnknownFormat { .. } => PyValueError::new_err(e.to_string()),
+        ImageError::UnknownFormat { .. } | ImageError::Encode { .. } => {
+            PyValueError::new_err(e.to_string())
+        }
         ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
     }
 }

@@ -2,7 +2,7 @@
 //! same folder, renamed into place), and decoding texture images to linear RGB.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Cursor, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -60,6 +60,12 @@ pub enum ImageError {
         /// The path.
         path: PathBuf,
     },
+    /// Encoding in memory failed.
+    #[error("cannot encode image: {message}")]
+    Encode {
+        /// The cause.
+        message: String,
+    },
     /// Writing failed.
     #[error("{}: cannot write image: {message}", path.display())]
     Write {
@@ -111,6 +117,17 @@ pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), I
     Ok(())
 }
 
+/// `film` encoded in `format`, as the bytes [`write_image`] would write (for a pipe, say).
+pub fn encode_image(
+    film: &Film,
+    format: OutputFormat,
+    gamma: Option<f32>,
+) -> Result<Vec<u8>, ImageError> {
+    let mut w = Cursor::new(Vec::new());
+    encode(film, &mut w, format, gamma).map_err(|message| ImageError::Encode { message })?;
+    Ok(w.into_inner())
+}
+
 fn write_to(
     film: &Film,
     path: &Path,
@@ -119,6 +136,17 @@ fn write_to(
 ) -> Result<(), String> {
     let file = File::create(path).map_err(|e| e.to_string())?;
     let mut w = BufWriter::new(file);
+    encode(film, &mut w, format, gamma)?;
+    let file = w.into_inner().map_err(|e| e.to_string())?;
+    file.sync_all().map_err(|e| e.to_string())
+}
+
+fn encode<W: Write + Seek>(
+    film: &Film,
+    mut w: W,
+    format: OutputFormat,
+    gamma: Option<f32>,
+) -> Result<(), String> {
     let (width, height) = (film.width, film.height);
     let err = |e: image::ImageError| e.to_string();
     match format {
@@ -152,8 +180,7 @@ fn write_to(
             }
         }
     }
-    let file = w.into_inner().map_err(|e| e.to_string())?;
-    file.sync_all().map_err(|e| e.to_string())
+    w.flush().map_err(|e| e.to_string())
 }
 
 /// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
@@ -300,5 +327,34 @@ mod tests {
         );
         assert_eq!(OutputFormat::from_path(Path::new("a.bmp")), None);
         assert_eq!(OutputFormat::from_path(Path::new("a")), None);
+    }
+
+    #[test]
+    fn encoded_bytes_are_the_bytes_written() {
+        let film = Film {
+            width: 3,
+            height: 2,
+            pixels: (0..6)
+                .map(|i| crate::math::Rgb::new(i as f32 / 5.0, 0.5, 2.0))
+                .collect(),
+        };
+        let dir = std::env::temp_dir().join(format!("penumbra-encode-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, format) in [
+            ("a.png", OutputFormat::Png),
+            ("a.pfm", OutputFormat::Pfm),
+            ("a.exr", OutputFormat::Exr),
+            ("a.jpg", OutputFormat::Jpeg),
+        ] {
+            let path = dir.join(name);
+            write_image(&film, &path, None).unwrap();
+            let written = std::fs::read(&path).unwrap();
+            assert_eq!(
+                encode_image(&film, format, None).unwrap(),
+                written,
+                "{name}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

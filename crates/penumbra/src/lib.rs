@@ -74,7 +74,7 @@ pub use accel::{intersect_brute_force, occluded_brute_force, Bvh};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
-pub use image_io::{encode_8bit, write_image, ImageError, OutputFormat};
+pub use image_io::{encode_8bit, encode_image, write_image, ImageError, OutputFormat};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
@@ -87,8 +87,8 @@ pub use render::{
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{
-    desc, escape_controls, AssetKind, ErrorKind, Location, Scene, SceneDesc, SceneError, SceneFile,
-    SceneFormat,
+    desc, escape_controls, inspect_obj, AssetKind, ErrorKind, Location, ObjInfo, Override,
+    OverrideError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, MAX_SCENE_BYTES,
 };
 pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};

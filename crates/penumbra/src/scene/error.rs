@@ -69,6 +69,9 @@ pub struct Location {
     pub column: Option<usize>,
     /// The key path, when the error is about a key.
     pub key: Option<String>,
+    /// The override (`KEY.PATH=VALUE`, see [`Override`](super::Override)) that set the value
+    /// the error is about, which is then not in the file: no line or column.
+    pub set_by: Option<String>,
 }
 
 /// `text` with every control character (newline, ESC, BEL, ...) written as a Rust escape
@@ -100,6 +103,9 @@ impl fmt::Display for Location {
         }
         if let Some(key) = &self.key {
             write!(f, ": {}", escape_controls(key))?;
+        }
+        if let Some(set) = &self.set_by {
+            write!(f, " (--set {})", escape_controls(set))?;
         }
         Ok(())
     }
@@ -158,8 +164,8 @@ pub enum SceneError {
     Invalid {
         /// What kind of mistake.
         kind: ErrorKind,
-        /// Where.
-        location: Location,
+        /// Where (boxed: errors stay small to return).
+        location: Box<Location>,
         /// What is wrong.
         message: String,
     },
@@ -177,7 +183,7 @@ impl SceneError {
     /// Where in the file, for errors about its contents.
     pub fn location(&self) -> Option<&Location> {
         match self {
-            SceneError::Invalid { location, .. } => Some(location),
+            SceneError::Invalid { location, .. } => Some(&**location),
             _ => None,
         }
     }

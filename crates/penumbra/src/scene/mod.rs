@@ -7,6 +7,7 @@ pub mod desc;
 mod error;
 mod locate;
 mod obj;
+mod overrides;
 mod parse;
 
 use std::path::{Path, PathBuf};
@@ -19,6 +20,8 @@ use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use obj::{inspect_obj, ObjInfo};
+pub use overrides::{Override, OverrideError};
 use parse::Source;
 
 /// Largest scene file read: 256 MiB of text, far beyond any hand-written or exported scene.
@@ -78,6 +81,16 @@ pub struct Scene {
 impl SceneFile {
     /// Reads and parses a `.toml` or `.json` scene file.
     pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
+        SceneFile::load_with(path, &[])
+    }
+
+    /// Reads and parses a scene file with `overrides` applied in order (see [`Override`]):
+    /// an overridden value is checked like one in the file, and errors about it name the
+    /// override.
+    pub fn load_with(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+    ) -> Result<SceneFile, SceneError> {
         let path = path.as_ref();
         let format = SceneFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
             path: path.to_owned(),
@@ -90,7 +103,7 @@ impl SceneFile {
         let text = String::from_utf8(bytes)
             .map_err(|e| read(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
-        SceneFile::from_str(&text, format, path, base_dir)
+        SceneFile::from_str_with(&text, format, path, base_dir, overrides)
     }
 
     /// Parses scene text. `name` is used in messages; relative paths in the file are resolved
@@ -101,9 +114,20 @@ impl SceneFile {
         name: impl Into<PathBuf>,
         base_dir: impl Into<PathBuf>,
     ) -> Result<SceneFile, SceneError> {
-        let source = Source::new(name.into(), text.to_owned(), format);
+        SceneFile::from_str_with(text, format, name, base_dir, &[])
+    }
+
+    /// [`SceneFile::from_str`] with `overrides` applied in order (see [`Override`]).
+    pub fn from_str_with(
+        text: &str,
+        format: SceneFormat,
+        name: impl Into<PathBuf>,
+        base_dir: impl Into<PathBuf>,
+        overrides: &[Override],
+    ) -> Result<SceneFile, SceneError> {
+        let mut source = Source::new(name.into(), text.to_owned(), format);
         Ok(SceneFile {
-            desc: source.parse()?,
+            desc: source.parse(overrides)?,
             base_dir: base_dir.into(),
             source,
         })

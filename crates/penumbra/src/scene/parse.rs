@@ -3,8 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
+use serde::de::{self as serde_de, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+use toml::{Table, Value};
+
 use super::desc::SceneDesc;
 use super::error::{self, classify, ErrorKind, KeyPath, Location, SceneError, Segment};
+use super::overrides::{self, Override};
 use super::{locate, SceneFormat};
 
 /// A scene file's text, its syntax and the name messages use for it: all an error needs to
@@ -14,11 +19,19 @@ pub(super) struct Source {
     name: PathBuf,
     text: String,
     format: SceneFormat,
+    /// The overrides applied, each with the path it set: values at or under one of these
+    /// paths are not in the text, and their errors name the override instead.
+    set: Vec<(KeyPath, String)>,
 }
 
 impl Source {
     pub(super) fn new(name: PathBuf, text: String, format: SceneFormat) -> Self {
-        Self { name, text, format }
+        Self {
+            name,
+            text,
+            format,
+            set: Vec::new(),
+        }
     }
 
     /// The name used in messages.
@@ -26,7 +39,44 @@ impl Source {
         &self.name
     }
 
-    pub(super) fn parse(&self) -> Result<SceneDesc, SceneError> {
+    /// The description: the text as written, or with `overrides` applied in order.
+    pub(super) fn parse(&mut self, overrides: &[Override]) -> Result<SceneDesc, SceneError> {
+        if overrides.is_empty() {
+            return self.parse_text();
+        }
+        let mut table = self.tree()?;
+        for o in overrides {
+            let path = overrides::apply(&mut table, o).map_err(|(path, message)| {
+                self.override_error(ErrorKind::BadValue, &path, o.text(), &message)
+            })?;
+            self.set.push((path, o.text().to_owned()));
+        }
+        serde_path_to_error::deserialize(Value::Table(table)).map_err(|e| {
+            let path = convert_path(e.path());
+            let message = e.inner().message();
+            let offset = locate::locate(&self.text, self.format, &path);
+            self.error_at_offset(classify(message), offset, Some(&path), message)
+        })
+    }
+
+    /// The file as a value tree (tables keep the file's order) for overrides to change.
+    fn tree(&self) -> Result<Table, SceneError> {
+        match self.format {
+            SceneFormat::Toml => self.text.parse::<Table>().map_err(|e| {
+                let offset = e.span().map(|s| s.start);
+                self.error_at_offset(ErrorKind::Syntax, offset, None, e.message())
+            }),
+            SceneFormat::Json => {
+                let mut de = serde_json::Deserializer::from_str(&self.text);
+                let root: JsonTable = serde_path_to_error::deserialize(&mut de)
+                    .map_err(|e| self.json_error(Some(convert_path(e.path())), e.inner()))?;
+                de.end().map_err(|e| self.json_error(None, &e))?;
+                Ok(root.0)
+            }
+        }
+    }
+
+    fn parse_text(&self) -> Result<SceneDesc, SceneError> {
         match self.format {
             SceneFormat::Toml => {
                 let de = toml::Deserializer::parse(&self.text).map_err(|e| {
@@ -89,6 +139,11 @@ impl Source {
         path: Option<&KeyPath>,
         message: &str,
     ) -> SceneError {
+        if let Some(path) = path {
+            if let Some(set) = overrides::setter(&self.set, path) {
+                return self.override_error(classify_kind(kind, message), path, set, message);
+            }
+        }
         let (line, column) = match offset {
             Some(o) => {
                 let (l, c) = error::line_col(&self.text, o);
@@ -98,12 +153,34 @@ impl Source {
         };
         SceneError::Invalid {
             kind,
-            location: Location {
+            location: Box::new(Location {
                 file: self.name.clone(),
                 line,
                 column,
                 key: path.filter(|p| !p.is_empty()).map(|p| p.to_string()),
-            },
+                set_by: None,
+            }),
+            message: plain_type_names(message.trim()),
+        }
+    }
+
+    /// An error about a value that the override `set` put at (or above) `path`.
+    fn override_error(
+        &self,
+        kind: ErrorKind,
+        path: &KeyPath,
+        set: &str,
+        message: &str,
+    ) -> SceneError {
+        SceneError::Invalid {
+            kind,
+            location: Box::new(Location {
+                file: self.name.clone(),
+                line: None,
+                column: None,
+                key: Some(path.to_string()),
+                set_by: Some(set.to_owned()),
+            }),
             message: plain_type_names(message.trim()),
         }
     }
@@ -117,6 +194,90 @@ impl Source {
     ) -> SceneError {
         let offset = locate::locate(&self.text, self.format, path);
         self.error_at_offset(kind, offset, Some(path), &message.into())
+    }
+}
+
+/// The kind an error keeps when it is about an override: a syntax error inside the override's
+/// value is a bad value of the scene, not a mistake in the file's text.
+fn classify_kind(kind: ErrorKind, message: &str) -> ErrorKind {
+    match kind {
+        ErrorKind::Syntax => classify(message),
+        kind => kind,
+    }
+}
+
+/// A JSON object read into a TOML table for overrides: keys keep the file's order, a `null`
+/// member is left out (as an absent optional key, which is what `null` means in the file), a
+/// duplicate key is an error as it is when the file is read directly.
+struct JsonTable(Table);
+
+/// A JSON value as TOML; `None` for `null`.
+struct JsonValue(Option<Value>);
+
+impl<'de> Deserialize<'de> for JsonTable {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match JsonValue::deserialize(d)?.0 {
+            Some(Value::Table(t)) => Ok(JsonTable(t)),
+            _ => Err(serde_de::Error::custom("a scene file is one JSON object")),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for JsonValue {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(JsonVisitor)
+    }
+}
+
+struct JsonVisitor;
+
+impl<'de> Visitor<'de> for JsonVisitor {
+    type Value = JsonValue;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_unit<E>(self) -> Result<JsonValue, E> {
+        Ok(JsonValue(None))
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<JsonValue, E> {
+        Ok(JsonValue(Some(Value::Boolean(v))))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<JsonValue, E> {
+        Ok(JsonValue(Some(Value::Integer(v))))
+    }
+    fn visit_u64<E: serde_de::Error>(self, v: u64) -> Result<JsonValue, E> {
+        // TOML's integers are 64-bit signed; no scene key takes a larger one with overrides.
+        i64::try_from(v)
+            .map(|v| JsonValue(Some(Value::Integer(v))))
+            .map_err(|_| E::custom(format!("{v} is out of range (at most {})", i64::MAX)))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<JsonValue, E> {
+        Ok(JsonValue(Some(Value::Float(v))))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<JsonValue, E> {
+        Ok(JsonValue(Some(Value::String(v.to_owned()))))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<JsonValue, A::Error> {
+        let mut out = Vec::new();
+        while let Some(JsonValue(v)) = seq.next_element()? {
+            out.push(v.ok_or_else(|| {
+                serde_de::Error::invalid_type(serde_de::Unexpected::Unit, &"a value")
+            })?);
+        }
+        Ok(JsonValue(Some(Value::Array(out))))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<JsonValue, A::Error> {
+        let mut out = Table::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                return Err(serde_de::Error::custom(format!("duplicate key `{key}`")));
+            }
+            if let JsonValue(Some(v)) = map.next_value()? {
+                out.insert(key, v);
+            }
+        }
+        Ok(JsonValue(Some(Value::Table(out))))
     }
 }
 

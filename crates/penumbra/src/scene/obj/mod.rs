@@ -27,6 +27,7 @@
 //!   CRLF line endings, tabs, a UTF-8 byte-order mark and bytes that are not UTF-8 are fine.
 
 mod chunk;
+mod info;
 mod lines;
 mod mtl;
 #[cfg(test)]
@@ -43,6 +44,7 @@ use crate::files::read_bounded;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
+pub use info::{inspect_obj, ObjInfo};
 use lines::decode;
 use mtl::{resolve, Library};
 

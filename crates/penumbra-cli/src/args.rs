@@ -1,0 +1,184 @@
+//! The command line's grammar: subcommands, flags and the parsers of their values. Nothing
+//! here loads or renders.
+
+use std::path::PathBuf;
+
+use clap::{ArgAction, Parser, Subcommand, ValueEnum};
+use penumbra::{Override, PixelBounds};
+
+#[derive(Parser)]
+#[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
+    #[command(version)]
+    Render(RenderArgs),
+    /// Validate a scene file (or a bare .obj mesh) and print a summary.
+    #[command(version)]
+    Check(CheckArgs),
+}
+
+/// `penumbra check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// The scene file (.toml or .json; - reads standard input), or a Wavefront .obj mesh.
+    pub scene: PathBuf,
+    /// Override a scene key: KEY.PATH=VALUE (repeatable).
+    #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
+    pub set: Vec<Override>,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SamplerArg {
+    Center,
+    Grid,
+    Rgss,
+    Jittered,
+}
+
+/// `penumbra render`.
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// The scene file (.toml or .json). - reads it from standard input (TOML, or JSON when it
+    /// starts with `{`), with relative paths in it relative to the current folder.
+    pub scene: PathBuf,
+    /// Output image; the extension picks the format; - writes to standard output (needs
+    /// --format). {camera}, {scene}, {spp} and {seed} are replaced; missing folders are made.
+    /// Default: film.output, else <scene stem>.png (<scene stem>_{camera}.png for several
+    /// cameras) next to the scene.
+    #[arg(short, long, visible_alias = "outfile", value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Image format: required with -o -, else it must agree with the extension.
+    #[arg(long, value_enum, value_name = "F")]
+    pub format: Option<FormatArg>,
+    /// Override a scene key, as if the file said so: KEY.PATH=VALUE, such as film.width=640,
+    /// render.sampler=rgss or objects[0].material=red. Repeatable; the VALUE is read as TOML,
+    /// else taken as a string.
+    #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
+    pub set: Vec<Override>,
+    /// Film width in pixels.
+    #[arg(long, value_name = "W")]
+    pub width: Option<u32>,
+    /// Film height in pixels.
+    #[arg(long, value_name = "H")]
+    pub height: Option<u32>,
+    /// Pixel sampler (center means 1 sample unless --spp is given).
+    #[arg(long, value_enum, value_name = "S")]
+    pub sampler: Option<SamplerArg>,
+    /// Samples per pixel, a perfect square.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// N for every area light (N×N samples), overriding the scene's values.
+    #[arg(long, value_name = "N")]
+    pub light_samples: Option<u32>,
+    /// The camera(s) to render: a name, a comma list, `all`, or name patterns with * and ?
+    /// (several cameras render one after another from one loaded scene; -o then needs
+    /// {camera}).
+    #[arg(long, value_name = "NAMES")]
+    pub camera: Option<String>,
+    /// Worker threads (0: all cores).
+    #[arg(
+        short,
+        long,
+        visible_alias = "nthreads",
+        value_name = "N",
+        default_value_t = 0
+    )]
+    pub threads: usize,
+    /// Seed for every random choice.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+    /// Render only the pixels [x0, x1) × [y0, y1) of the full film.
+    // Hyphen values are taken so that "-1,..." is reported as a bad region, not a bad flag.
+    #[arg(
+        long,
+        value_name = "x0,x1,y0,y1",
+        value_parser = parse_bounds,
+        allow_hyphen_values = true
+    )]
+    pub pixelbounds: Option<PixelBounds>,
+    /// Render only the part [x0, x1) × [y0, y1) of the film given as fractions in [0, 1] (y
+    /// down), as pbrt: pixels ceil(width·x0) to ceil(width·x1), likewise in y.
+    #[arg(
+        long,
+        value_name = "x0,x1,y0,y1",
+        value_parser = parse_crop,
+        allow_hyphen_values = true,
+        conflicts_with = "pixelbounds"
+    )]
+    pub cropwindow: Option<CropWindow>,
+    /// A fast preview (pbrt's --quick): a quarter of the width and height, center sampling
+    /// with 1 sample per pixel, 1 light sample per area light. Explicit --sampler, --spp and
+    /// --light-samples still apply.
+    #[arg(long)]
+    pub quick: bool,
+    /// Print the summary as one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar and no summary on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Output formats for --format.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    Png,
+    #[value(alias = "jpeg")]
+    Jpg,
+    Exr,
+    Pfm,
+}
+
+/// A crop window in fractions of the film: [x0, x1) × [y0, y1), y down.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CropWindow {
+    pub x0: f32,
+    pub x1: f32,
+    pub y0: f32,
+    pub y1: f32,
+}
+
+fn parse_crop(s: &str) -> Result<CropWindow, String> {
+    let expected = "expected four numbers x0,x1,y0,y1 in [0, 1]";
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| expected.to_owned())?;
+    match v[..] {
+        [x0, x1, y0, y1] if v.iter().all(|c| (0.0..=1.0).contains(c)) => {
+            if x0 < x1 && y0 < y1 {
+                Ok(CropWindow { x0, x1, y0, y1 })
+            } else {
+                Err("the window is empty (need x0 < x1 and y0 < y1)".to_owned())
+            }
+        }
+        _ => Err(expected.to_owned()),
+    }
+}
+
+fn parse_override(s: &str) -> Result<Override, String> {
+    Override::parse(s).map_err(|e| e.to_string())
+}
+
+fn parse_bounds(s: &str) -> Result<PixelBounds, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| "expected four non-negative integers x0,x1,y0,y1".to_owned())?;
+    match v[..] {
+        [x0, x1, y0, y1] if x0 < x1 && y0 < y1 => Ok(PixelBounds { x0, x1, y0, y1 }),
+        [_, _, _, _] => Err("the region is empty (need x0 < x1 and y0 < y1)".to_owned()),
+        _ => Err("expected four non-negative integers x0,x1,y0,y1".to_owned()),
+    }
+}

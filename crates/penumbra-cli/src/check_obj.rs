@@ -1,0 +1,75 @@
+//! `penumbra check model.obj`: a Wavefront OBJ on its own, to place it in a scene: triangles,
+//! bounds (in the file's own units and axes), materials and their textures, whether it has
+//! normals and uvs, and whether it is closed.
+
+use std::path::Path;
+
+use penumbra::inspect_obj;
+use serde_json::json;
+
+use crate::failure::{invalid, say, Failure};
+use crate::summary::{bounds_json, bounds_text};
+
+/// True for a path naming an OBJ file.
+pub fn is_obj(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+}
+
+pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
+    let info = inspect_obj(path)
+        .map_err(|e| invalid(format!("{}: cannot load mesh: {e}", path.display())))?;
+    let textures: Vec<String> = info
+        .materials
+        .iter()
+        .filter_map(|(_, t)| t.as_ref().map(|t| t.display().to_string()))
+        .collect();
+    let names: Vec<&str> = info.materials.iter().map(|(n, _)| n.as_str()).collect();
+    if json {
+        let summary = json!({
+            "mesh": path.display().to_string(),
+            "triangles": info.triangles,
+            "vertices": info.vertices,
+            "bounds": bounds_json(info.bounds),
+            "normals": info.normals,
+            "uvs": info.uvs,
+            "materials": names,
+            "textures": textures,
+            "closed": info.closed,
+        });
+        return say(&summary.to_string());
+    }
+    let yes_no = |b: bool| if b { "yes" } else { "no" };
+    let lines = [
+        format!("{}: ok", path.display()),
+        format!("  triangles  {}", info.triangles),
+        format!("  vertices   {}", info.vertices),
+        format!("  bounds     {}", bounds_text(info.bounds)),
+        format!(
+            "  normals    {}, uvs {}",
+            yes_no(info.normals),
+            yes_no(info.uvs)
+        ),
+        format!(
+            "  materials  {}{}",
+            names.len(),
+            if names.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", names.join(", "))
+            }
+        ),
+        format!(
+            "  textures   {}{}",
+            textures.len(),
+            if textures.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", textures.join(", "))
+            }
+        ),
+        format!("  closed     {}", yes_no(info.closed)),
+    ];
+    say(&lines.join("\n"))
+}

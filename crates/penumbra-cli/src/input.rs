@@ -1,0 +1,46 @@
+//! Where a scene comes from: a file, or standard input when the path is `-`.
+
+use std::io::Read;
+use std::path::Path;
+
+use penumbra::{Override, SceneFile, SceneFormat, MAX_SCENE_BYTES};
+
+use crate::failure::{invalid, Failure};
+
+/// The name messages give a scene read from standard input.
+pub const STDIN_NAME: &str = "<stdin>";
+
+/// True when `path` means standard input.
+pub fn is_stdin(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// Reads and parses the scene at `path` (`-`: standard input) with `set` applied.
+pub fn load(path: &Path, set: &[Override]) -> Result<SceneFile, Failure> {
+    if !is_stdin(path) {
+        return SceneFile::load_with(path, set).map_err(invalid);
+    }
+    let mut bytes = Vec::new();
+    std::io::stdin()
+        .lock()
+        .take(MAX_SCENE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| invalid(format!("{STDIN_NAME}: cannot read scene: {e}")))?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(invalid(format!(
+            "{STDIN_NAME}: cannot read scene: larger than {MAX_SCENE_BYTES} bytes"
+        )));
+    }
+    let text = String::from_utf8(bytes)
+        .map_err(|_| invalid(format!("{STDIN_NAME}: cannot read scene: not UTF-8 text")))?;
+    SceneFile::from_str_with(&text, format_of(&text), STDIN_NAME, "", set).map_err(invalid)
+}
+
+/// JSON when the text starts with `{` (which no TOML document does), else TOML.
+fn format_of(text: &str) -> SceneFormat {
+    if text.trim_start().starts_with('{') {
+        SceneFormat::Json
+    } else {
+        SceneFormat::Toml
+    }
+}

@@ -1,0 +1,220 @@
+//! Where an image goes: the output name (with `{camera}`, `{scene}`, `{spp}` and `{seed}`
+//! replaced), its format, its folder (made when missing), or standard output for `-o -`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use penumbra::{encode_image, write_image, Film, OutputFormat};
+
+use crate::args::FormatArg;
+use crate::failure::{invalid, runtime, Failure};
+
+/// The values a pattern's fields take for one render.
+pub struct Fields<'a> {
+    /// The camera's name (path separators become `_`).
+    pub camera: &'a str,
+    /// The scene file's stem (`stdin` for standard input).
+    pub scene: &'a str,
+    pub spp: u32,
+    pub seed: u64,
+}
+
+/// The names a pattern may use.
+const FIELDS: &str = "{camera}, {scene}, {spp}, {seed}";
+
+/// `pattern` with each `{field}` replaced; `{{` and `}}` are literal braces.
+pub fn expand(pattern: &str, f: &Fields) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = pattern;
+    while let Some(i) = rest.find(['{', '}']) {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        if let Some(after) = tail.strip_prefix("{{").or_else(|| tail.strip_prefix("}}")) {
+            out.push_str(&tail[..1]);
+            rest = after;
+            continue;
+        }
+        if let Some(after) = tail.strip_prefix('}') {
+            out.push('}');
+            rest = after;
+            continue;
+        }
+        let end = tail
+            .find('}')
+            .ok_or_else(|| format!("an unclosed `{{` in `{pattern}` (write {{{{ for a brace)"))?;
+        let value = match &tail[1..end] {
+            "camera" => f.camera.replace(['/', '\\'], "_"),
+            "scene" => f.scene.to_owned(),
+            "spp" => f.spp.to_string(),
+            "seed" => f.seed.to_string(),
+            other => {
+                return Err(format!(
+                    "unknown field `{{{other}}}` in `{pattern}` (known: {FIELDS})"
+                ))
+            }
+        };
+        out.push_str(&value);
+        rest = &tail[end + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+/// True when `pattern` names the camera, so that several cameras get several files.
+pub fn names_camera(pattern: &str) -> bool {
+    pattern.replace("{{", "").contains("{camera}")
+}
+
+/// An image's destination.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Target {
+    File(PathBuf),
+    Stdout,
+}
+
+/// A resolved output: where, and in which format.
+#[derive(Clone, Debug)]
+pub struct Output {
+    pub target: Target,
+    pub format: OutputFormat,
+}
+
+/// The format `--format` names.
+pub fn format_of(arg: FormatArg) -> OutputFormat {
+    match arg {
+        FormatArg::Png => OutputFormat::Png,
+        FormatArg::Jpg => OutputFormat::Jpeg,
+        FormatArg::Exr => OutputFormat::Exr,
+        FormatArg::Pfm => OutputFormat::Pfm,
+    }
+}
+
+impl Output {
+    /// The output of the expanded name `path` (`-`: standard output) and `--format`.
+    pub fn new(path: PathBuf, format: Option<FormatArg>) -> Result<Output, Failure> {
+        if path.as_os_str() == "-" {
+            let format = format.ok_or_else(|| {
+                invalid("-o -: give the image format with --format png|jpg|exr|pfm")
+            })?;
+            return Ok(Output {
+                target: Target::Stdout,
+                format: format_of(format),
+            });
+        }
+        let name = path.display().to_string();
+        let Some(by_name) = OutputFormat::from_path(&path) else {
+            return Err(invalid(format!(
+                "{name}: unknown image format (use .png, .jpg, .exr or .pfm)"
+            )));
+        };
+        if let Some(f) = format.map(format_of).filter(|&f| f != by_name) {
+            return Err(invalid(format!(
+                "--format: {f:?} disagrees with the name {name} ({by_name:?})"
+            )));
+        }
+        Ok(Output {
+            target: Target::File(path),
+            format: by_name,
+        })
+    }
+
+    /// How summaries name it.
+    pub fn display(&self) -> String {
+        match &self.target {
+            Target::File(p) => p.display().to_string(),
+            Target::Stdout => "-".to_owned(),
+        }
+    }
+
+    /// Refuses an image the format cannot hold, before the work of rendering it.
+    pub fn check_size(&self, width: u32, height: u32) -> Result<(), Failure> {
+        match self.format.max_dimension() {
+            Some(max) if width > max || height > max => Err(invalid(format!(
+                "{}: a {width}x{height} image is too large for this format (at most {max} pixels wide and high)",
+                self.display()
+            ))),
+            _ => Ok(()),
+        }
+    }
+
+    /// Makes the file's folder (and its parents) when missing.
+    pub fn make_folder(&self) -> Result<(), Failure> {
+        let Target::File(path) = &self.target else {
+            return Ok(());
+        };
+        match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            Some(dir) if !dir.is_dir() => std::fs::create_dir_all(dir).map_err(|e| {
+                runtime(format!(
+                    "{}: cannot write image: cannot make folder {}: {e}",
+                    path.display(),
+                    dir.display()
+                ))
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Writes the image: a file appears complete or not at all; standard output gets the
+    /// encoded bytes at once.
+    pub fn write(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
+        match &self.target {
+            Target::File(path) => write_image(film, path, gamma).map_err(runtime),
+            Target::Stdout => {
+                let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
+                let mut out = std::io::stdout().lock();
+                out.write_all(&bytes)
+                    .and_then(|()| out.flush())
+                    .map_err(|e| runtime(format!("cannot write to standard output: {e}")))
+            }
+        }
+    }
+}
+
+/// The scene's stem for `{scene}` and default names.
+pub fn scene_stem(scene: &Path, stdin: bool) -> String {
+    if stdin {
+        return "stdin".to_owned();
+    }
+    scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fields() -> Fields<'static> {
+        Fields {
+            camera: "side/left",
+            scene: "cornell",
+            spp: 16,
+            seed: 7,
+        }
+    }
+
+    #[test]
+    fn patterns_expand_their_fields() {
+        let e = |p: &str| expand(p, &fields());
+        assert_eq!(
+            e("out/{scene}_{camera}.png").unwrap(),
+            "out/cornell_side_left.png"
+        );
+        assert_eq!(e("{spp}spp-{seed}.exr").unwrap(), "16spp-7.exr");
+        assert_eq!(e("plain.png").unwrap(), "plain.png");
+        assert_eq!(e("{{camera}}.png").unwrap(), "{camera}.png");
+        assert_eq!(e("a}b.png").unwrap(), "a}b.png");
+        assert!(e("{frame}.png")
+            .unwrap_err()
+            .contains("unknown field `{frame}`"));
+        assert!(e("{camera.png").unwrap_err().contains("unclosed"));
+    }
+
+    #[test]
+    fn only_a_real_camera_field_names_the_camera() {
+        assert!(names_camera("out/{camera}.png"));
+        assert!(!names_camera("out/{{camera}}.png"));
+        assert!(!names_camera("out/x.png"));
+    }
+}

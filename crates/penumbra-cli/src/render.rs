@@ -1,0 +1,231 @@
+//! `penumbra render`: load and build the scene once, plan one render per camera (settings,
+//! region and output, all checked before any work), then render, write and report each.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use penumbra::{
+    PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile, View, World,
+    MAX_THREADS,
+};
+
+use crate::args::RenderArgs;
+use crate::cameras;
+use crate::failure::{invalid, note, runtime, say, Failure};
+use crate::input::{self, is_stdin};
+use crate::output::{expand, names_camera, scene_stem, Fields, Output};
+use crate::settings::{flag_of, region, settings};
+use crate::signals::{interrupted, Interrupt};
+use crate::summary::Report;
+
+/// One render of the run.
+struct Job {
+    settings: RenderSettings,
+    region: Option<PixelBounds>,
+    output: Output,
+}
+
+pub fn run(args: &RenderArgs) -> Result<(), Failure> {
+    let interrupt = Interrupt::install();
+    if args.threads > MAX_THREADS {
+        return Err(invalid(format!(
+            "--threads: at most {MAX_THREADS} worker threads, not {}",
+            args.threads
+        )));
+    }
+    if args.json && args.output.as_deref() == Some(Path::new("-")) {
+        return Err(invalid(
+            "--json: standard output carries the image with -o -; drop --json",
+        ));
+    }
+    let load_start = Instant::now();
+    let file = input::load(&args.scene, &args.set)?;
+    let file_time = load_start.elapsed();
+    let scene = file.build(args.threads).map_err(invalid)?;
+    // The scene file, then its meshes and textures: everything of loading but the BVH.
+    let parse_time = file_time + scene.load_time;
+    let jobs = plan(args, &file, &scene)?;
+    let load_time = load_start.elapsed();
+    interrupt.check()?;
+
+    for job in &jobs {
+        job.output.make_folder()?;
+        let options = RenderOptions {
+            threads: args.threads,
+            region: job.region,
+            cancel: Some(interrupt.cancel_flag()),
+            progress: None,
+        };
+        interrupt.start_rendering();
+        let (film, stats) = with_progress(args.quiet, |progress| {
+            let options = RenderOptions {
+                progress: Some(progress),
+                ..options
+            };
+            penumbra::render(&scene.world, &job.settings, &options)
+        })
+        .map_err(|e| match e {
+            RenderError::Cancelled => interrupted(),
+            e @ RenderError::BadRegion { .. } => invalid(format!("{}: {e}", region_flag(args))),
+            RenderError::Settings(e) => invalid(format!("{}: {e}", flag_of(&e))),
+            e => runtime(e),
+        })?;
+        interrupt.check()?;
+        job.output.write(&film, scene.gamma)?;
+
+        let report = Report {
+            scene: &scene_name(&args.scene),
+            camera: camera_name(&job.settings.view, &scene.world),
+            output: &job.output.display(),
+            film: &film,
+            settings: &job.settings,
+            world: &scene.world,
+            stats: &stats,
+            load_time,
+            parse_time,
+        };
+        if !args.quiet {
+            note(&report.line());
+        }
+        if args.json {
+            say(&report.json().to_string())?;
+        }
+    }
+    Ok(())
+}
+
+/// Every render of the run, each checked (settings, output name and format, image size)
+/// before anything is rendered or written.
+fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, Failure> {
+    let views = cameras::select(args.camera.as_deref(), &scene.world)?;
+    let several = views.len() > 1;
+    let (pattern, from) = output_pattern(args, scene, several)?;
+    if several && pattern.to_str().is_none_or(|p| !names_camera(p)) {
+        return Err(invalid(format!(
+            "{from}: {} cameras need {{camera}} in the output name, such as out/{{scene}}_{{camera}}.png",
+            views.len()
+        )));
+    }
+    let stem = scene_stem(&args.scene, is_stdin(&args.scene));
+    let mut jobs: Vec<Job> = Vec::new();
+    for view in &views {
+        let settings = settings(args, file, scene, view.as_deref());
+        // Settings from flags are checked before anything is written or rendered.
+        settings
+            .check(&scene.world)
+            .map_err(|e| invalid(format!("{}: {e}", flag_of(&e))))?;
+        let name = match pattern.to_str() {
+            Some(p) => {
+                let fields = Fields {
+                    camera: camera_name(&settings.view, &scene.world),
+                    scene: &stem,
+                    spp: settings.spp,
+                    seed: settings.seed,
+                };
+                PathBuf::from(expand(p, &fields).map_err(|e| invalid(format!("{from}: {e}")))?)
+            }
+            // Not UTF-8: no fields to expand.
+            None => pattern.clone(),
+        };
+        let output = Output::new(name, args.format)?;
+        let region = region(args, &settings);
+        let (w, h) = match region {
+            Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),
+            None => (settings.width, settings.height),
+        };
+        output.check_size(w, h)?;
+        // Camera names that differ only in a path separator (made `_`) meet here.
+        if let Some(other) = jobs.iter().find(|j| j.output.target == output.target) {
+            return Err(invalid(format!(
+                "{from}: two renders would write {}",
+                other.output.display()
+            )));
+        }
+        jobs.push(Job {
+            settings,
+            region,
+            output,
+        });
+    }
+    Ok(jobs)
+}
+
+/// The output name before expansion and the flag or key it comes from: `-o`, else
+/// `film.output`, else `<scene stem>.png` beside the scene (`<scene stem>_{camera}.png` for
+/// several cameras).
+fn output_pattern(
+    args: &RenderArgs,
+    scene: &Scene,
+    several: bool,
+) -> Result<(PathBuf, &'static str), Failure> {
+    if let Some(o) = &args.output {
+        return Ok((o.clone(), "-o"));
+    }
+    if let Some(o) = &scene.output {
+        return Ok((o.clone(), "film.output"));
+    }
+    if is_stdin(&args.scene) {
+        return Err(invalid(
+            "-o: a scene read from standard input needs -o (or film.output)",
+        ));
+    }
+    let stem = args.scene.file_stem().unwrap_or_default();
+    let mut name = stem.to_owned();
+    name.push(if several { "_{camera}.png" } else { ".png" });
+    Ok((args.scene.with_file_name(name), "-o"))
+}
+
+/// The camera's name for `{camera}`.
+fn camera_name<'a>(view: &'a View, world: &'a World) -> &'a str {
+    match view {
+        View::Named(n) => n,
+        View::First => world.cameras().first().map_or("camera", |(n, _)| n),
+        View::Camera(_) => "camera",
+    }
+}
+
+/// The flag that chose the region.
+fn region_flag(args: &RenderArgs) -> &'static str {
+    if args.cropwindow.is_some() {
+        "--cropwindow"
+    } else {
+        "--pixelbounds"
+    }
+}
+
+/// How summaries name the scene.
+fn scene_name(scene: &Path) -> PathBuf {
+    if is_stdin(scene) {
+        PathBuf::from(input::STDIN_NAME)
+    } else {
+        scene.to_owned()
+    }
+}
+
+/// Runs `work` with a progress bar on stderr (none with `quiet` or when stderr is not a
+/// terminal).
+fn with_progress<T>(quiet: bool, work: impl FnOnce(&(dyn Fn(u64, u64) + Sync)) -> T) -> T {
+    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let bar = ProgressBar::new(100);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:40.cyan/blue} {percent:>3}% {elapsed_precise} eta {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let progress = |done: u64, total: u64| {
+        if let Some(bar) = &bar {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+    };
+    let result = work(&progress);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    result
+}

@@ -1,0 +1,112 @@
+//! The render flags applied to the scene file's settings, and the flag each settings error is
+//! about.
+
+use penumbra::{PixelBounds, RenderSettings, Sampler, Scene, SceneFile, SettingsError, View};
+
+use crate::args::{CropWindow, RenderArgs, SamplerArg};
+
+/// The scene file's settings with the command line's flags applied, looking through `camera`
+/// (`None`: the file's default).
+///
+/// In order: the file (with `--set`), `--width`/`--height`, `--quick` (a quarter of each
+/// side, as pbrt: `max(1, side / 4)`; center sampling, 1 spp, 1 light sample per area light),
+/// then `--sampler`, `--spp`, `--light-samples` and `--seed`.
+pub fn settings(
+    args: &RenderArgs,
+    file: &SceneFile,
+    scene: &Scene,
+    camera: Option<&str>,
+) -> RenderSettings {
+    let mut s = scene.settings.clone();
+    if let Some(w) = args.width {
+        s.width = w;
+    }
+    if let Some(h) = args.height {
+        s.height = h;
+    }
+    if args.quick {
+        s.width = (s.width / 4).max(1);
+        s.height = (s.height / 4).max(1);
+        s.sampler = Sampler::Center;
+        s.spp = 1;
+        s.light_samples = Some(1);
+    }
+    if let Some(sampler) = args.sampler {
+        s.sampler = match sampler {
+            SamplerArg::Center => Sampler::Center,
+            SamplerArg::Grid => Sampler::Grid,
+            SamplerArg::Rgss => Sampler::Rgss,
+            SamplerArg::Jittered => Sampler::Jittered,
+        };
+        // A sampler without --spp takes its own default count: 1 for center, else the
+        // file's `samples`, else 4.
+        s.spp = match (s.sampler, file.desc.render.samples) {
+            (Sampler::Center, _) => 1,
+            (_, Some(n)) => u32::try_from(n).unwrap_or(u32::MAX),
+            (_, None) => 4,
+        };
+    }
+    if let Some(spp) = args.spp {
+        s.spp = spp;
+    }
+    if args.light_samples.is_some() {
+        s.light_samples = args.light_samples;
+    }
+    if let Some(seed) = args.seed {
+        s.seed = seed;
+    }
+    if let Some(name) = camera {
+        s.view = View::Named(name.to_owned());
+    }
+    s
+}
+
+/// The pixels to render: `--pixelbounds`, or `--cropwindow` over this film; `None`: all.
+pub fn region(args: &RenderArgs, s: &RenderSettings) -> Option<PixelBounds> {
+    args.pixelbounds
+        .or_else(|| args.cropwindow.map(|c| crop_bounds(c, s.width, s.height)))
+}
+
+/// pbrt-v4's mapping of a crop window to pixels: each bound is `ceil(resolution · fraction)`
+/// in single precision, so adjacent windows share no pixel and leave none out. The result
+/// may be empty; rendering then reports it as a bad region.
+pub fn crop_bounds(c: CropWindow, width: u32, height: u32) -> PixelBounds {
+    let at = |size: u32, f: f32| (size as f32 * f).ceil() as u32;
+    PixelBounds {
+        x0: at(width, c.x0),
+        x1: at(width, c.x1),
+        y0: at(height, c.y0),
+        y1: at(height, c.y1),
+    }
+}
+
+/// The flag a settings error is about, as the user typed it.
+pub fn flag_of(e: &SettingsError) -> &'static str {
+    match e {
+        SettingsError::Spp(_) | SettingsError::CenterSpp => "--spp",
+        SettingsError::LightSamples(_) => "--light-samples",
+        SettingsError::EmptyFilm { .. } | SettingsError::FilmTooLarge { .. } => "--width/--height",
+        SettingsError::UnknownCamera { .. } | SettingsError::NoCamera => "--camera",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crop_windows_round_up_like_pbrt() {
+        let c = |x0, x1, y0, y1| CropWindow { x0, x1, y0, y1 };
+        let b = crop_bounds(c(0.0, 1.0, 0.0, 1.0), 640, 480);
+        assert_eq!((b.x0, b.x1, b.y0, b.y1), (0, 640, 0, 480));
+        // 0.25·10 = 2.5 → 3; 0.5·10 = 5; 0.1·7 = 0.7 → 1; 0.9·7 = 6.3 → 7.
+        let b = crop_bounds(c(0.25, 0.5, 0.1, 0.9), 10, 7);
+        assert_eq!((b.x0, b.x1, b.y0, b.y1), (3, 5, 1, 7));
+        // Two halves tile the film exactly.
+        let (l, r) = (
+            crop_bounds(c(0.0, 0.5, 0.0, 1.0), 9, 9),
+            crop_bounds(c(0.5, 1.0, 0.0, 1.0), 9, 9),
+        );
+        assert_eq!((l.x1, r.x0, r.x1), (5, 5, 9));
+    }
+}

@@ -1,0 +1,142 @@
+//! `penumbra check`: per-object triangles and bounds, a bare OBJ summarized on its own, and
+//! warnings (stderr, exit 0) for area lights that cannot light anything.
+
+mod harness;
+#[path = "../../penumbra/tests/support/mod.rs"]
+mod support;
+
+use harness::{error_line, ok, run_in, run_with};
+use serde_json::Value;
+use support::{TempDir, BASE_TOML};
+
+fn json(r: &harness::Run) -> Value {
+    serde_json::from_slice(&r.stdout).unwrap_or_else(|e| panic!("{e}: {}", r.out()))
+}
+
+#[test]
+fn check_lists_each_object_with_its_triangles_and_bounds() {
+    let dir = TempDir::new("check-objects");
+    dir.write("s.toml", BASE_TOML);
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let v = json(&r);
+    let objects = v["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 2);
+    // The floor quad: corner [-3, -0.5, 3], u = [6, 0, 0], v = [0, 0, -6].
+    assert_eq!(objects[0]["type"], "quad");
+    assert_eq!(objects[0]["triangles"], 2);
+    assert_eq!(
+        objects[0]["bounds"]["min"],
+        serde_json::json!([-3.0, -0.5, -3.0])
+    );
+    assert_eq!(
+        objects[0]["bounds"]["max"],
+        serde_json::json!([3.0, -0.5, 3.0])
+    );
+    // The unit cube at the origin.
+    assert_eq!(objects[1]["key"], "objects[1]");
+    assert_eq!(objects[1]["triangles"], 12);
+    assert_eq!(
+        objects[1]["bounds"]["min"],
+        serde_json::json!([-0.5, -0.5, -0.5])
+    );
+    assert_eq!(v["warnings"], serde_json::json!([]));
+    assert!(r.stderr.is_empty(), "{}", r.stderr);
+    let r = ok(run_in(dir.path(), ["check", "s.toml"]));
+    assert!(r.out().contains("objects    2"), "{}", r.out());
+    assert!(
+        r.out().lines().any(|l| l.contains("objects[1]")
+            && l.contains("cube")
+            && l.contains("12 triangles")
+            && l.contains("[-0.5000, -0.5000, -0.5000] to [0.5000, 0.5000, 0.5000]")),
+        "{}",
+        r.out()
+    );
+}
+
+const TETRA: &str = "mtllib t.mtl\nv 0 0 0\nv 2 0 0\nv 0 3 0\nv 0 0 4\nusemtl shiny\n\
+                     f 1 3 2\nf 1 2 4\nusemtl dull\nf 1 4 3\nf 2 3 4\n";
+const MTL: &str = "newmtl shiny\nKd 1 0 0\nmap_Kd wood.png\nnewmtl dull\nKd 0 1 0\n";
+
+#[test]
+fn check_summarizes_a_bare_obj() {
+    let dir = TempDir::new("check-obj");
+    dir.write("t.obj", TETRA);
+    dir.write("t.mtl", MTL);
+    let r = ok(run_in(dir.path(), ["check", "t.obj", "--json"]));
+    let v = json(&r);
+    assert_eq!(v["triangles"], 4);
+    assert_eq!(v["bounds"]["max"], serde_json::json!([2.0, 3.0, 4.0]));
+    assert_eq!(v["materials"], serde_json::json!(["shiny", "dull"]));
+    assert!(v["textures"][0].as_str().unwrap().ends_with("wood.png"));
+    assert_eq!(v["closed"], true);
+    // An open mesh: one face fewer.
+    dir.write("open.obj", "v 0 0 0\nv 2 0 0\nv 0 3 0\nf 1 2 3\n");
+    let r = ok(run_in(dir.path(), ["check", "open.obj"]));
+    assert!(r.out().contains("closed     no"), "{}", r.out());
+    assert!(r.out().contains("triangles  1"), "{}", r.out());
+    // A broken one is an input error naming the file.
+    dir.write("bad.obj", "v 0 0 0\nf 1 2 3\n");
+    let line = error_line(&run_in(dir.path(), ["check", "bad.obj"]), 2);
+    assert!(
+        line.contains("bad.obj") && line.contains("cannot load mesh"),
+        "{line}"
+    );
+}
+
+/// The base scene lit by one area light above the floor, under the physical model.
+fn with_area_light(u: &str, v: &str) -> String {
+    BASE_TOML.replace(
+        "[[lights]]\ntype = \"point\"\nposition = [0, 5, 5]\n",
+        &format!(
+            "[render]\nlight_model = \"physical\"\n\n[[lights]]\ntype = \"area\"\n\
+             center = [0, 3, 0]\nu = {u}\nv = {v}\n"
+        ),
+    )
+}
+
+#[test]
+fn check_warns_about_lights_that_light_nothing() {
+    let dir = TempDir::new("check-warn");
+    // u × v = [0, -1, 0]: facing down at the scene, no warning.
+    dir.write("down.toml", with_area_light("[1, 0, 0]", "[0, 0, 1]"));
+    let r = ok(run_in(dir.path(), ["check", "down.toml"]));
+    assert!(!r.stderr.contains("warning"), "{}", r.stderr);
+    // Swapped: facing up, away from everything.
+    dir.write("up.toml", with_area_light("[0, 0, 1]", "[1, 0, 0]"));
+    let r = ok(run_in(dir.path(), ["check", "up.toml", "--json"]));
+    assert!(
+        r.stderr
+            .starts_with("warning: up.toml: lights[0]: the physical area light faces away"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(json(&r)["warnings"].as_array().unwrap().len(), 1);
+    // Under the phong model an area light shines both ways: no warning.
+    dir.write(
+        "phong.toml",
+        with_area_light("[0, 0, 1]", "[1, 0, 0]").replace("physical", "phong"),
+    );
+    let r = ok(run_in(dir.path(), ["check", "phong.toml"]));
+    assert!(r.stderr.is_empty(), "{}", r.stderr);
+    // Zero area: parallel edges.
+    dir.write("flat.toml", with_area_light("[1, 0, 0]", "[2, 0, 0]"));
+    let r = ok(run_in(dir.path(), ["check", "flat.toml"]));
+    assert!(
+        r.stderr.contains("lights[0]: the area light has zero area"),
+        "{}",
+        r.stderr
+    );
+    assert!(r.out().contains("flat.toml: ok"));
+}
+
+#[test]
+fn check_reads_a_scene_from_stdin() {
+    let dir = TempDir::new("check-stdin");
+    let r = ok(run_with(
+        dir.path(),
+        ["check", "-"],
+        Some(BASE_TOML.as_bytes()),
+    ));
+    assert!(r.out().starts_with("<stdin>: ok"), "{}", r.out());
+    assert!(r.out().contains("triangles  14"), "{}", r.out());
+}

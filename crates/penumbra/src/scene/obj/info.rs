@@ -1,0 +1,106 @@
+//! What a Wavefront OBJ file holds, read on its own (no scene): its size, bounds, materials
+//! and textures, and whether it is closed. For `penumbra check model.obj`.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use crate::geometry::Mesh;
+use crate::math::Aabb;
+
+use super::load_obj;
+
+/// A summary of an OBJ file, in its own (object) space.
+#[derive(Clone, Debug)]
+pub struct ObjInfo {
+    /// Triangles after fan triangulation of its faces.
+    pub triangles: usize,
+    /// Distinct vertices (position, normal, uv triples) of the mesh.
+    pub vertices: usize,
+    /// Bounds of every vertex a triangle uses.
+    pub bounds: Aabb,
+    /// Whether it has vertex normals (`vn`) and texture coordinates (`vt`).
+    pub normals: bool,
+    /// See `normals`.
+    pub uvs: bool,
+    /// The materials of its MTL libraries, in order, each with its `map_Kd` texture.
+    pub materials: Vec<(String, Option<PathBuf>)>,
+    /// True when every edge is shared by exactly two triangles (vertices matched by position):
+    /// a closed surface, such as a watertight model.
+    pub closed: bool,
+}
+
+/// Reads the OBJ file at `path` (and its MTL libraries, not its textures) and summarizes it.
+/// The error says what is wrong, with the line.
+pub fn inspect_obj(path: &Path) -> Result<ObjInfo, String> {
+    let model = load_obj(path, None)?;
+    let mesh = &model.mesh;
+    let bounds = mesh
+        .indices
+        .iter()
+        .flatten()
+        .fold(Aabb::EMPTY, |b, &i| b.grow(mesh.positions[i as usize]));
+    Ok(ObjInfo {
+        triangles: mesh.indices.len(),
+        vertices: mesh.positions.len(),
+        bounds,
+        normals: !mesh.normals.is_empty(),
+        uvs: !mesh.uvs.is_empty(),
+        materials: model
+            .materials
+            .iter()
+            .map(|m| (m.name.clone(), m.diffuse_texture.clone()))
+            .collect(),
+        closed: is_closed(mesh),
+    })
+}
+
+/// Every edge shared by exactly two triangles, vertices compared by position (an OBJ splits a
+/// position into several vertices where normals or uvs differ).
+fn is_closed(mesh: &Mesh) -> bool {
+    if mesh.indices.is_empty() {
+        return false;
+    }
+    let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
+    let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    for tri in &mesh.indices {
+        for k in 0..3 {
+            let (a, b) = (key(tri[k]), key(tri[(k + 1) % 3]));
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    edges.values().all(|&n| n == 2)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    fn mesh(positions: &[[f32; 3]], indices: &[[u32; 3]]) -> Mesh {
+        Mesh {
+            positions: positions.iter().map(|&p| Vec3::from(p)).collect(),
+            indices: indices.to_vec(),
+            ..Mesh::default()
+        }
+    }
+
+    #[test]
+    fn a_tetrahedron_is_closed_and_a_triangle_is_not() {
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let tetra = mesh(&p, &[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        assert!(is_closed(&tetra));
+        assert!(!is_closed(&mesh(&p, &[[0, 1, 2]])));
+        assert!(!is_closed(&mesh(&p, &[])));
+        // The same position under two indices (split by uvs) still closes the surface.
+        let mut split = p.to_vec();
+        split.push([0.0, 0.0, 0.0]);
+        let tetra = mesh(&split, &[[4, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        assert!(is_closed(&tetra));
+    }
+}
