@@ -1,22 +1,24 @@
 //! The `penumbra` command: parse flags, load, build, render, write. The only place where errors
-//! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 130 interrupted.
+//! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 128 + the signal's
+//! number when a signal stopped it (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP; see `signals`).
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use penumbra::{
-    escape_controls, render, write_image, Light, OutputFormat, PixelBounds, RenderError,
-    RenderOptions, RenderSettings, Sampler, Scene, SceneFile, SettingsError, View, World,
-    MAX_THREADS,
+    escape_controls, render, write_image_unless, ImageError, Light, OutputFormat, PixelBounds,
+    RenderError, RenderOptions, RenderSettings, Sampler, Scene, SceneFile, SettingsError, View,
+    World, MAX_THREADS,
 };
 use serde_json::json;
+
+mod signals;
+use signals::Interrupt;
 
 #[derive(Parser)]
 #[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
@@ -238,26 +240,12 @@ fn light_samples(world: &World, n: Option<u32>) -> u64 {
 }
 
 fn run_render(args: RenderArgs) -> Result<(), Failure> {
-    // Ctrl-C while loading ends the process at once (nothing is written yet); while
-    // rendering it asks the renderer to stop, which then leaves no image either.
-    let cancel = Arc::new(AtomicBool::new(false));
-    let rendering = Arc::new(AtomicBool::new(false));
-    {
-        let (cancel, rendering) = (cancel.clone(), rendering.clone());
-        // If the handler cannot be installed, Ctrl-C keeps its default effect; the output is
-        // still never half-written since it is renamed into place only when complete.
-        let _ = ctrlc::set_handler(move || {
-            if rendering.load(Ordering::SeqCst) {
-                cancel.store(true, Ordering::SeqCst);
-            } else {
-                note("error: interrupted; no image written");
-                std::process::exit(130);
-            }
-        });
-    }
-    let interrupted = || Failure {
-        code: 130,
-        message: "interrupted; no image written".into(),
+    // A signal while loading ends the process at once (nothing is written yet); while
+    // rendering or writing it asks them to stop, which then leaves no image either.
+    let interrupt = Interrupt::install();
+    let interrupted = || {
+        let (code, message) = interrupt.report();
+        Failure { code, message }
     };
     if args.threads > MAX_THREADS {
         return Err(invalid(format!(
@@ -277,9 +265,6 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         .check(&scene.world)
         .map_err(|e| invalid(format!("{}: {e}", flag_of(&e))))?;
     let load_time = load_start.elapsed();
-    if cancel.load(Ordering::SeqCst) {
-        return Err(interrupted());
-    }
 
     let out = output_path(&args, &scene);
     let Some(format) = OutputFormat::from_path(&out) else {
@@ -331,10 +316,10 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let options = RenderOptions {
         threads: args.threads,
         region: args.pixelbounds,
-        cancel: Some(&cancel),
+        cancel: Some(interrupt.flag()),
         progress: Some(&progress),
     };
-    rendering.store(true, Ordering::SeqCst);
+    interrupt.defer();
     let result = render(&scene.world, &settings, &options);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
@@ -348,10 +333,11 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         Err(RenderError::Settings(e)) => return Err(invalid(format!("{}: {e}", flag_of(&e)))),
         Err(e) => return Err(runtime(e)),
     };
-    if cancel.load(Ordering::SeqCst) {
-        return Err(interrupted());
+    match write_image_unless(&film, &out, scene.gamma, interrupt.flag()) {
+        Ok(()) => {}
+        Err(ImageError::Cancelled) => return Err(interrupted()),
+        Err(e) => return Err(runtime(e)),
     }
-    write_image(&film, &out, scene.gamma).map_err(runtime)?;
 
     let spp = settings.spp;
     let world_stats = scene.world.stats();

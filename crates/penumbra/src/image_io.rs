@@ -2,9 +2,9 @@
 //! same folder, renamed into place), and decoding texture images to linear RGB.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
@@ -68,6 +68,9 @@ pub enum ImageError {
         /// The cause.
         message: String,
     },
+    /// The cancel flag was set before the image was complete; the file is as it was.
+    #[error("interrupted")]
+    Cancelled,
 }
 
 /// The 8-bit code of a linear value: `round(255·encode(clamp(c, 0, 1)))` with the sRGB curve,
@@ -84,6 +87,18 @@ pub fn encode_8bit(c: f32, gamma: Option<f32>) -> u8 {
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not
 /// at all.
 pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), ImageError> {
+    write_image_unless(film, path, gamma, &AtomicBool::new(false))
+}
+
+/// [`write_image`], stopped by `cancel`: checked before every write to the temporary file and
+/// before it is renamed into place. Once set, the temporary file is removed and the call
+/// returns [`ImageError::Cancelled`], leaving `path` as it was (absent, or the old file).
+pub fn write_image_unless(
+    film: &Film,
+    path: &Path,
+    gamma: Option<f32>,
+    cancel: &AtomicBool,
+) -> Result<(), ImageError> {
     let format = OutputFormat::from_path(path).ok_or_else(|| ImageError::UnknownFormat {
         path: path.to_owned(),
     })?;
@@ -102,13 +117,93 @@ pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), I
         std::process::id(),
         WRITES.fetch_add(1, Ordering::Relaxed)
     ));
-    let result = write_to(film, &tmp, format, gamma)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    if let Err(message) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(write_err(message));
+    let cancelled = || cancel.load(Ordering::SeqCst);
+    let result = write_to(film, &tmp, format, gamma, cancel).and_then(|()| {
+        if cancelled() {
+            return Err("interrupted".into());
+        }
+        std::fs::rename(&tmp, path).map_err(|e| e.to_string())
+    });
+    match result {
+        Ok(()) => Ok(()),
+        Err(message) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(if cancelled() {
+                ImageError::Cancelled
+            } else {
+                write_err(message)
+            })
+        }
     }
-    Ok(())
+}
+
+/// A file whose writes fail once `cancel` is set, so that an encoder stops at its next write.
+struct Unless<'a> {
+    file: File,
+    cancel: &'a AtomicBool,
+}
+
+impl Write for Unless<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.cancel.load(Ordering::Relaxed) {
+            // Not ErrorKind::Interrupted, which write_all would retry.
+            return Err(std::io::Error::other("interrupted"));
+        }
+        self.file.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl Seek for Unless<'_> {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.file.seek(pos)
+    }
+}
+
+/// A film converted for its format, ready to be encoded.
+enum Prepared {
+    /// 8-bit codes, for PNG and JPEG.
+    Rgb8(RgbImage),
+    /// Linear floats, for EXR.
+    Rgb32F(Rgb32FImage),
+    /// Nothing to convert: PFM writes the film's floats as they are.
+    Floats,
+}
+
+/// Converts `film` for `format`, row by row; `None` once `cancel` is set.
+fn prepare(
+    film: &Film,
+    format: OutputFormat,
+    gamma: Option<f32>,
+    cancel: &AtomicBool,
+) -> Result<Option<Prepared>, String> {
+    let (width, height) = (film.width, film.height);
+    let rows = film.pixels.chunks(width.max(1) as usize);
+    let cancelled = || cancel.load(Ordering::Relaxed);
+    Ok(Some(match format {
+        OutputFormat::Png | OutputFormat::Jpeg => {
+            // A table lookup per channel: quick enough not to need checking in between.
+            if cancelled() {
+                return Ok(None);
+            }
+            let bytes = encode_all(&film.pixels, gamma);
+            Prepared::Rgb8(RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?)
+        }
+        OutputFormat::Exr => {
+            let mut floats = Vec::with_capacity(film.pixels.len() * 3);
+            for row in rows {
+                if cancelled() {
+                    return Ok(None);
+                }
+                floats.extend(row.iter().flat_map(|p| p.to_array()));
+            }
+            Prepared::Rgb32F(ImageBuffer::from_raw(width, height, floats).ok_or("bad film size")?)
+        }
+        OutputFormat::Pfm => Prepared::Floats,
+    }))
 }
 
 fn write_to(
@@ -116,15 +211,17 @@ fn write_to(
     path: &Path,
     format: OutputFormat,
     gamma: Option<f32>,
+    cancel: &AtomicBool,
 ) -> Result<(), String> {
+    let interrupted = || "interrupted".to_owned();
+    // Converted before the file is created, so that a cancelled write leaves nothing at all.
+    let prepared = prepare(film, format, gamma, cancel)?.ok_or_else(interrupted)?;
     let file = File::create(path).map_err(|e| e.to_string())?;
-    let mut w = BufWriter::new(file);
+    let mut w = BufWriter::new(Unless { file, cancel });
     let (width, height) = (film.width, film.height);
     let err = |e: image::ImageError| e.to_string();
-    match format {
-        OutputFormat::Png | OutputFormat::Jpeg => {
-            let bytes = encode_all(&film.pixels, gamma);
-            let img = RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?;
+    match prepared {
+        Prepared::Rgb8(img) => {
             if format == OutputFormat::Png {
                 img.write_to(&mut w, image::ImageFormat::Png).map_err(err)?;
             } else {
@@ -133,14 +230,11 @@ fn write_to(
                     .map_err(err)?;
             }
         }
-        OutputFormat::Exr => {
-            let floats: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
-            let img: Rgb32FImage =
-                ImageBuffer::from_raw(width, height, floats).ok_or("bad film size")?;
+        Prepared::Rgb32F(img) => {
             img.write_to(&mut w, image::ImageFormat::OpenExr)
                 .map_err(err)?;
         }
-        OutputFormat::Pfm => {
+        Prepared::Floats => {
             // Negative scale means little-endian; scanlines go bottom to top.
             write!(w, "PF\n{width} {height}\n-1.0\n").map_err(|e| e.to_string())?;
             for row in film.pixels.chunks(width as usize).rev() {
@@ -152,7 +246,7 @@ fn write_to(
             }
         }
     }
-    let file = w.into_inner().map_err(|e| e.to_string())?;
+    let Unless { file, .. } = w.into_inner().map_err(|e| e.to_string())?;
     file.sync_all().map_err(|e| e.to_string())
 }
 
@@ -277,6 +371,32 @@ mod tests {
         std::fs::write(&corrupt, b"not a png").unwrap();
         assert!(load_texture_image(&corrupt, true).is_err());
         assert!(load_texture_image(&dir.join("missing.png"), true).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_cancelled_write_leaves_the_old_file_and_no_temporary_file() {
+        let dir = std::env::temp_dir().join(format!("penumbra-cancel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let film = Film {
+            width: 2,
+            height: 1,
+            pixels: vec![glam::Vec3::ONE; 2],
+        };
+        for ext in ["png", "jpg", "exr", "pfm"] {
+            let path = dir.join(format!("out.{ext}"));
+            std::fs::write(&path, b"old").unwrap();
+            let got = write_image_unless(&film, &path, None, &AtomicBool::new(true));
+            assert!(matches!(got, Err(ImageError::Cancelled)), "{ext}: {got:?}");
+            assert_eq!(std::fs::read(&path).unwrap(), b"old", "{ext}");
+            write_image_unless(&film, &path, None, &AtomicBool::new(false)).unwrap();
+            assert_ne!(std::fs::read(&path).unwrap(), b"old", "{ext}");
+        }
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 4, "temporary files left: {names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

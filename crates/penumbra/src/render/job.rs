@@ -2,6 +2,7 @@
 //! pixels traced together (a pinhole's rays share their origin), then every hit shaded.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
 
@@ -25,6 +26,8 @@ pub(super) struct Job<'a> {
     pub(super) integrator: Integrator<'a>,
     /// The pixel offsets of a deterministic sampler; `None` for jittered.
     pub(super) offsets: Option<Vec<Vec2>>,
+    /// Checked before every sample is shaded.
+    pub(super) cancel: Option<&'a AtomicBool>,
 }
 
 /// Buffers one worker reuses from one batch of pixels to the next.
@@ -40,29 +43,35 @@ pub(super) struct Buffers {
 
 impl Job<'_> {
     /// Appends to `out` the values of the pixels `xs` of row `y` of the full film, and returns
-    /// the shadow rays they took.
+    /// the shadow rays they took; `None` once the render is cancelled.
     pub(super) fn row(
         &self,
         y: u32,
         xs: Range<u32>,
         buffers: &mut Buffers,
         out: &mut Vec<Rgb>,
-    ) -> u64 {
+    ) -> Option<u64> {
         let spp = self.settings.samples_per_axis().pow(2);
         let per_batch = (BATCH_RAYS / spp).max(1);
         let mut shadow = 0;
         let mut x0 = xs.start;
         while x0 < xs.end {
             let x1 = (x0 + per_batch).min(xs.end);
-            shadow += self.pixels(y, x0..x1, buffers, out);
+            shadow += self.pixels(y, x0..x1, buffers, out)?;
             x0 = x1;
         }
-        shadow
+        Some(shadow)
     }
 
     /// [`Job::row`] for a few pixels: every sample's camera ray first, traced in one call,
     /// then each pixel's mean in sample order.
-    fn pixels(&self, y: u32, xs: Range<u32>, buffers: &mut Buffers, out: &mut Vec<Rgb>) -> u64 {
+    fn pixels(
+        &self,
+        y: u32,
+        xs: Range<u32>,
+        buffers: &mut Buffers,
+        out: &mut Vec<Rgb>,
+    ) -> Option<u64> {
         let settings = self.settings;
         let n = settings.samples_per_axis();
         let spp = (n * n) as usize;
@@ -99,6 +108,12 @@ impl Job<'_> {
         for pixel in 0..xs.len() {
             let mut sum = Rgb::ZERO;
             for i in pixel * spp..(pixel + 1) * spp {
+                // One pixel can hold hours of work (65536 samples of a million shadow rays
+                // each): a cancelled render stops within one sample. One relaxed load costs
+                // nothing next to a sample.
+                if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    return None;
+                }
                 match &hits[i] {
                     Some(hit) => {
                         let ray = Ray::new(eye, dirs[i]);
@@ -113,6 +128,6 @@ impl Job<'_> {
             }
             out.push(sum / spp as f32);
         }
-        shadow
+        Some(shadow)
     }
 }
