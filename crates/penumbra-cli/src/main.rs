@@ -336,6 +336,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     match write_image_unless(&film, &out, scene.gamma, interrupt.flag()) {
         Ok(()) => {}
         Err(ImageError::Cancelled) => return Err(interrupted()),
+        Err(e @ ImageError::NonFinite { .. }) => return Err(invalid(e)),
         Err(e) => return Err(runtime(e)),
     }
 

@@ -68,6 +68,20 @@ pub enum ImageError {
         /// The cause.
         message: String,
     },
+    /// A float image (EXR, PFM) would hold an infinite or NaN value: radiance beyond the f32
+    /// range, such as the physical light model's inverse-square falloff right next to a
+    /// very bright light. Nothing is written.
+    #[error("{}: pixel ({x}, {y}) is {value}, beyond the range of 32-bit floats: the scene's lights or materials are too bright", path.display())]
+    NonFinite {
+        /// The path.
+        path: PathBuf,
+        /// Column of the first such pixel.
+        x: u32,
+        /// Row of the first such pixel, from the top.
+        y: u32,
+        /// Its first non-finite channel.
+        value: f32,
+    },
     /// The cancel flag was set before the image was complete; the file is as it was.
     #[error("interrupted")]
     Cancelled,
@@ -106,6 +120,22 @@ pub fn write_image_unless(
         path: path.to_owned(),
         message,
     };
+    if matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
+        // SPEC §7 writes floats unclamped: an infinite or NaN value would be a lie.
+        let bad = film.pixels.iter().enumerate().find_map(|(i, p)| {
+            let value = p.to_array().into_iter().find(|c| !c.is_finite())?;
+            Some((i, value))
+        });
+        if let Some((i, value)) = bad {
+            let width = film.width.max(1) as usize;
+            return Err(ImageError::NonFinite {
+                path: path.to_owned(),
+                x: (i % width) as u32,
+                y: (i / width) as u32,
+                value,
+            });
+        }
+    }
     let name = path
         .file_name()
         .ok_or_else(|| write_err("not a file name".into()))?;
@@ -397,6 +427,32 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names.len(), 4, "temporary files left: {names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn float_formats_never_store_a_non_finite_value() {
+        let dir = std::env::temp_dir().join(format!("penumbra-nonfinite-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
+            let film = Film {
+                width: 3,
+                height: 2,
+                pixels: (0..6)
+                    .map(|i| glam::Vec3::splat(if i == 4 { bad } else { 0.5 }))
+                    .collect(),
+            };
+            for ext in ["exr", "pfm"] {
+                let path = dir.join(format!("out.{ext}"));
+                let got = write_image(&film, &path, None);
+                let Err(ImageError::NonFinite { x: 1, y: 1, .. }) = got else {
+                    panic!("{ext} {bad}: {got:?}");
+                };
+                assert!(!path.exists(), "{ext} {bad}: a file was written");
+            }
+            // 8-bit formats clamp (NaN to 0), as SPEC §7 says.
+            write_image(&film, &dir.join("out.png"), None).unwrap();
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -216,6 +216,36 @@ fn table() -> Vec<Case> {
         // --- Values out of range (building): at the key ---
         toml("samples not a perfect square", with_render("samples = 3"))
             .build_error(BadValue, at("samples = 3"), Some("render.samples"), &["perfect square", "not 3"]),
+        // Finite numbers whose products overflow f32 (issue 10, class 2): refused at the key
+        // rather than rendered as infinite or NaN pixels.
+        toml("light color × intensity beyond f32",
+             edit(BASE, "position = [0, 5, 5]\n",
+                  "position = [0, 5, 5]\ncolor = [3e38, 3e38, 3e38]\nintensity = 10\n"))
+            .build_error(BadValue, at("intensity = 10"), Some("lights[0].intensity"),
+                         &["color × intensity", "3e39", "at most"]),
+        toml("light intensity near f32::MAX",
+             edit(BASE, "position = [0, 5, 5]\n", "position = [0, 5, 5]\nintensity = 3e38\n"))
+            .build_error(BadValue, at("intensity = 3e38"), Some("lights[0].intensity"),
+                         &["color × intensity", "3e38", "at most"]),
+        toml("lights that together emit beyond the range",
+             edit(BASE, "position = [0, 5, 5]\n",
+                  "position = [0, 5, 5]\nintensity = 6e31\n\n[[lights]]\ntype = \"point\"\n\
+                   position = [0, 5, 4]\nintensity = 5e31\n"))
+            .build_error(BadValue, at("intensity = 5e31"), Some("lights[1].intensity"),
+                         &["lights together", "1.1e32", "at most"]),
+        toml("diffuse near f32::MAX",
+             edit(BASE, "diffuse = [0.8, 0.1, 0.1]", "diffuse = [3.4e38, 0.1, 0.1]"))
+            .build_error(BadValue, at("diffuse = "), Some("materials.red.diffuse"),
+                         &["reflect", "at most"]),
+        toml("ambient × the ambient light beyond the range",
+             with_render("ambient = [1e30, 1e30, 1e30]").replace("specular = 0.3\n", "specular = 0.3\nambient = 1e10\n"))
+            .build_error(BadValue, at("ambient = 1e10"), Some("materials.red.ambient"),
+                         &["reflect", "1e40", "at most"]),
+        toml("checker color × diffuse beyond the range",
+             format!("{}\n[textures.board]\ntype = \"checker\"\nodd = 1e30\n",
+                     with_material_texture(&edit(BASE, "diffuse = [0.8, 0.1, 0.1]", "diffuse = 1e10"), "board")))
+            .build_error(BadValue, at("diffuse = 1e10"), Some("materials.red.diffuse"),
+                         &["reflect", "at most"]),
         toml("zero samples", with_render("samples = 0"))
             .build_error(BadValue, at("samples = 0"), Some("render.samples"), &["perfect square", "not 0"]),
         toml("center sampler with 4 samples", with_render("sampler = \"center\"\nsamples = 4"))

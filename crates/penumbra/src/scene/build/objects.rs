@@ -145,15 +145,20 @@ impl Builder<'_> {
                     }))
                 }
             };
+            let built = material(Phong {
+                diffuse: m.diffuse.map(Vec3::from),
+                ambient: m.ambient.map(Vec3::from),
+                specular: m.specular.map(Vec3::from),
+                shininess: m.shininess.map(|s| s.max(0.0)),
+                texture,
+            });
+            // A decoded image texture is at most 1.
+            let (most, _) = self.reflected(&built, 1.0);
+            let what = format!("the MTL's material \"{}\"", m.name);
+            self.check_reflected(path, &what, most)?;
             let id = self
                 .world
-                .add_material(material(Phong {
-                    diffuse: m.diffuse.map(Vec3::from),
-                    ambient: m.ambient.map(Vec3::from),
-                    specular: m.specular.map(Vec3::from),
-                    shininess: m.shininess.map(|s| s.max(0.0)),
-                    texture,
-                }))
+                .add_material(built)
                 .map_err(|e| self.bad(path, e.to_string()))?;
             ids.push(id);
         }
