@@ -332,6 +332,23 @@ fn table() -> Vec<Case> {
         toml("corrupt OBJ file", with_mesh("bad.obj"))
             .file("bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n")
             .build_error(MESH, at("file ="), Some("objects[2].file"), &["bad.obj", "line 2"]),
+        // Files that are not OBJ or MTL text (issue 10, class 4): not an empty mesh that renders.
+        toml("PNG given as an OBJ", with_mesh("m.obj"))
+            .file("m.obj", PNG_START)
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "not an OBJ", "PNG"]),
+        toml("binary garbage given as an OBJ", with_mesh("m.obj"))
+            .file("m.obj", (0..4096u32).map(|i| (i * 7919 % 251) as u8).collect::<Vec<u8>>())
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "not an OBJ", "binary"]),
+        toml("OBJ without faces", with_mesh("m.obj"))
+            .file("m.obj", "# vertices only\nv 0 0 0\nv 1 0 0\nv 0 1 0\n")
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "no faces"]),
+        toml("text that is not an OBJ", with_mesh("m.obj"))
+            .file("m.obj", "Dear user,\nthis is a letter, not a mesh.\n")
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "no faces"]),
+        toml("PNG given as an MTL", with_mesh("m.obj"))
+            .file("m.obj", format!("mtllib m.mtl\n{TRIANGLE_OBJ}"))
+            .file("m.mtl", PNG_START)
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.mtl", "not an MTL", "PNG"]),
         toml("missing MTL file", with_mesh("m.obj"))
             .file("m.obj", format!("mtllib gone.mtl\n{TRIANGLE_OBJ}"))
             .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "gone.mtl"]),
@@ -477,6 +494,9 @@ const SIDE_CAMERA: &str = "position = [5, 1, 0]\nlook_at = [0, 0, 0]\nfov = 45\n
 
 /// The keys of a camera looking straight down: degenerate with the default up (+y).
 const TOP_CAMERA: &str = "position = [0, 5, 0]\nlook_at = [0, 0, 0]\nfov = 30\n";
+
+/// The first bytes of a PNG file: its signature and the start of its header chunk.
+const PNG_START: &[u8] = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x02\0\0\0";
 
 /// A triangle with corners 1, 2, 3, for OBJ files.
 const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
