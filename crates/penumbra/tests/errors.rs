@@ -317,11 +317,18 @@ fn table() -> Vec<Case> {
             .parse_error(Syntax, at("45 45"), None, &[]),
         toml("TOML: unclosed table header", edit(BASE, "[materials.red]", "[materials.red"))
             .parse_error(Syntax, after("[materials.red"), None, &[]),
+        // Duplicates and nesting too deep name their key path, found from the text.
         toml("TOML: duplicate key", edit(BASE, "size = 1", "size = 1\nsize = 2"))
-            .parse_error(Syntax, at("size = 2"), None, &["duplicate"]),
+            .parse_error(Syntax, at("size = 2"), Some("objects[1].size"), &["duplicate key `size`"]),
         // A second [materials.red] names the same material twice: at the repeated name.
         toml("TOML: duplicate material name", format!("{BASE}\n[materials.red]\ndiffuse = 1\n"))
-            .parse_error(Syntax, at_nth("red]", 1), None, &["duplicate"]),
+            .parse_error(Syntax, at_nth("red]", 1), Some("materials.red"), &["duplicate key `red`"]),
+        toml("TOML: duplicate key in a dotted key",
+             edit(BASE, "fov = 45\n", "fov = 45\n\n[render]\nambient = 0.1\n\"ambient\" = 0.2\n"))
+            .parse_error(Syntax, at("\"ambient\" = 0.2"), Some("render.ambient"), &["duplicate key `ambient`"]),
+        toml("TOML: nesting too deep",
+             edit(BASE, "fov = 45", &format!("fov = {}{}", "[".repeat(200), "]".repeat(200))))
+            .parse_error(Syntax, line_only("fov = [[["), Some("camera.fov"), &["nested too deeply"]),
 
         // --- Files the scene loads (building), written next to it: at the `file` key ---
         toml("missing mesh file", with_mesh("meshes/nosuch.obj"))
@@ -1059,6 +1066,33 @@ fn unreadable_scene_files_are_file_errors() {
     let message = e.to_string();
     assert!(
         message.contains(".toml") && message.contains(".json"),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_byte_that_is_not_utf8_is_located() {
+    let dir = TempDir::new("errors-utf8");
+    // Latin-1 "é" (0xE9) in a material's name: line 12, column 16.
+    let text = edit(
+        BASE,
+        "[materials.red]",
+        "[materials.red]\n[materials.\"caf\u{1}\"]",
+    );
+    let mut bytes = text.into_bytes();
+    let at = bytes.iter().position(|&b| b == 1).unwrap();
+    bytes[at] = 0xE9;
+    let path = dir.write("latin1.toml", &bytes);
+    let e = SceneFile::load(&path).unwrap_err();
+    let location = e.location().unwrap_or_else(|| panic!("not located: {e}"));
+    assert_eq!(
+        (location.line, location.column),
+        (Some(12), Some(16)),
+        "{e}"
+    );
+    let message = e.to_string();
+    assert!(
+        message.contains("0xE9") && message.contains("UTF-8"),
         "{message}"
     );
 }
