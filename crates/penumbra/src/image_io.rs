@@ -283,9 +283,18 @@ fn write_to(
 /// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
 pub const MAX_TEXELS: u64 = 1 << 26;
 
+/// Memory decoding takes per texel at its peak: the decoder's buffer (up to 8 bytes for
+/// 16-bit RGBA), its float copy (12) and the texels kept (12).
+pub const DECODE_BYTES_PER_TEXEL: u64 = 32;
+
 /// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
-/// through the sRGB curve when `srgb` is true, else as value/max.
-pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
+/// through the sRGB curve when `srgb` is true, else as value/max. With `max_bytes`, an image
+/// whose decoding would take more memory than that is refused before it is decoded.
+pub fn load_texture_image(
+    path: &Path,
+    srgb: bool,
+    max_bytes: Option<u64>,
+) -> Result<Image, String> {
     // A compressed image over 1 GiB is not a texture; a folder, device or pipe is refused
     // before it is opened.
     crate::files::check_regular(path, 1 << 30).map_err(|e| e.to_string())?;
@@ -302,23 +311,32 @@ pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
             "the image is too large for memory ({w}x{h}; at most {MAX_TEXELS} texels)"
         ));
     }
+    let need = w as u64 * h as u64 * DECODE_BYTES_PER_TEXEL;
+    if let Some(max) = max_bytes.filter(|&max| need > max) {
+        return Err(format!(
+            "decoding this {w}x{h} image needs about {} of memory, more than the {} available",
+            crate::memory::human(need),
+            crate::memory::human(max)
+        ));
+    }
     let img = reader()?.decode().map_err(|e| e.to_string())?;
     let (width, height) = (img.width(), img.height());
     if width == 0 || height == 0 {
         return Err("the image is empty".into());
     }
     let rgb = img.into_rgb32f();
-    let texels = rgb
-        .pixels()
-        .map(|p| {
-            let c = glam::Vec3::from(p.0);
-            if srgb {
-                c.map(srgb_to_linear)
-            } else {
-                c
-            }
-        })
-        .collect();
+    let mut texels = Vec::new();
+    texels
+        .try_reserve_exact(width as usize * height as usize)
+        .map_err(|_| format!("not enough memory for a {width}x{height} image"))?;
+    texels.extend(rgb.pixels().map(|p| {
+        let c = glam::Vec3::from(p.0);
+        if srgb {
+            c.map(srgb_to_linear)
+        } else {
+            c
+        }
+    }));
     Ok(Image {
         width,
         height,
@@ -387,8 +405,8 @@ mod tests {
         for (name, img, encoded) in cases {
             let path = dir.join(name);
             img.save(&path).unwrap();
-            let srgb = load_texture_image(&path, true).unwrap();
-            let linear = load_texture_image(&path, false).unwrap();
+            let srgb = load_texture_image(&path, true, None).unwrap();
+            let linear = load_texture_image(&path, false, None).unwrap();
             assert_eq!((srgb.width, srgb.height), (1, 1));
             for c in srgb.texels[0].to_array() {
                 assert!((c - srgb_to_linear(encoded)).abs() < 1e-6, "{name}: {c}");
@@ -399,8 +417,8 @@ mod tests {
         }
         let corrupt = dir.join("corrupt.png");
         std::fs::write(&corrupt, b"not a png").unwrap();
-        assert!(load_texture_image(&corrupt, true).is_err());
-        assert!(load_texture_image(&dir.join("missing.png"), true).is_err());
+        assert!(load_texture_image(&corrupt, true, None).is_err());
+        assert!(load_texture_image(&dir.join("missing.png"), true, None).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -57,6 +57,7 @@ mod integrator;
 mod light;
 mod material;
 mod math;
+mod memory;
 mod pool;
 mod render;
 mod sampling;

@@ -5,6 +5,7 @@
 //! (shapes and OBJ meshes). Every error is located in the file.
 
 mod bounds;
+mod budget;
 mod materials;
 mod objects;
 mod settings;
@@ -37,6 +38,8 @@ struct Builder<'a> {
     /// What the lights emit together, the ambient light and the light model: the bounds an
     /// MTL material is checked against (see `bounds`).
     lighting: Lighting,
+    /// The memory the scene may take, and what it takes so far.
+    budget: budget::Budget,
 }
 
 /// The light a material reflects, for its radiance bound.
@@ -61,6 +64,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
             ambient: 0.0,
             model: LightModel::Phong,
         },
+        budget: budget::Budget::new(crate::memory::available()),
     };
     let film = b.film()?;
     b.cameras()?;

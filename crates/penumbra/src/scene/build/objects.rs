@@ -79,6 +79,7 @@ impl Builder<'_> {
                 mesh
             }
         };
+        self.take_triangles(path, mesh.len())?;
         self.world
             .add_mesh(&mesh, &world, &materials)
             .map_err(|e| {
@@ -104,6 +105,7 @@ impl Builder<'_> {
         let loaded = match self.meshes.get(&key) {
             Some(loaded) => loaded,
             None => {
+                self.check_obj_size(path, &obj_path)?;
                 let model = load_obj(&obj_path, self.pool.as_ref()).map_err(|e| {
                     self.err(
                         ErrorKind::Asset(AssetKind::Mesh),
