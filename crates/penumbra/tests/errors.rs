@@ -233,6 +233,10 @@ fn table() -> Vec<Case> {
                    position = [0, 5, 4]\nintensity = 5e31\n"))
             .build_error(BadValue, at("intensity = 5e31"), Some("lights[1].intensity"),
                          &["lights together", "1.1e32", "at most"]),
+        toml("ambient light beyond the range", with_render("ambient = [1, 2e38, 1]"))
+            .build_error(BadValue, at("ambient = "), Some("render.ambient"), &["2e38", "at most"]),
+        toml("background beyond the range", with_render("background = 3e38"))
+            .build_error(BadValue, at("background = "), Some("render.background"), &["3e38", "at most"]),
         toml("diffuse near f32::MAX",
              edit(BASE, "diffuse = [0.8, 0.1, 0.1]", "diffuse = [3.4e38, 0.1, 0.1]"))
             .build_error(BadValue, at("diffuse = "), Some("materials.red.diffuse"),

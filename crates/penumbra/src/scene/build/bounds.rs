@@ -190,7 +190,7 @@ impl Builder<'_> {
         Err(self.bad(
             path,
             format!(
-                "{} is more than the at most {} that can be rendered",
+                "{} is brighter than can be rendered (at most {})",
                 sci(peak(c)),
                 sci(MAX_EMISSION)
             ),
