@@ -5,7 +5,7 @@ use std::io::Write;
 
 /// An error and the exit code it ends with.
 pub struct Failure {
-    /// 1 runtime failure, 2 invalid input or usage, 130 interrupted.
+    /// 1 runtime failure, 2 invalid input or usage, 128 + a signal's number when one stopped the run.
     pub code: u8,
     /// The message after `error: `; empty for none.
     pub message: String,

@@ -4,10 +4,11 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use penumbra::{encode_image, write_image, Film, OutputFormat};
+use penumbra::{encode_image, write_image_unless, Film, ImageError, OutputFormat};
 
 use crate::args::FormatArg;
 use crate::failure::{invalid, runtime, Failure};
+use crate::signals::Interrupt;
 
 /// The values a pattern's fields take for one render.
 pub struct Fields<'a> {
@@ -154,11 +155,21 @@ impl Output {
         }
     }
 
-    /// Writes the image: a file appears complete or not at all; standard output gets the
-    /// encoded bytes at once.
-    pub fn write(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
+    /// Writes the image: a file appears complete or not at all (a signal during the write
+    /// leaves the old file, or none); standard output gets the encoded bytes at once.
+    pub fn write(
+        &self,
+        film: &Film,
+        gamma: Option<f32>,
+        interrupt: &Interrupt,
+    ) -> Result<(), Failure> {
         match &self.target {
-            Target::File(path) => write_image(film, path, gamma).map_err(runtime),
+            Target::File(path) => match write_image_unless(film, path, gamma, interrupt.flag()) {
+                Ok(()) => Ok(()),
+                Err(ImageError::Cancelled) => Err(interrupt.failure()),
+                Err(e @ ImageError::NonFinite { .. }) => Err(invalid(e)),
+                Err(e) => Err(runtime(e)),
+            },
             Target::Stdout => {
                 let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
                 let mut out = std::io::stdout().lock();

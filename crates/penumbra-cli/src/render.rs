@@ -17,7 +17,7 @@ use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
 use crate::output::{expand, names_camera, scene_stem, Fields, Output};
 use crate::settings::{flag_of, region, settings};
-use crate::signals::{interrupted, Interrupt};
+use crate::signals::Interrupt;
 use crate::summary::Report;
 
 /// One render of the run.
@@ -55,10 +55,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         let options = RenderOptions {
             threads: args.threads,
             region: job.region,
-            cancel: Some(interrupt.cancel_flag()),
+            cancel: Some(interrupt.flag()),
             progress: None,
         };
-        interrupt.start_rendering();
+        interrupt.defer();
         let (film, stats) = with_progress(args.quiet, |progress| {
             let options = RenderOptions {
                 progress: Some(progress),
@@ -67,13 +67,13 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             penumbra::render(&scene.world, &job.settings, &options)
         })
         .map_err(|e| match e {
-            RenderError::Cancelled => interrupted(),
+            RenderError::Cancelled => interrupt.failure(),
             e @ RenderError::BadRegion { .. } => invalid(format!("{}: {e}", region_flag(args))),
             RenderError::Settings(e) => invalid(format!("{}: {e}", flag_of(&e))),
             e => runtime(e),
         })?;
         interrupt.check()?;
-        job.output.write(&film, scene.gamma)?;
+        job.output.write(&film, scene.gamma, &interrupt)?;
 
         let report = Report {
             scene: &scene_name(&args.scene),

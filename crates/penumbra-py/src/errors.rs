@@ -77,13 +77,15 @@ pub(crate) fn render_error(e: RenderError) -> PyErr {
     }
 }
 
-/// An image error as Python sees it: an unknown extension or an image that cannot be encoded is
-/// a `ValueError`, a failed write an `OSError`.
+/// An image error as Python sees it: an unknown extension or an image that cannot be encoded
+/// (non-finite values in a float format included) is a `ValueError`, a failed write an
+/// `OSError`, a cancelled one `KeyboardInterrupt`.
 pub(crate) fn image_error(e: ImageError) -> PyErr {
     match e {
-        ImageError::UnknownFormat { .. } | ImageError::Encode { .. } => {
-            PyValueError::new_err(e.to_string())
-        }
+        ImageError::UnknownFormat { .. }
+        | ImageError::Encode { .. }
+        | ImageError::NonFinite { .. } => PyValueError::new_err(e.to_string()),
         ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
+        ImageError::Cancelled => PyKeyboardInterrupt::new_err(e.to_string()),
     }
 }

@@ -40,12 +40,33 @@ impl std::error::Error for CameraError {}
 
 /// The camera's orthonormal frame: forward, right, up.
 fn frame(position: Vec3, look_at: Vec3, up: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
-    let forward = (look_at - position).normalize_or_zero();
-    let right = forward.cross(up).normalize_or_zero();
+    let mut to_target = look_at - position;
+    if !to_target.is_finite() {
+        // The difference of two finite points can overflow (3e38 − −3e38); halves cannot.
+        to_target = 0.5 * look_at - 0.5 * position;
+    }
+    let forward = direction(to_target);
+    let right = direction(forward.cross(up));
     if forward == Vec3::ZERO || right == Vec3::ZERO || !right.is_finite() {
         return None;
     }
     Some((forward, right, right.cross(forward)))
+}
+
+/// `v` normalized, or zero for a zero or non-finite `v`. A vector whose squared length
+/// overflows (|v| ≳ 1e19) or underflows (|v| ≲ 1e-19) is first scaled by its largest
+/// component; other vectors take the plain path, bit for bit.
+fn direction(v: Vec3) -> Vec3 {
+    let n = v.normalize_or_zero();
+    if n != Vec3::ZERO {
+        return n;
+    }
+    let largest = v.abs().max_element();
+    if largest > 0.0 && largest.is_finite() {
+        (v / largest).normalize_or_zero()
+    } else {
+        Vec3::ZERO
+    }
 }
 
 impl Camera {
@@ -168,6 +189,25 @@ mod tests {
         // Top-left corner: +y is up, x grows to the right.
         let tl = c.ray(0.0, 0.0).direction;
         assert!((tl - Vec3::new(-2.0, 1.0, -1.0).normalize()).length() < 1e-6);
+    }
+
+    #[test]
+    fn far_and_near_targets_are_not_degenerate() {
+        // The squared distance overflows (1e40), underflows (1e-50), or the difference itself
+        // overflows (6e38); each camera still looks straight at its target along −x.
+        for (position, at) in [
+            (Vec3::new(1e20, 0.0, 0.0), Vec3::ZERO),
+            (Vec3::new(1e-25, 0.0, 0.0), Vec3::ZERO),
+            (Vec3::new(3e38, 0.0, 0.0), Vec3::new(-3e38, 0.0, 0.0)),
+        ] {
+            let c = Camera::new(position, at, Vec3::new(0.0, 1e30, 0.0), 60.0)
+                .unwrap_or_else(|e| panic!("{position}: {e}"));
+            let r = PinholeCamera::new(&c, 2, 2).ray(1.0, 1.0);
+            assert!(
+                (r.direction - -Vec3::X).length() < 1e-6,
+                "{position}: {r:?}"
+            );
+        }
     }
 
     #[test]

@@ -2,9 +2,9 @@
 //! same folder, renamed into place), and decoding texture images to linear RGB.
 
 use std::fs::File;
-use std::io::{BufWriter, Cursor, Seek, Write};
+use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
@@ -74,6 +74,23 @@ pub enum ImageError {
         /// The cause.
         message: String,
     },
+    /// A float image (EXR, PFM) would hold an infinite or NaN value: radiance beyond the f32
+    /// range, such as the physical light model's inverse-square falloff right next to a
+    /// very bright light. Nothing is written.
+    #[error("{}: pixel ({x}, {y}) is {value}, beyond the range of 32-bit floats: the scene's lights or materials are too bright", path.display())]
+    NonFinite {
+        /// The path.
+        path: PathBuf,
+        /// Column of the first such pixel.
+        x: u32,
+        /// Row of the first such pixel, from the top.
+        y: u32,
+        /// Its first non-finite channel.
+        value: f32,
+    },
+    /// The cancel flag was set before the image was complete; the file is as it was.
+    #[error("interrupted")]
+    Cancelled,
 }
 
 /// The 8-bit code of a linear value: `round(255·encode(clamp(c, 0, 1)))` with the sRGB curve,
@@ -90,6 +107,18 @@ pub fn encode_8bit(c: f32, gamma: Option<f32>) -> u8 {
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not
 /// at all.
 pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), ImageError> {
+    write_image_unless(film, path, gamma, &AtomicBool::new(false))
+}
+
+/// [`write_image`], stopped by `cancel`: checked before every write to the temporary file and
+/// before it is renamed into place. Once set, the temporary file is removed and the call
+/// returns [`ImageError::Cancelled`], leaving `path` as it was (absent, or the old file).
+pub fn write_image_unless(
+    film: &Film,
+    path: &Path,
+    gamma: Option<f32>,
+    cancel: &AtomicBool,
+) -> Result<(), ImageError> {
     let format = OutputFormat::from_path(path).ok_or_else(|| ImageError::UnknownFormat {
         path: path.to_owned(),
     })?;
@@ -97,6 +126,22 @@ pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), I
         path: path.to_owned(),
         message,
     };
+    if matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
+        // SPEC §7 writes floats unclamped: an infinite or NaN value would be a lie.
+        let bad = film.pixels.iter().enumerate().find_map(|(i, p)| {
+            let value = p.to_array().into_iter().find(|c| !c.is_finite())?;
+            Some((i, value))
+        });
+        if let Some((i, value)) = bad {
+            let width = film.width.max(1) as usize;
+            return Err(ImageError::NonFinite {
+                path: path.to_owned(),
+                x: (i % width) as u32,
+                y: (i / width) as u32,
+                value,
+            });
+        }
+    }
     let name = path
         .file_name()
         .ok_or_else(|| write_err("not a file name".into()))?;
@@ -108,13 +153,93 @@ pub fn write_image(film: &Film, path: &Path, gamma: Option<f32>) -> Result<(), I
         std::process::id(),
         WRITES.fetch_add(1, Ordering::Relaxed)
     ));
-    let result = write_to(film, &tmp, format, gamma)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    if let Err(message) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(write_err(message));
+    let cancelled = || cancel.load(Ordering::SeqCst);
+    let result = write_to(film, &tmp, format, gamma, cancel).and_then(|()| {
+        if cancelled() {
+            return Err("interrupted".into());
+        }
+        std::fs::rename(&tmp, path).map_err(|e| e.to_string())
+    });
+    match result {
+        Ok(()) => Ok(()),
+        Err(message) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(if cancelled() {
+                ImageError::Cancelled
+            } else {
+                write_err(message)
+            })
+        }
     }
-    Ok(())
+}
+
+/// A file whose writes fail once `cancel` is set, so that an encoder stops at its next write.
+struct Unless<'a> {
+    file: File,
+    cancel: &'a AtomicBool,
+}
+
+impl Write for Unless<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.cancel.load(Ordering::Relaxed) {
+            // Not ErrorKind::Interrupted, which write_all would retry.
+            return Err(std::io::Error::other("interrupted"));
+        }
+        self.file.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl Seek for Unless<'_> {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.file.seek(pos)
+    }
+}
+
+/// A film converted for its format, ready to be encoded.
+enum Prepared {
+    /// 8-bit codes, for PNG and JPEG.
+    Rgb8(RgbImage),
+    /// Linear floats, for EXR.
+    Rgb32F(Rgb32FImage),
+    /// Nothing to convert: PFM writes the film's floats as they are.
+    Floats,
+}
+
+/// Converts `film` for `format`, row by row; `None` once `cancel` is set.
+fn prepare(
+    film: &Film,
+    format: OutputFormat,
+    gamma: Option<f32>,
+    cancel: &AtomicBool,
+) -> Result<Option<Prepared>, String> {
+    let (width, height) = (film.width, film.height);
+    let rows = film.pixels.chunks(width.max(1) as usize);
+    let cancelled = || cancel.load(Ordering::Relaxed);
+    Ok(Some(match format {
+        OutputFormat::Png | OutputFormat::Jpeg => {
+            // A table lookup per channel: quick enough not to need checking in between.
+            if cancelled() {
+                return Ok(None);
+            }
+            let bytes = encode_all(&film.pixels, gamma);
+            Prepared::Rgb8(RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?)
+        }
+        OutputFormat::Exr => {
+            let mut floats = Vec::with_capacity(film.pixels.len() * 3);
+            for row in rows {
+                if cancelled() {
+                    return Ok(None);
+                }
+                floats.extend(row.iter().flat_map(|p| p.to_array()));
+            }
+            Prepared::Rgb32F(ImageBuffer::from_raw(width, height, floats).ok_or("bad film size")?)
+        }
+        OutputFormat::Pfm => Prepared::Floats,
+    }))
 }
 
 /// `film` encoded in `format`, as the bytes [`write_image`] would write (for a pipe, say).
@@ -123,8 +248,13 @@ pub fn encode_image(
     format: OutputFormat,
     gamma: Option<f32>,
 ) -> Result<Vec<u8>, ImageError> {
+    let encode_err = |message: String| ImageError::Encode { message };
+    let never = AtomicBool::new(false);
+    let prepared = prepare(film, format, gamma, &never)
+        .map_err(encode_err)?
+        .ok_or_else(|| encode_err("interrupted".into()))?;
     let mut w = Cursor::new(Vec::new());
-    encode(film, &mut w, format, gamma).map_err(|message| ImageError::Encode { message })?;
+    encode(film, &prepared, format, &mut w).map_err(encode_err)?;
     Ok(w.into_inner())
 }
 
@@ -133,42 +263,42 @@ fn write_to(
     path: &Path,
     format: OutputFormat,
     gamma: Option<f32>,
+    cancel: &AtomicBool,
 ) -> Result<(), String> {
+    let interrupted = || "interrupted".to_owned();
+    // Converted before the file is created, so that a cancelled write leaves nothing at all.
+    let prepared = prepare(film, format, gamma, cancel)?.ok_or_else(interrupted)?;
     let file = File::create(path).map_err(|e| e.to_string())?;
-    let mut w = BufWriter::new(file);
-    encode(film, &mut w, format, gamma)?;
-    let file = w.into_inner().map_err(|e| e.to_string())?;
+    let mut w = BufWriter::new(Unless { file, cancel });
+    encode(film, &prepared, format, &mut w)?;
+    let Unless { file, .. } = w.into_inner().map_err(|e| e.to_string())?;
     file.sync_all().map_err(|e| e.to_string())
 }
 
+/// Writes the prepared film to `w` in `format`.
 fn encode<W: Write + Seek>(
     film: &Film,
-    mut w: W,
+    prepared: &Prepared,
     format: OutputFormat,
-    gamma: Option<f32>,
+    mut w: W,
 ) -> Result<(), String> {
     let (width, height) = (film.width, film.height);
     let err = |e: image::ImageError| e.to_string();
-    match format {
-        OutputFormat::Png | OutputFormat::Jpeg => {
-            let bytes = encode_all(&film.pixels, gamma);
-            let img = RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?;
+    match prepared {
+        Prepared::Rgb8(img) => {
             if format == OutputFormat::Png {
                 img.write_to(&mut w, image::ImageFormat::Png).map_err(err)?;
             } else {
                 JpegEncoder::new_with_quality(&mut w, 95)
-                    .write_image(&img, width, height, image::ExtendedColorType::Rgb8)
+                    .write_image(img, width, height, image::ExtendedColorType::Rgb8)
                     .map_err(err)?;
             }
         }
-        OutputFormat::Exr => {
-            let floats: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
-            let img: Rgb32FImage =
-                ImageBuffer::from_raw(width, height, floats).ok_or("bad film size")?;
+        Prepared::Rgb32F(img) => {
             img.write_to(&mut w, image::ImageFormat::OpenExr)
                 .map_err(err)?;
         }
-        OutputFormat::Pfm => {
+        Prepared::Floats => {
             // Negative scale means little-endian; scanlines go bottom to top.
             write!(w, "PF\n{width} {height}\n-1.0\n").map_err(|e| e.to_string())?;
             for row in film.pixels.chunks(width as usize).rev() {
@@ -186,9 +316,18 @@ fn encode<W: Write + Seek>(
 /// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
 pub const MAX_TEXELS: u64 = 1 << 26;
 
+/// Memory decoding takes per texel at its peak: the decoder's buffer (up to 8 bytes for
+/// 16-bit RGBA), its float copy (12) and the texels kept (12).
+pub const DECODE_BYTES_PER_TEXEL: u64 = 32;
+
 /// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
-/// through the sRGB curve when `srgb` is true, else as value/max.
-pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
+/// through the sRGB curve when `srgb` is true, else as value/max. With `max_bytes`, an image
+/// whose decoding would take more memory than that is refused before it is decoded.
+pub fn load_texture_image(
+    path: &Path,
+    srgb: bool,
+    max_bytes: Option<u64>,
+) -> Result<Image, String> {
     // A compressed image over 1 GiB is not a texture; a folder, device or pipe is refused
     // before it is opened.
     crate::files::check_regular(path, 1 << 30).map_err(|e| e.to_string())?;
@@ -205,23 +344,32 @@ pub fn load_texture_image(path: &Path, srgb: bool) -> Result<Image, String> {
             "the image is too large for memory ({w}x{h}; at most {MAX_TEXELS} texels)"
         ));
     }
+    let need = w as u64 * h as u64 * DECODE_BYTES_PER_TEXEL;
+    if let Some(max) = max_bytes.filter(|&max| need > max) {
+        return Err(format!(
+            "decoding this {w}x{h} image needs about {} of memory, more than the {} available",
+            crate::memory::human(need),
+            crate::memory::human(max)
+        ));
+    }
     let img = reader()?.decode().map_err(|e| e.to_string())?;
     let (width, height) = (img.width(), img.height());
     if width == 0 || height == 0 {
         return Err("the image is empty".into());
     }
     let rgb = img.into_rgb32f();
-    let texels = rgb
-        .pixels()
-        .map(|p| {
-            let c = glam::Vec3::from(p.0);
-            if srgb {
-                c.map(srgb_to_linear)
-            } else {
-                c
-            }
-        })
-        .collect();
+    let mut texels = Vec::new();
+    texels
+        .try_reserve_exact(width as usize * height as usize)
+        .map_err(|_| format!("not enough memory for a {width}x{height} image"))?;
+    texels.extend(rgb.pixels().map(|p| {
+        let c = glam::Vec3::from(p.0);
+        if srgb {
+            c.map(srgb_to_linear)
+        } else {
+            c
+        }
+    }));
     Ok(Image {
         width,
         height,
@@ -290,8 +438,8 @@ mod tests {
         for (name, img, encoded) in cases {
             let path = dir.join(name);
             img.save(&path).unwrap();
-            let srgb = load_texture_image(&path, true).unwrap();
-            let linear = load_texture_image(&path, false).unwrap();
+            let srgb = load_texture_image(&path, true, None).unwrap();
+            let linear = load_texture_image(&path, false, None).unwrap();
             assert_eq!((srgb.width, srgb.height), (1, 1));
             for c in srgb.texels[0].to_array() {
                 assert!((c - srgb_to_linear(encoded)).abs() < 1e-6, "{name}: {c}");
@@ -302,8 +450,60 @@ mod tests {
         }
         let corrupt = dir.join("corrupt.png");
         std::fs::write(&corrupt, b"not a png").unwrap();
-        assert!(load_texture_image(&corrupt, true).is_err());
-        assert!(load_texture_image(&dir.join("missing.png"), true).is_err());
+        assert!(load_texture_image(&corrupt, true, None).is_err());
+        assert!(load_texture_image(&dir.join("missing.png"), true, None).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_cancelled_write_leaves_the_old_file_and_no_temporary_file() {
+        let dir = std::env::temp_dir().join(format!("penumbra-cancel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let film = Film {
+            width: 2,
+            height: 1,
+            pixels: vec![glam::Vec3::ONE; 2],
+        };
+        for ext in ["png", "jpg", "exr", "pfm"] {
+            let path = dir.join(format!("out.{ext}"));
+            std::fs::write(&path, b"old").unwrap();
+            let got = write_image_unless(&film, &path, None, &AtomicBool::new(true));
+            assert!(matches!(got, Err(ImageError::Cancelled)), "{ext}: {got:?}");
+            assert_eq!(std::fs::read(&path).unwrap(), b"old", "{ext}");
+            write_image_unless(&film, &path, None, &AtomicBool::new(false)).unwrap();
+            assert_ne!(std::fs::read(&path).unwrap(), b"old", "{ext}");
+        }
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 4, "temporary files left: {names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn float_formats_never_store_a_non_finite_value() {
+        let dir = std::env::temp_dir().join(format!("penumbra-nonfinite-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
+            let film = Film {
+                width: 3,
+                height: 2,
+                pixels: (0..6)
+                    .map(|i| glam::Vec3::splat(if i == 4 { bad } else { 0.5 }))
+                    .collect(),
+            };
+            for ext in ["exr", "pfm"] {
+                let path = dir.join(format!("out.{ext}"));
+                let got = write_image(&film, &path, None);
+                let Err(ImageError::NonFinite { x: 1, y: 1, .. }) = got else {
+                    panic!("{ext} {bad}: {got:?}");
+                };
+                assert!(!path.exists(), "{ext} {bad}: a file was written");
+            }
+            // 8-bit formats clamp (NaN to 0), as SPEC §7 says.
+            write_image(&film, &dir.join("out.png"), None).unwrap();
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -57,6 +57,7 @@ mod integrator;
 mod light;
 mod material;
 mod math;
+mod memory;
 mod pool;
 mod render;
 mod sampling;
@@ -74,7 +75,9 @@ pub use accel::{intersect_brute_force, occluded_brute_force, Bvh};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
-pub use image_io::{encode_8bit, encode_image, write_image, ImageError, OutputFormat};
+pub use image_io::{
+    encode_8bit, encode_image, write_image, write_image_unless, ImageError, OutputFormat,
+};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;

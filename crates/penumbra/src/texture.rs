@@ -105,8 +105,8 @@ impl ImageTexture {
                 self.texel(x, y)
             }
             Filter::Bilinear => {
-                let x = st.x * w - 0.5;
-                let y = (1.0 - st.y) * h - 0.5;
+                let x = finite(st.x * w - 0.5);
+                let y = finite((1.0 - st.y) * h - 0.5);
                 let (x0, y0) = (x.floor(), y.floor());
                 let (fx, fy) = (x - x0, y - y0);
                 let top = self.texel(x0, y0) * (1.0 - fx) + self.texel(x0 + 1.0, y0) * fx;
@@ -127,6 +127,16 @@ impl ImageTexture {
             Wrap::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
         };
         self.image.texels[(y * w + x) as usize]
+    }
+}
+
+/// `x`, or for an infinite `x` (uv·uv_scale can overflow) the largest float of its sign, and 0
+/// for NaN: then x − floor(x) is 0 rather than NaN, and the lookup a texel, not NaN.
+fn finite(x: f32) -> f32 {
+    if x.is_nan() {
+        0.0
+    } else {
+        x.clamp(-f32::MAX, f32::MAX)
     }
 }
 

@@ -216,6 +216,40 @@ fn table() -> Vec<Case> {
         // --- Values out of range (building): at the key ---
         toml("samples not a perfect square", with_render("samples = 3"))
             .build_error(BadValue, at("samples = 3"), Some("render.samples"), &["perfect square", "not 3"]),
+        // Finite numbers whose products overflow f32 (issue 10, class 2): refused at the key
+        // rather than rendered as infinite or NaN pixels.
+        toml("light color × intensity beyond f32",
+             edit(BASE, "position = [0, 5, 5]\n",
+                  "position = [0, 5, 5]\ncolor = [3e38, 3e38, 3e38]\nintensity = 10\n"))
+            .build_error(BadValue, at("intensity = 10"), Some("lights[0].intensity"),
+                         &["color × intensity", "3e39", "at most"]),
+        toml("light intensity near f32::MAX",
+             edit(BASE, "position = [0, 5, 5]\n", "position = [0, 5, 5]\nintensity = 3e38\n"))
+            .build_error(BadValue, at("intensity = 3e38"), Some("lights[0].intensity"),
+                         &["color × intensity", "3e38", "at most"]),
+        toml("lights that together emit beyond the range",
+             edit(BASE, "position = [0, 5, 5]\n",
+                  "position = [0, 5, 5]\nintensity = 6e31\n\n[[lights]]\ntype = \"point\"\n\
+                   position = [0, 5, 4]\nintensity = 5e31\n"))
+            .build_error(BadValue, at("intensity = 5e31"), Some("lights[1].intensity"),
+                         &["lights together", "1.1e32", "at most"]),
+        toml("ambient light beyond the range", with_render("ambient = [1, 2e38, 1]"))
+            .build_error(BadValue, at("ambient = "), Some("render.ambient"), &["2e38", "at most"]),
+        toml("background beyond the range", with_render("background = 3e38"))
+            .build_error(BadValue, at("background = "), Some("render.background"), &["3e38", "at most"]),
+        toml("diffuse near f32::MAX",
+             edit(BASE, "diffuse = [0.8, 0.1, 0.1]", "diffuse = [3.4e38, 0.1, 0.1]"))
+            .build_error(BadValue, at("diffuse = "), Some("materials.red.diffuse"),
+                         &["reflect", "at most"]),
+        toml("ambient × the ambient light beyond the range",
+             with_render("ambient = [1e30, 1e30, 1e30]").replace("specular = 0.3\n", "specular = 0.3\nambient = 1e10\n"))
+            .build_error(BadValue, at("ambient = 1e10"), Some("materials.red.ambient"),
+                         &["reflect", "1e40", "at most"]),
+        toml("checker color × diffuse beyond the range",
+             format!("{}\n[textures.board]\ntype = \"checker\"\nodd = 1e30\n",
+                     with_material_texture(&edit(BASE, "diffuse = [0.8, 0.1, 0.1]", "diffuse = 1e10"), "board")))
+            .build_error(BadValue, at("diffuse = 1e10"), Some("materials.red.diffuse"),
+                         &["reflect", "at most"]),
         toml("zero samples", with_render("samples = 0"))
             .build_error(BadValue, at("samples = 0"), Some("render.samples"), &["perfect square", "not 0"]),
         toml("center sampler with 4 samples", with_render("sampler = \"center\"\nsamples = 4"))
@@ -287,11 +321,18 @@ fn table() -> Vec<Case> {
             .parse_error(Syntax, at("45 45"), None, &[]),
         toml("TOML: unclosed table header", edit(BASE, "[materials.red]", "[materials.red"))
             .parse_error(Syntax, after("[materials.red"), None, &[]),
+        // Duplicates and nesting too deep name their key path, found from the text.
         toml("TOML: duplicate key", edit(BASE, "size = 1", "size = 1\nsize = 2"))
-            .parse_error(Syntax, at("size = 2"), None, &["duplicate"]),
+            .parse_error(Syntax, at("size = 2"), Some("objects[1].size"), &["duplicate key `size`"]),
         // A second [materials.red] names the same material twice: at the repeated name.
         toml("TOML: duplicate material name", format!("{BASE}\n[materials.red]\ndiffuse = 1\n"))
-            .parse_error(Syntax, at_nth("red]", 1), None, &["duplicate"]),
+            .parse_error(Syntax, at_nth("red]", 1), Some("materials.red"), &["duplicate key `red`"]),
+        toml("TOML: duplicate key in a dotted key",
+             edit(BASE, "fov = 45\n", "fov = 45\n\n[render]\nambient = 0.1\n\"ambient\" = 0.2\n"))
+            .parse_error(Syntax, at("\"ambient\" = 0.2"), Some("render.ambient"), &["duplicate key `ambient`"]),
+        toml("TOML: nesting too deep",
+             edit(BASE, "fov = 45", &format!("fov = {}{}", "[".repeat(200), "]".repeat(200))))
+            .parse_error(Syntax, line_only("fov = [[["), Some("camera.fov"), &["nested too deeply"]),
 
         // --- Files the scene loads (building), written next to it: at the `file` key ---
         toml("missing mesh file", with_mesh("meshes/nosuch.obj"))
@@ -302,6 +343,23 @@ fn table() -> Vec<Case> {
         toml("corrupt OBJ file", with_mesh("bad.obj"))
             .file("bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n")
             .build_error(MESH, at("file ="), Some("objects[2].file"), &["bad.obj", "line 2"]),
+        // Files that are not OBJ or MTL text (issue 10, class 4): not an empty mesh that renders.
+        toml("PNG given as an OBJ", with_mesh("m.obj"))
+            .file("m.obj", PNG_START)
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "not an OBJ", "PNG"]),
+        toml("binary garbage given as an OBJ", with_mesh("m.obj"))
+            .file("m.obj", (0..4096u32).map(|i| (i * 7919 % 251) as u8).collect::<Vec<u8>>())
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "not an OBJ", "binary"]),
+        toml("OBJ without faces", with_mesh("m.obj"))
+            .file("m.obj", "# vertices only\nv 0 0 0\nv 1 0 0\nv 0 1 0\n")
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "no faces"]),
+        toml("text that is not an OBJ", with_mesh("m.obj"))
+            .file("m.obj", "Dear user,\nthis is a letter, not a mesh.\n")
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "no faces"]),
+        toml("PNG given as an MTL", with_mesh("m.obj"))
+            .file("m.obj", format!("mtllib m.mtl\n{TRIANGLE_OBJ}"))
+            .file("m.mtl", PNG_START)
+            .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.mtl", "not an MTL", "PNG"]),
         toml("missing MTL file", with_mesh("m.obj"))
             .file("m.obj", format!("mtllib gone.mtl\n{TRIANGLE_OBJ}"))
             .build_error(MESH, at("file ="), Some("objects[2].file"), &["m.obj", "gone.mtl"]),
@@ -447,6 +505,9 @@ const SIDE_CAMERA: &str = "position = [5, 1, 0]\nlook_at = [0, 0, 0]\nfov = 45\n
 
 /// The keys of a camera looking straight down: degenerate with the default up (+y).
 const TOP_CAMERA: &str = "position = [0, 5, 0]\nlook_at = [0, 0, 0]\nfov = 30\n";
+
+/// The first bytes of a PNG file: its signature and the start of its header chunk.
+const PNG_START: &[u8] = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x02\0\0\0";
 
 /// A triangle with corners 1, 2, 3, for OBJ files.
 const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -1009,6 +1070,33 @@ fn unreadable_scene_files_are_file_errors() {
     let message = e.to_string();
     assert!(
         message.contains(".toml") && message.contains(".json"),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_byte_that_is_not_utf8_is_located() {
+    let dir = TempDir::new("errors-utf8");
+    // Latin-1 "é" (0xE9) in a material's name: line 12, column 16.
+    let text = edit(
+        BASE,
+        "[materials.red]",
+        "[materials.red]\n[materials.\"caf\u{1}\"]",
+    );
+    let mut bytes = text.into_bytes();
+    let at = bytes.iter().position(|&b| b == 1).unwrap();
+    bytes[at] = 0xE9;
+    let path = dir.write("latin1.toml", &bytes);
+    let e = SceneFile::load(&path).unwrap_err();
+    let location = e.location().unwrap_or_else(|| panic!("not located: {e}"));
+    assert_eq!(
+        (location.line, location.column),
+        (Some(12), Some(16)),
+        "{e}"
+    );
+    let message = e.to_string();
+    assert!(
+        message.contains("0xE9") && message.contains("UTF-8"),
         "{message}"
     );
 }

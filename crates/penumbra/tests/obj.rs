@@ -593,11 +593,13 @@ fn map_kd_with_windows_separators() {
 }
 
 #[test]
-fn empty_obj_has_no_triangles() {
+fn an_obj_without_faces_is_an_error() {
+    // Nothing in it can be rendered: most likely the wrong file, so it is not an empty mesh.
     let dir = TempDir::new("empty");
     dir.write("e.obj", "# nothing\nv 0 0 0\n");
-    let scene = mesh(dir.path(), "e.obj");
-    assert_eq!(scene.world.stats().triangles, 0);
+    let text = "[[objects]]\ntype = \"mesh\"\nfile = \"e.obj\"\n";
+    let err = try_build(dir.path(), text).expect_err("an OBJ without faces was accepted");
+    assert!(err.to_string().contains("no faces"), "{err}");
 }
 
 #[test]

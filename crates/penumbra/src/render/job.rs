@@ -2,6 +2,7 @@
 //! pixels traced together (a pinhole's rays share their origin), then every hit shaded.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
 
@@ -28,6 +29,8 @@ pub(super) struct Job<'a> {
     pub(super) offsets: Option<Vec<Vec2>>,
     /// Present when the render computes AOVs.
     pub(super) aovs: Option<AovContext>,
+    /// Checked before every sample is shaded.
+    pub(super) cancel: Option<&'a AtomicBool>,
 }
 
 /// Buffers one worker reuses from one batch of pixels to the next.
@@ -43,7 +46,8 @@ pub(super) struct Buffers {
 
 impl Job<'_> {
     /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their
-    /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took.
+    /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took;
+    /// `None` once the render is cancelled.
     pub(super) fn row(
         &self,
         y: u32,
@@ -51,17 +55,17 @@ impl Job<'_> {
         buffers: &mut Buffers,
         out: &mut Vec<Rgb>,
         aovs: &mut Vec<AovPixel>,
-    ) -> u64 {
+    ) -> Option<u64> {
         let spp = self.settings.samples_per_axis().pow(2);
         let per_batch = (BATCH_RAYS / spp).max(1);
         let mut shadow = 0;
         let mut x0 = xs.start;
         while x0 < xs.end {
             let x1 = (x0 + per_batch).min(xs.end);
-            shadow += self.pixels(y, x0..x1, buffers, out, aovs);
+            shadow += self.pixels(y, x0..x1, buffers, out, aovs)?;
             x0 = x1;
         }
-        shadow
+        Some(shadow)
     }
 
     /// [`Job::row`] for a few pixels: every sample's camera ray first, traced in one call,
@@ -73,7 +77,7 @@ impl Job<'_> {
         buffers: &mut Buffers,
         out: &mut Vec<Rgb>,
         aovs: &mut Vec<AovPixel>,
-    ) -> u64 {
+    ) -> Option<u64> {
         let settings = self.settings;
         let n = settings.samples_per_axis();
         let spp = (n * n) as usize;
@@ -111,6 +115,12 @@ impl Job<'_> {
             let mut sum = Rgb::ZERO;
             let mut albedo = Rgb::ZERO;
             for i in pixel * spp..(pixel + 1) * spp {
+                // One pixel can hold hours of work (65536 samples of a million shadow rays
+                // each): a cancelled render stops within one sample. One relaxed load costs
+                // nothing next to a sample.
+                if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    return None;
+                }
                 match &hits[i] {
                     Some(hit) => {
                         let ray = Ray::new(eye, dirs[i]);
@@ -133,6 +143,6 @@ impl Job<'_> {
                 aovs.push(px);
             }
         }
-        shadow
+        Some(shadow)
     }
 }

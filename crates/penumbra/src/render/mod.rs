@@ -49,7 +49,8 @@ pub struct RenderOptions<'a> {
     pub threads: usize,
     /// Render only this region of the film (default: all of it).
     pub region: Option<PixelBounds>,
-    /// Checked between tile rows: when set, rendering stops with [`RenderError::Cancelled`].
+    /// Checked before every sample: when set, rendering stops with [`RenderError::Cancelled`]
+    /// within one sample's work.
     pub cancel: Option<&'a AtomicBool>,
     /// Called from worker threads after each tile with (pixels done, pixels in all).
     pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
@@ -208,6 +209,7 @@ fn render_impl(
         settings,
         offsets: fixed_offsets(settings.sampler, settings.samples_per_axis()),
         aovs: with_aovs.then(|| AovContext::new(world)),
+        cancel: options.cancel,
     };
 
     let tiles: Vec<PixelBounds> = (region.y0..region.y1)
@@ -241,11 +243,7 @@ fn render_impl(
                 let mut shadow = 0;
                 let mut buffers = Buffers::default();
                 for y in tile.y0..tile.y1 {
-                    // A row of a tile can take long at high sample counts: check per row.
-                    if cancelled() {
-                        return None;
-                    }
-                    shadow += job.row(y, tile.x0..tile.x1, &mut buffers, &mut out, &mut aovs);
+                    shadow += job.row(y, tile.x0..tile.x1, &mut buffers, &mut out, &mut aovs)?;
                 }
                 let n = out.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;

@@ -43,6 +43,14 @@ impl KeyPath {
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
     }
+
+    /// The last key of the path (`size` in `objects[1].size`), if it ends in a key.
+    pub fn last_key(&self) -> Option<&str> {
+        match self.0.last()? {
+            Segment::Key(k) => Some(k),
+            Segment::Index(_) => None,
+        }
+    }
 }
 
 impl fmt::Display for KeyPath {

@@ -42,6 +42,94 @@ fn locate_toml(text: &str, path: &KeyPath) -> Option<usize> {
     offset
 }
 
+/// The key path of the TOML key at byte `offset`, from the text alone, for errors the parser
+/// finds before any table exists (a duplicate key, nesting too deep): the table that the
+/// nearest header above opens (`[[objects]]` counted into `objects[i]`), then the dotted key of
+/// the nearest `key = ` line at or above `offset`. On a header line, the header's own path.
+pub(crate) fn toml_path_at(text: &str, offset: usize) -> KeyPath {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    let mut table = KeyPath(Vec::new());
+    let mut arrays: Vec<(String, usize)> = Vec::new();
+    let mut key_line: Option<&str> = None;
+    for line in text[..line_end].split('\n') {
+        match toml_header(line) {
+            Some((name, is_array)) => {
+                let keys = split_dotted(name);
+                let mut path = KeyPath(keys.iter().map(|k| Segment::Key(k.clone())).collect());
+                if is_array {
+                    let joined = keys.join(".");
+                    let count = match arrays.iter_mut().find(|(n, _)| *n == joined) {
+                        Some((_, c)) => {
+                            *c += 1;
+                            *c
+                        }
+                        None => {
+                            arrays.push((joined, 0));
+                            0
+                        }
+                    };
+                    path = path.index(count);
+                }
+                table = path;
+                key_line = None;
+            }
+            None => {
+                if let Some((key, _)) = line.split_once('=') {
+                    // A key, not a string or row inside a multi-line array.
+                    let quotes = key.matches(['"', '\'']).count();
+                    let is_key = !key.trim().is_empty() && !key.contains(['[', '{', ',']);
+                    if is_key && quotes % 2 == 0 {
+                        key_line = Some(key);
+                    }
+                }
+            }
+        }
+    }
+    match key_line {
+        Some(key) => split_dotted(key).iter().fold(table, |path, k| path.key(k)),
+        None => table,
+    }
+}
+
+/// The name in a `[name]` or `[[name]]` header line, and whether it is an array of tables.
+fn toml_header(line: &str) -> Option<(&str, bool)> {
+    let t = line.trim();
+    let t = t.find('#').map_or(t, |i| t[..i].trim_end());
+    let (inner, is_array) = if let Some(rest) = t.strip_prefix("[[") {
+        (rest.strip_suffix("]]")?, true)
+    } else {
+        (t.strip_prefix('[')?.strip_suffix(']')?, false)
+    };
+    // A key, not the row of a multi-line array (`[0, 1],`, `[1]`).
+    let key_like = |c: char| c.is_alphanumeric() || "_-. \"'".contains(c);
+    (!inner.trim().is_empty()
+        && inner.chars().all(key_like)
+        && inner.chars().any(|c| c.is_alphabetic()))
+    .then_some((inner, is_array))
+}
+
+/// The parts of a dotted key, unquoted: `a."b.c" . d` → a, b.c, d.
+fn split_dotted(key: &str) -> Vec<String> {
+    let mut parts = Vec::new();
+    let mut current = String::new();
+    let mut quote: Option<char> = None;
+    for c in key.trim().chars() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), c) => current.push(c),
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '.') => parts.push(std::mem::take(&mut current).trim().to_owned()),
+            (None, c) => current.push(c),
+        }
+    }
+    parts.push(current.trim().to_owned());
+    parts
+}
+
 /// A scanner over JSON text that serde_json has already accepted, so it only needs to step
 /// over values, never to report syntax errors.
 struct Json<'a> {
@@ -188,6 +276,18 @@ mod tests {
         // A missing key points at the deepest part that exists.
         let (line, _) = at(text, SceneFormat::Toml, objects.index(1).key("nothing"));
         assert!(line >= 7, "line {line}");
+    }
+
+    #[test]
+    fn names_the_toml_key_at_an_offset() {
+        let text = "[film]\nwidth = 1\n\n[[objects]]\ntype = \"cube\"\n\n[[objects]]\ntype = \"quad\"\nu = [\n  [1],\n  [0, 0, 1]\n]\n  a.\"b.c\" = 2\n[materials.red]\n";
+        let path_at = |needle: &str| toml_path_at(text, text.find(needle).unwrap()).to_string();
+        assert_eq!(path_at("width"), "film.width");
+        assert_eq!(path_at("quad"), "objects[1].type");
+        assert_eq!(path_at("[0, 0, 1]"), "objects[1].u");
+        assert_eq!(path_at("[1]"), "objects[1].u");
+        assert_eq!(path_at("a."), "objects[1].a.b.c");
+        assert_eq!(path_at("red]"), "materials.red");
     }
 
     #[test]

@@ -100,8 +100,8 @@ impl SceneFile {
             source,
         };
         let bytes = read_bounded(path, MAX_SCENE_BYTES).map_err(read)?;
-        let text = String::from_utf8(bytes)
-            .map_err(|e| read(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
+        let text =
+            String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()))?;
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
         SceneFile::from_str_with(&text, format, path, base_dir, overrides)
     }
@@ -157,5 +157,27 @@ impl SceneFile {
     /// Resolves a path written in the scene file against its folder.
     pub fn resolve(&self, path: &str) -> PathBuf {
         self.base_dir.join(path)
+    }
+}
+
+/// The error for a scene file that is not UTF-8: at the line and column of the first byte
+/// that cannot be read, as every other mistake in the file is.
+fn not_utf8(path: &Path, bytes: &[u8], e: std::str::Utf8Error) -> SceneError {
+    let valid = e.valid_up_to();
+    let prefix = std::str::from_utf8(&bytes[..valid]).unwrap_or_default();
+    let (line, column) = error::line_col(prefix, prefix.len());
+    SceneError::Invalid {
+        kind: ErrorKind::Syntax,
+        location: Box::new(error::Location {
+            file: path.to_owned(),
+            line: Some(line),
+            column: Some(column),
+            key: None,
+            set_by: None,
+        }),
+        message: format!(
+            "byte 0x{:02X} is not UTF-8 text (scene files must be saved as UTF-8)",
+            bytes[valid]
+        ),
     }
 }

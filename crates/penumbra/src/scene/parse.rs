@@ -81,7 +81,23 @@ impl Source {
             SceneFormat::Toml => {
                 let de = toml::Deserializer::parse(&self.text).map_err(|e| {
                     let offset = e.span().map(|s| s.start);
-                    self.error_at_offset(ErrorKind::Syntax, offset, None, e.message())
+                    let message = e.message();
+                    // A duplicate or a nesting too deep is about a key, which the parser does
+                    // not name: find it from the text, as JSON's errors name theirs.
+                    let about_a_key =
+                        message.starts_with("duplicate key") || message.contains("recurs");
+                    match offset.filter(|_| about_a_key) {
+                        Some(o) => {
+                            let path = locate::toml_path_at(&self.text, o);
+                            let message = match (message, path.last_key()) {
+                                ("duplicate key", Some(key)) => format!("duplicate key `{key}`"),
+                                ("duplicate key", None) => message.to_owned(),
+                                _ => format!("arrays or tables nested too deeply ({message})"),
+                            };
+                            self.error_at_offset(ErrorKind::Syntax, offset, Some(&path), &message)
+                        }
+                        None => self.error_at_offset(ErrorKind::Syntax, offset, None, message),
+                    }
                 })?;
                 // toml's `preserve_order` feature hands table keys over in file order, so the
                 // default camera is the first one written, as in JSON.

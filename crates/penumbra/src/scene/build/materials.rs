@@ -51,13 +51,15 @@ impl Builder<'_> {
         if let Some(img) = self.images.get(&key) {
             return Ok(img.clone());
         }
-        let img = load_texture_image(&file, srgb).map_err(|e| {
+        let img = load_texture_image(&file, srgb, self.budget.left()).map_err(|e| {
             self.err(
                 ErrorKind::Asset(AssetKind::Image),
                 path,
                 format!("cannot load {what} \"{}\": {e}", file.display()),
             )
         })?;
+        self.budget.texture_bytes +=
+            img.width as u64 * img.height as u64 * super::budget::BYTES_PER_TEXEL;
         let img = Arc::new(img);
         self.images.insert(key, img.clone());
         Ok(img)

@@ -4,6 +4,8 @@
 //! (textures, materials, lights, and MTL materials through the same conversion) and `objects`
 //! (shapes and OBJ meshes). Every error is located in the file.
 
+mod bounds;
+mod budget;
 mod materials;
 mod objects;
 mod settings;
@@ -15,6 +17,7 @@ use std::time::Instant;
 
 use super::error::{ErrorKind, KeyPath, SceneError};
 use super::{Scene, SceneFile};
+use crate::integrator::LightModel;
 use crate::pool::thread_pool;
 use crate::texture::Image;
 use crate::world::WorldBuilder;
@@ -32,6 +35,19 @@ struct Builder<'a> {
     /// OBJ files read once per scene.
     meshes: HashMap<PathBuf, objects::LoadedObj>,
     world: WorldBuilder,
+    /// What the lights emit together, the ambient light and the light model: the bounds an
+    /// MTL material is checked against (see `bounds`).
+    lighting: Lighting,
+    /// The memory the scene may take, and what it takes so far.
+    budget: budget::Budget,
+}
+
+/// The light a material reflects, for its radiance bound.
+#[derive(Clone, Copy)]
+struct Lighting {
+    emission: f64,
+    ambient: f64,
+    model: LightModel,
 }
 
 pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
@@ -43,26 +59,57 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         images: HashMap::new(),
         meshes: HashMap::new(),
         world: WorldBuilder::new(),
+        lighting: Lighting {
+            emission: 0.0,
+            ambient: 0.0,
+            model: LightModel::Phong,
+        },
+        budget: budget::Budget::new(crate::memory::available()),
     };
     let film = b.film()?;
     b.cameras()?;
     let (settings, default_light_samples) = b.settings(film.width, film.height)?;
 
+    let render = KeyPath::root("render");
+    b.check_render_color(&render.key("ambient"), settings.ambient)?;
+    b.check_render_color(&render.key("background"), settings.background)?;
+
+    // The largest channel of each texture, for the materials' radiance bounds.
+    let mut texture_peaks = Vec::new();
     for (name, tex) in &desc.textures.0 {
         let texture = b.texture(&KeyPath::root("textures").key(name), tex)?;
+        texture_peaks.push(bounds::texture_peak(&texture));
         b.world.add_texture(texture);
     }
     // Material 0 is the format's default; named materials follow in file order.
+    let mut materials = Vec::new();
     for (name, m) in &desc.materials.0 {
         let path = KeyPath::root("materials").key(name);
         let material = b.material(&path, m)?;
+        materials.push(material.clone());
         b.world
             .add_material(material)
             .map_err(|e| b.err(ErrorKind::BadValue, &path, e.to_string()))?;
     }
+    let mut emission = 0.0;
     for (i, l) in desc.lights.iter().enumerate() {
-        let light = b.light(&KeyPath::root("lights").index(i), l, default_light_samples)?;
+        let path = KeyPath::root("lights").index(i);
+        let light = b.light(&path, l, default_light_samples)?;
+        let emitted = bounds::emission(l, settings.light_model);
+        emission += emitted;
+        b.check_emission(&path, bounds::light_key(l), emitted, emission)?;
         b.world.add_light(light);
+    }
+    b.lighting = Lighting {
+        emission,
+        ambient: bounds::peak(settings.ambient),
+        model: settings.light_model,
+    };
+    for ((name, m), material) in desc.materials.0.iter().zip(&materials) {
+        let texture = material.texture.map_or(1.0, |t| texture_peaks[t as usize]);
+        let (most, term) = b.reflected(material, texture);
+        let path = KeyPath::root("materials").key(name);
+        b.check_reflected(&bounds::material_key(&path, m, term), "this material", most)?;
     }
     for (i, o) in desc.objects.iter().enumerate() {
         b.object(&KeyPath::root("objects").index(i), o)?;

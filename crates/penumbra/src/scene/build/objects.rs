@@ -79,6 +79,7 @@ impl Builder<'_> {
                 mesh
             }
         };
+        self.take_triangles(path, mesh.len())?;
         self.world
             .add_mesh(&mesh, &world, &materials)
             .map_err(|e| {
@@ -104,6 +105,7 @@ impl Builder<'_> {
         let loaded = match self.meshes.get(&key) {
             Some(loaded) => loaded,
             None => {
+                self.check_obj_size(path, &obj_path)?;
                 let model = load_obj(&obj_path, self.pool.as_ref()).map_err(|e| {
                     self.err(
                         ErrorKind::Asset(AssetKind::Mesh),
@@ -145,15 +147,20 @@ impl Builder<'_> {
                     }))
                 }
             };
+            let built = material(Phong {
+                diffuse: m.diffuse.map(Vec3::from),
+                ambient: m.ambient.map(Vec3::from),
+                specular: m.specular.map(Vec3::from),
+                shininess: m.shininess.map(|s| s.max(0.0)),
+                texture,
+            });
+            // A decoded image texture is at most 1.
+            let (most, _) = self.reflected(&built, 1.0);
+            let what = format!("the MTL's material \"{}\"", m.name);
+            self.check_reflected(path, &what, most)?;
             let id = self
                 .world
-                .add_material(material(Phong {
-                    diffuse: m.diffuse.map(Vec3::from),
-                    ambient: m.ambient.map(Vec3::from),
-                    specular: m.specular.map(Vec3::from),
-                    shininess: m.shininess.map(|s| s.max(0.0)),
-                    texture,
-                }))
+                .add_material(built)
                 .map_err(|e| self.bad(path, e.to_string()))?;
             ids.push(id);
         }

@@ -6,6 +6,47 @@
 
 use std::borrow::Cow;
 
+/// Bytes looked at to tell text from binary data.
+const SNIFF_BYTES: usize = 64 << 10;
+
+/// Signatures of binary files a user might pick by mistake, and what they are.
+const SIGNATURES: [(&[u8], &str); 8] = [
+    (b"\x89PNG", "a PNG image"),
+    (b"\xFF\xD8\xFF", "a JPEG image"),
+    (b"GIF8", "a GIF image"),
+    (b"\x76\x2F\x31\x01", "an OpenEXR image"),
+    (b"PK\x03\x04", "a ZIP archive"),
+    (b"\x1F\x8B", "a gzip archive"),
+    (b"\x7FELF", "a program"),
+    (b"%PDF", "a PDF document"),
+];
+
+/// Refuses `bytes` that are not a text file (`what`: "an OBJ", "an MTL"): a well-known binary
+/// signature, a NUL byte, or many control characters near the start. A parser that ignores
+/// unknown statements would otherwise read such a file as an empty one.
+pub(super) fn check_text(bytes: &[u8], what: &str) -> Result<(), String> {
+    if let Some((_, kind)) = SIGNATURES.iter().find(|(sig, _)| bytes.starts_with(sig)) {
+        return Err(format!("not {what} file: it starts like {kind}"));
+    }
+    let head = &bytes[..bytes.len().min(SNIFF_BYTES)];
+    if let Some(at) = head.iter().position(|&b| b == 0) {
+        return Err(format!(
+            "not {what} file: it holds binary data (a NUL byte at offset {at})"
+        ));
+    }
+    let controls = head
+        .iter()
+        .filter(|&&b| b < 0x20 && !b"\t\n\r\x0B\x0C".contains(&b))
+        .count();
+    if controls * 8 > head.len() {
+        return Err(format!(
+            "not {what} file: it holds binary data ({controls} control bytes in the first {})",
+            head.len()
+        ));
+    }
+    Ok(())
+}
+
 /// Calls `f(line number, line)` for every logical line of `text`, comments removed and
 /// `\`-continued lines joined (numbered by their first line).
 pub(super) fn for_each_line(

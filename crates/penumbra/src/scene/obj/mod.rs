@@ -134,8 +134,15 @@ impl ObjData {
 /// file involved.
 pub(crate) fn load_obj(path: &Path, pool: Option<&rayon::ThreadPool>) -> Result<ObjModel, String> {
     let bytes = read_bounded(path, MAX_FILE_BYTES).map_err(|e| e.to_string())?;
+    lines::check_text(&bytes, "an OBJ")?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    build_mesh(read(&bytes, dir, pool, CHUNK_BYTES)?)
+    let data = read(&bytes, dir, pool, CHUNK_BYTES)?;
+    if data.triangles == 0 {
+        // Nothing to render: most likely not the file meant (any text without `f` lines
+        // parses, since unknown statements are ignored).
+        return Err("no faces (`f` lines): nothing to render; is it an OBJ file?".into());
+    }
+    build_mesh(data)
 }
 
 /// Parses the OBJ file `bytes`, whose `mtllib` names are relative to `dir`, in chunks of

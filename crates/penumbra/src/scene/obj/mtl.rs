@@ -10,7 +10,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use super::lines::{decode, for_each_line, numbers, rest_of_line};
+use super::lines::{check_text, decode, for_each_line, numbers, rest_of_line};
 use super::{ObjMaterial, MAX_FILE_BYTES};
 use crate::files::read_bounded;
 
@@ -48,6 +48,8 @@ impl Library {
 fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
     let bytes = read_bounded(path, MAX_FILE_BYTES)
         .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
+    check_text(&bytes, "an MTL")
+        .map_err(|e| format!("material library \"{}\": {e}", path.display()))?;
     parse_mtl(&decode(&bytes), path, library)
 }
 

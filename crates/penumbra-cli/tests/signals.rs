@@ -1,0 +1,185 @@
+//! Signals sent to a real `penumbra` process (issue 10, class 6): SIGINT, SIGTERM and SIGHUP
+//! stop a render promptly, however much work one pixel holds, with the shell's exit code for
+//! the signal (128 + its number: 130, 143, 129), one `error:` line, and no image or temporary
+//! file left behind; a signal that arrives while the image is being written leaves the old
+//! file as it was.
+//!
+//! Signals are sent with the `kill` command, as a user or a job system would.
+#![cfg(unix)]
+
+#[path = "../../penumbra/tests/support/mod.rs"]
+mod support;
+
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use support::TempDir;
+
+/// One pixel of a floor lit by one area light: with `--spp 65536 --light-samples 256` that
+/// pixel alone takes 65536 × 65536 shadow rays, hours of work.
+const ONE_HEAVY_PIXEL: &str = r#"[film]
+width = 1
+height = 1
+
+[camera]
+position = [0, 2, 1]
+look_at = [0, 0, 0]
+fov = 60
+
+[[lights]]
+type = "area"
+center = [0, 3, 0]
+u = [1, 0, 0]
+v = [0, 0, 1]
+samples = 4
+
+[[objects]]
+type = "quad"
+corner = [-50, 0, 50]
+u = [100, 0, 0]
+v = [0, 0, -100]
+"#;
+
+/// Starts `penumbra render SCENE -o OUT --quiet ARGS`.
+fn spawn_render(scene: &Path, out: &Path, args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .env_remove("RUST_BACKTRACE")
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .arg("--quiet")
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start the penumbra binary")
+}
+
+/// Sends `signal` (as `kill -SIGNAL` names it) to `child`.
+fn send(child: &Child, signal: &str) {
+    let status = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(status.success(), "kill -{signal} failed");
+}
+
+/// Waits at most `limit` for `child` to exit (killing it then, and failing), and returns its
+/// exit code, its stderr and how long the wait took.
+fn wait_at_most(mut child: Child, limit: Duration, what: &str) -> (Option<i32>, String, Duration) {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{what}: still running {limit:?} after the signal");
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let took = start.elapsed();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code(), stderr, took)
+}
+
+/// Files in `dir` whose names mark a temporary image (`.NAME.tmp-PID-N`).
+fn temporary_files(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp"))
+        .collect()
+}
+
+/// Asserts the one `error:` line of an interrupted run.
+fn assert_interrupted(what: &str, stderr: &str) {
+    for word in ["panicked", "backtrace"] {
+        assert!(!stderr.contains(word), "{what}: panic: {stderr}");
+    }
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{what}: want one error line: {stderr}");
+    assert!(errors[0].contains("interrupted"), "{what}: {}", errors[0]);
+}
+
+#[test]
+fn int_term_and_hup_stop_even_one_heavy_pixel_at_once() {
+    let sb = TempDir::new("signal-heavy-pixel");
+    let scene = sb.write("s.toml", ONE_HEAVY_PIXEL);
+    let out = sb.join("out.png");
+    for (signal, code) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
+        let child = spawn_render(
+            &scene,
+            &out,
+            &["--spp", "65536", "--light-samples", "256", "-t", "1"],
+        );
+        // Loading this scene takes milliseconds: after a second the pixel is being worked on.
+        std::thread::sleep(Duration::from_secs(1));
+        assert!(
+            !out.exists(),
+            "SIG{signal}: an image appeared before the signal"
+        );
+        send(&child, signal);
+        // The promise is 100 ms; the bound leaves room for a loaded test machine.
+        let (got, stderr, took) =
+            wait_at_most(child, Duration::from_secs(2), &format!("SIG{signal}"));
+        eprintln!(
+            "SIG{signal}: exited {got:?} {} ms after the signal",
+            took.as_millis()
+        );
+        assert_eq!(got, Some(code), "SIG{signal}: exit code; stderr: {stderr}");
+        assert_interrupted(&format!("SIG{signal}"), &stderr);
+        assert!(!out.exists(), "SIG{signal}: an image was written");
+        assert!(
+            temporary_files(sb.path()).is_empty(),
+            "SIG{signal}: temporary files left: {:?}",
+            temporary_files(sb.path())
+        );
+    }
+}
+
+#[test]
+fn a_signal_while_the_image_is_written_keeps_the_old_image_and_no_temporary_file() {
+    let sb = TempDir::new("signal-while-writing");
+    // A large film without lights renders in a moment but takes a while to encode as PNG.
+    let scene = sb.write(
+        "s.toml",
+        ONE_HEAVY_PIXEL
+            .replace("width = 1\n", "width = 3000\n")
+            .replace("height = 1\n", "height = 3000\n")
+            .replace("samples = 4\n", "samples = 1\n"),
+    );
+    let out = sb.join("out.png");
+    let old = b"the previous image".to_vec();
+    std::fs::write(&out, &old).unwrap();
+    let child = spawn_render(&scene, &out, &["--sampler", "center"]);
+    // The temporary file appears when writing begins; signal the process as soon as it does.
+    let start = Instant::now();
+    while temporary_files(sb.path()).is_empty() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no temporary image file appeared"
+        );
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    send(&child, "TERM");
+    let (got, stderr, took) = wait_at_most(child, Duration::from_secs(10), "SIGTERM");
+    eprintln!(
+        "SIGTERM while writing: exited {got:?} {} ms after the signal",
+        took.as_millis()
+    );
+    assert_eq!(got, Some(143), "exit code; stderr: {stderr}");
+    assert_interrupted("SIGTERM while writing", &stderr);
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        old,
+        "the old image was changed"
+    );
+    assert!(
+        temporary_files(sb.path()).is_empty(),
+        "temporary files left: {:?}",
+        temporary_files(sb.path())
+    );
+}
