@@ -57,6 +57,7 @@ mod light;
 mod material;
 mod math;
 mod pool;
+mod raycast;
 mod render;
 mod sampling;
 mod scene;
@@ -79,6 +80,10 @@ pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use pool::MAX_THREADS;
+pub use raycast::{
+    create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
+    QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
+};
 pub use render::{
     render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
     View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
