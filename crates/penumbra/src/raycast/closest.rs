@@ -5,8 +5,8 @@ use glam::Vec3;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
-pub(crate) fn closest_on_triangle(p: Vec3, tri: &[[f32; 3]; 3]) -> (Vec3, f32, f32) {
-    let [a, b, c] = tri.map(Vec3::from);
+pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
+    let [a, b, c] = tri;
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     // Vertex region of a.
@@ -70,7 +70,7 @@ mod tests {
             ([1.0, 1.0, 0.0], [0.5, 0.5, 0.0], 0.5, 0.5),
         ];
         for (q, want, b1, b2) in cases {
-            let (p, u, v) = closest_on_triangle(Vec3::from(q), &TRI);
+            let (p, u, v) = closest_on_triangle(Vec3::from(q), TRI.map(Vec3::from));
             assert!(p.distance(Vec3::from(want)) < 1e-6, "{q:?} → {p}");
             assert!(
                 (u - b1).abs() < 1e-6 && (v - b2).abs() < 1e-6,
@@ -85,10 +85,10 @@ mod tests {
     #[test]
     fn degenerate_triangles_give_a_point_on_them() {
         let seg = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
-        let (p, _, _) = closest_on_triangle(Vec3::new(1.5, 1.0, 0.0), &seg);
+        let (p, _, _) = closest_on_triangle(Vec3::new(1.5, 1.0, 0.0), seg.map(Vec3::from));
         assert!(p.distance(Vec3::new(1.5, 0.0, 0.0)) < 1e-6, "{p}");
         let dot = [[1.0, 1.0, 1.0]; 3];
-        let (p, _, _) = closest_on_triangle(Vec3::ZERO, &dot);
+        let (p, _, _) = closest_on_triangle(Vec3::ZERO, dot.map(Vec3::from));
         assert_eq!(p, Vec3::ONE);
     }
 }

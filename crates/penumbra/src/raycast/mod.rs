@@ -234,7 +234,7 @@ impl RaycastingScene {
         if self.accel.get().is_none() {
             let pool = self.pools.get(threads)?;
             self.accel
-                .get_or_init(|| Accel::build(&self.geometry, Some(&pool)));
+                .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
         }
         Ok(())
     }
@@ -247,20 +247,22 @@ impl RaycastingScene {
         let pool = self.pools.get(options.threads)?;
         let accel = self
             .accel
-            .get_or_init(|| Accel::build(&self.geometry, Some(&pool)));
+            .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
         Ok((accel, pool))
     }
 
     /// Geometry id and primitive id of scene triangle `triangle`.
+    #[cfg(test)]
     fn ids(&self, triangle: u32) -> (u32, u32) {
         let t = triangle as usize;
         (self.geometry.triangles[t].object, self.local_ids[t])
     }
 
     /// Corners of scene triangle `triangle`.
-    fn corners(&self, triangle: u32) -> [[f32; 3]; 3] {
+    #[cfg(test)]
+    fn corners(&self, triangle: u32) -> watertight::Corners {
         self.geometry
             .corners(triangle as usize)
-            .map(|v| v.to_array())
+            .map(glam::Vec3A::from)
     }
 }

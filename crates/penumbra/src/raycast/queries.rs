@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::run::{run, QueryOptions, CHUNK};
 use super::traverse::{Accel, SlotHit};
-use super::watertight::{unit_normal, PreparedRay};
+use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 
 /// The closest hit of each ray ([`RaycastingScene::cast_rays`]); entry `i` of every array
@@ -81,7 +81,7 @@ fn hits_of(accel: &Accel, ray: &[f32; 6], out: &mut Vec<SlotHit>) {
         a.crossing
             .t
             .total_cmp(&b.crossing.t)
-            .then(a.triangle.cmp(&b.triangle))
+            .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
     });
 }
 
@@ -120,9 +120,9 @@ impl RaycastingScene {
                 };
                 let c = hit.crossing;
                 t[i] = c.t;
-                (g[i], p[i]) = self.ids(hit.triangle);
+                (g[i], p[i]) = (hit.geometry, hit.primitive);
                 uv[i] = [c.b1, c.b2];
-                normal[i] = unit_normal(&self.corners(hit.triangle)).to_array();
+                normal[i] = accel.normal(hit.slot).to_array();
             }
         })?;
         Ok(out)
@@ -216,11 +216,10 @@ impl RaycastingScene {
                 let last = *out.ray_splits.last().unwrap_or(&0);
                 out.ray_splits.push(last + count);
                 for h in hits.by_ref().take(count as usize) {
-                    let (g, p) = self.ids(h.triangle);
                     out.ray_ids.push(ray);
                     out.t_hit.push(h.crossing.t);
-                    out.geometry_ids.push(g);
-                    out.primitive_ids.push(p);
+                    out.geometry_ids.push(h.geometry);
+                    out.primitive_ids.push(h.primitive);
                     out.primitive_uvs.push([h.crossing.b1, h.crossing.b2]);
                 }
                 ray += 1;
@@ -264,9 +263,9 @@ impl RaycastingScene {
                     continue;
                 };
                 pts[i] = near.point.to_array();
-                (g[i], p[i]) = self.ids(near.triangle);
+                (g[i], p[i]) = (near.geometry, near.primitive);
                 uv[i] = [near.b1, near.b2];
-                normal[i] = unit_normal(&self.corners(near.triangle)).to_array();
+                normal[i] = accel.normal(near.slot).to_array();
             }
         })?;
         Ok(out)

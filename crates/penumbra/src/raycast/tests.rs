@@ -10,7 +10,7 @@ use proptest::prelude::*;
 
 use super::closest::closest_on_triangle;
 use super::tests_meshes::MeshData;
-use super::watertight::{EdgeRule, PreparedRay};
+use super::watertight::{EdgeRule, PreparedRay, SoaTriangle};
 use super::*;
 
 /// Options with `threads` workers.
@@ -31,7 +31,7 @@ fn scene_of(meshes: &[MeshData]) -> RaycastingScene {
 }
 
 /// Every triangle of the scene as (geometry, primitive, corners).
-fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, [[f32; 3]; 3])> {
+fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, super::watertight::Corners)> {
     (0..s.triangle_count() as u32)
         .map(|i| {
             let (g, p) = s.ids(i);
@@ -41,10 +41,10 @@ fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, [[f32; 3]; 3])> {
 }
 
 /// The `f64` Möller–Trumbore distance of a ray to a triangle, edges inclusive.
-fn hit_f64(ray: &[f32; 6], tri: &[[f32; 3]; 3]) -> Option<f64> {
+fn hit_f64(ray: &[f32; 6], tri: &super::watertight::Corners) -> Option<f64> {
     let o = DVec3::new(ray[0] as f64, ray[1] as f64, ray[2] as f64);
     let d = DVec3::new(ray[3] as f64, ray[4] as f64, ray[5] as f64);
-    let [a, b, c] = tri.map(|p| DVec3::from(p.map(|x| x as f64)));
+    let [a, b, c] = tri.map(|p| Vec3::from(p).as_dvec3());
     let (e1, e2) = (b - a, c - a);
     let p = d.cross(e2);
     let det = e1.dot(p);
@@ -64,7 +64,12 @@ fn closest_brute(s: &RaycastingScene, ray: &[f32; 6]) -> Option<(f32, u32, u32)>
     let r = PreparedRay::new(Vec3::from_slice(&ray[..3]), Vec3::from_slice(&ray[3..]))?;
     let mut best: Option<(f32, u32, u32)> = None;
     for (g, p, tri) in all_triangles(s) {
-        if let Some(c) = r.hit(&tri, 0.0, f32::INFINITY, EdgeRule::Inclusive) {
+        if let Some(c) = r.hit(
+            &SoaTriangle::new(&tri),
+            0.0,
+            f32::INFINITY,
+            EdgeRule::Inclusive,
+        ) {
             if best.is_none_or(|b| c.t < b.0) {
                 best = Some((c.t, g, p));
             }
@@ -81,7 +86,7 @@ fn crossings_brute(s: &RaycastingScene, ray: &[f32; 6]) -> Vec<(f32, u32, u32)> 
     let mut v: Vec<_> = all_triangles(s)
         .into_iter()
         .filter_map(|(g, p, tri)| {
-            r.hit(&tri, 0.0, f32::INFINITY, EdgeRule::Owned)
+            r.hit(&SoaTriangle::new(&tri), 0.0, f32::INFINITY, EdgeRule::Owned)
                 .map(|c| (c.t, g, p))
         })
         .collect();
@@ -119,9 +124,12 @@ fn check_rays(s: &RaycastingScene, rays: &[[f32; 6]]) {
                 if (g, p) != (hit_tri.0, hit_tri.1) {
                     let r =
                         PreparedRay::new(Vec3::from_slice(&ray[..3]), Vec3::from_slice(&ray[3..]));
-                    let c = r
-                        .unwrap()
-                        .hit(&hit_tri.2, 0.0, f32::INFINITY, EdgeRule::Inclusive);
+                    let c = r.unwrap().hit(
+                        &SoaTriangle::new(&hit_tri.2),
+                        0.0,
+                        f32::INFINITY,
+                        EdgeRule::Inclusive,
+                    );
                     assert_eq!(c.map(|c| c.t), Some(t), "ray {ray:?}");
                 }
                 // The f64 distance agrees within rounding wherever f64 sees a hit.
@@ -167,7 +175,11 @@ fn check_points(s: &RaycastingScene, points: &[[f32; 3]]) {
         let q = Vec3::from(*q);
         let best = tris
             .iter()
-            .map(|(_, _, t)| closest_on_triangle(q, t).0.distance_squared(q))
+            .map(|(_, _, t)| {
+                closest_on_triangle(q, t.map(Vec3::from))
+                    .0
+                    .distance_squared(q)
+            })
             .fold(f32::INFINITY, f32::min);
         let got = Vec3::from(closest.points[i]);
         if tris.is_empty() {

@@ -14,7 +14,7 @@
 use glam::{Vec3, Vec3A};
 
 use super::closest::closest_on_triangle;
-use super::watertight::{Crossing, EdgeRule, PreparedRay};
+use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
 
@@ -32,16 +32,21 @@ const EPS: f32 = f32::EPSILON * 0.5;
 pub(crate) struct Accel {
     bvh: Bvh,
     /// Corners of the triangle in each leaf slot.
-    tris: Vec<[[f32; 3]; 3]>,
-    /// Scene triangle index of each leaf slot.
-    slots: Vec<u32>,
+    tris: Vec<SoaTriangle>,
+    /// Geometry id and primitive id of the triangle in each leaf slot.
+    ids: Vec<[u32; 2]>,
 }
 
-/// A hit of the closest-hit or every-hit traversal: where, and which scene triangle.
+/// A hit of the closest-hit or every-hit traversal: where, and which triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct SlotHit {
     pub crossing: Crossing,
-    pub triangle: u32,
+    /// Geometry id.
+    pub geometry: u32,
+    /// Primitive id within the geometry.
+    pub primitive: u32,
+    /// Leaf slot, for [`Accel::normal`].
+    pub slot: u32,
 }
 
 /// The closest point on the surface to a query point.
@@ -51,31 +56,77 @@ pub(crate) struct Nearest {
     pub distance_sq: f32,
     pub b1: f32,
     pub b2: f32,
-    pub triangle: u32,
+    pub geometry: u32,
+    pub primitive: u32,
+    pub slot: u32,
 }
 
 impl Accel {
-    /// Builds the hierarchy over `geometry`, on `pool` when given.
-    pub fn build(geometry: &Geometry, pool: Option<&rayon::ThreadPool>) -> Accel {
+    /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
+    /// is its `object`, its primitive id `local_ids[triangle]`.
+    pub fn build(
+        geometry: &Geometry,
+        local_ids: &[u32],
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Accel {
         let bvh = match pool {
             Some(pool) => Bvh::build_parallel(geometry, pool),
             None => Bvh::build(geometry),
         };
-        let slots = bvh.prim_ids().to_vec();
+        let slots = bvh.prim_ids();
         let tris = slots
             .iter()
-            .map(|&i| geometry.corners(i as usize).map(|v| v.to_array()))
+            .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
             .collect();
-        Accel { bvh, tris, slots }
+        let ids = slots
+            .iter()
+            .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
+            .collect();
+        Accel { bvh, tris, ids }
+    }
+
+    /// The hit record of `crossing` on leaf slot `slot`.
+    fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
+        let [geometry, primitive] = self.ids[slot];
+        SlotHit {
+            crossing,
+            geometry,
+            primitive,
+            slot: slot as u32,
+        }
+    }
+
+    /// The unit normal `(v1 − v0) × (v2 − v0)` of the triangle in leaf slot `slot`.
+    pub fn normal(&self, slot: u32) -> Vec3 {
+        unit_normal(&self.tris[slot as usize].corners())
     }
 
     /// The corners of scene triangle slot `slot` (leaf order).
-    fn slot(&self, slot: usize) -> &[[f32; 3]; 3] {
+    fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
     }
 
     /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
-    pub fn closest(&self, ray: &PreparedRay, t_min: f32, mut t_max: f32) -> Option<SlotHit> {
+    pub fn closest(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<SlotHit> {
+        self.first_hit::<false>(ray, t_min, t_max)
+            .map(|(i, c)| self.slot_hit(i, c))
+    }
+
+    /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
+    /// inclusive; stops at the first.
+    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> bool {
+        self.first_hit::<true>(ray, t_min, t_max).is_some()
+    }
+
+    /// Nearer child first, the far one on a stack: the closest hit (shrinking `t_max` at each
+    /// hit) or, when `ANY`, the first hit found. Returns the leaf slot and the crossing.
+    #[inline(always)]
+    fn first_hit<const ANY: bool>(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        mut t_max: f32,
+    ) -> Option<(usize, Crossing)> {
         let nodes = self.bvh.nodes();
         if nodes.is_empty() {
             return None;
@@ -90,6 +141,9 @@ impl Accel {
                 let first = node.first() as usize;
                 for i in first..first + node.count() as usize {
                     if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
+                        if ANY {
+                            return Some((i, c));
+                        }
                         t_max = c.t;
                         best = Some((i, c));
                     }
@@ -117,33 +171,19 @@ impl Accel {
                     (None, None) => {}
                 }
             }
-            // Pop the next subtree that can still hold a closer hit.
+            // Pop the next subtree that can still hold a (closer) hit.
             loop {
                 if sp == 0 {
-                    return best.map(|(i, crossing)| SlotHit {
-                        crossing,
-                        triangle: self.slots[i],
-                    });
+                    return best;
                 }
                 sp -= 1;
                 let candidate = &nodes[stack[sp] as usize];
-                if enter(candidate, ray, t_min, t_max).is_some() {
+                if ANY || enter(candidate, ray, t_min, t_max).is_some() {
                     node = candidate;
                     break;
                 }
             }
         }
-    }
-
-    /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
-    /// inclusive; stops at the first.
-    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> bool {
-        let mut found = false;
-        self.visit(ray, t_min, t_max, EdgeRule::Inclusive, &mut |_| {
-            found = true;
-            false
-        });
-        found
     }
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
@@ -180,10 +220,7 @@ impl Accel {
             if node.count() > 0 {
                 for i in first..first + node.count() as usize {
                     if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
-                        let hit = SlotHit {
-                            crossing,
-                            triangle: self.slots[i],
-                        };
+                        let hit = self.slot_hit(i, crossing);
                         if !f(hit) {
                             return;
                         }
@@ -219,7 +256,8 @@ impl Accel {
             let first = node.first() as usize;
             if node.count() > 0 {
                 for i in first..first + node.count() as usize {
-                    let (q, b1, b2) = closest_on_triangle(p, self.slot(i));
+                    let (q, b1, b2) =
+                        closest_on_triangle(p, self.slot(i).corners().map(Vec3::from));
                     let d = (q - p).length_squared();
                     if d < best_d {
                         best_d = d;
@@ -228,7 +266,9 @@ impl Accel {
                             distance_sq: d,
                             b1,
                             b2,
-                            triangle: self.slots[i],
+                            geometry: self.ids[i][0],
+                            primitive: self.ids[i][1],
+                            slot: i as u32,
                         });
                     }
                 }
@@ -257,8 +297,8 @@ impl Accel {
 /// conservative (see the module docs).
 #[inline(always)]
 fn enter(node: &BvhNode, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<f32> {
-    let t0 = (Vec3A::from(node.min_corner()) - ray.origin_a) * ray.inv_dir;
-    let t1 = (Vec3A::from(node.max_corner()) - ray.origin_a) * ray.inv_dir;
+    let t0 = (Vec3A::from(node.min_corner()) - ray.origin) * ray.inv_dir;
+    let t1 = (Vec3A::from(node.max_corner()) - ray.origin) * ray.inv_dir;
     let near = t0.min(t1).max_element();
     let far = t0.max(t1).min_element() * EXIT_SCALE;
     let near = if near > t_min { near } else { t_min };

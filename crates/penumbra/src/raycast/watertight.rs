@@ -21,7 +21,7 @@
 //!   `(ε, ε²)` in the sheared frame (a simulation of simplicity), which is the top-left rule of
 //!   rasterization.
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec3Swizzles};
 
 /// How a ray exactly on a triangle's edge or vertex counts; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,16 +35,45 @@ pub(crate) enum EdgeRule {
 /// A ray prepared for the watertight test and for the conservative box test.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PreparedRay {
-    /// Origin.
-    pub origin: Vec3,
     /// `1 / direction`, per component (±∞ for a zero component).
     pub inv_dir: Vec3A,
-    /// Origin, for the box test.
-    pub origin_a: Vec3A,
-    /// Axis permutation: the direction's largest component is `k[2]`.
-    k: [usize; 3],
-    /// Shear: `(−d_x/d_z, −d_y/d_z, 1/d_z)` in the permuted axes.
-    shear: [f32; 3],
+    /// Origin.
+    pub origin: Vec3A,
+    /// The sheared frame, row by row: the axis permutation (the direction's largest
+    /// component becomes z) and the shear `x' = x − (d_x/d_z)·z`, `y' = y − (d_y/d_z)·z`.
+    /// Each row has one or two non-zero entries, so applying it rounds exactly as the scalar
+    /// formulas (adding a zero is exact).
+    frame: [[f32; 3]; 3],
+    /// `1/d_z`: scales the frame's z into ray parameters.
+    inv_dz: f32,
+}
+
+/// The three corners of a triangle.
+pub(crate) type Corners = [Vec3A; 3];
+
+/// A triangle's corners by coordinate, as the traversal stores them:
+/// `x = (v0.x, v1.x, v2.x)`, and so on, so that the test runs on all three at once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SoaTriangle {
+    x: Vec3A,
+    y: Vec3A,
+    z: Vec3A,
+}
+
+impl SoaTriangle {
+    /// The triangle with corners `c`.
+    pub fn new(c: &Corners) -> SoaTriangle {
+        SoaTriangle {
+            x: Vec3A::new(c[0].x, c[1].x, c[2].x),
+            y: Vec3A::new(c[0].y, c[1].y, c[2].y),
+            z: Vec3A::new(c[0].z, c[1].z, c[2].z),
+        }
+    }
+
+    /// Its corners.
+    pub fn corners(&self) -> Corners {
+        [0, 1, 2].map(|k| Vec3A::new(self.x[k], self.y[k], self.z[k]))
+    }
 }
 
 /// A hit of [`PreparedRay::hit`]: the ray parameter and the barycentric weights of the
@@ -71,69 +100,67 @@ impl PreparedRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = direction[kz];
+        let mut frame = [[0.0; 3]; 3];
+        frame[0][kx] = 1.0;
+        frame[0][kz] = -direction[kx] / dz;
+        frame[1][ky] = 1.0;
+        frame[1][kz] = -direction[ky] / dz;
+        frame[2][kz] = 1.0;
         Some(PreparedRay {
-            origin,
             inv_dir: Vec3A::from(direction).recip(),
-            origin_a: Vec3A::from(origin),
-            k: [kx, ky, kz],
-            shear: [-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz],
+            origin: Vec3A::from(origin),
+            frame,
+            inv_dz: 1.0 / dz,
         })
     }
 
-    /// The vertex `p` in the ray's sheared frame: `(x, y)` in the plane across the ray and
-    /// the unscaled depth `z`.
-    #[inline(always)]
-    fn in_frame(&self, p: &[f32; 3]) -> (f32, f32, f32) {
-        let [kx, ky, kz] = self.k;
-        let (x, y, z) = (
-            p[kx] - self.origin[kx],
-            p[ky] - self.origin[ky],
-            p[kz] - self.origin[kz],
-        );
-        (x + self.shear[0] * z, y + self.shear[1] * z, z)
-    }
-
-    /// Intersects the triangle `tri` (its three corners) for `t` in `[t_min, t_max]` under
-    /// `rule`. Two-sided; degenerate triangles and triangles seen exactly edge-on are missed.
+    /// Intersects the triangle `tri` for `t` in `[t_min, t_max]` under `rule`. Two-sided;
+    /// degenerate triangles and triangles seen exactly edge-on are missed.
     #[inline(always)]
     pub fn hit(
         &self,
-        tri: &[[f32; 3]; 3],
+        tri: &SoaTriangle,
         t_min: f32,
         t_max: f32,
         rule: EdgeRule,
     ) -> Option<Crossing> {
-        let (ax, ay, az) = self.in_frame(&tri[0]);
-        let (bx, by, bz) = self.in_frame(&tri[1]);
-        let (cx, cy, cz) = self.in_frame(&tri[2]);
-        // Edge functions: `u` of edge B→C (the weight of A), `v` of C→A, `w` of A→B.
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
-        if u == 0.0 || v == 0.0 || w == 0.0 {
-            u = edge_f64(cx, by, cy, bx);
-            v = edge_f64(ax, cy, ay, cx);
-            w = edge_f64(bx, ay, by, ax);
+        // The corners in the ray's sheared frame, one lane per corner. Each lane depends on
+        // its vertex alone, so a vertex shared by two triangles lands on the same point.
+        let (dx, dy, dz) = (
+            tri.x - Vec3A::splat(self.origin.x),
+            tri.y - Vec3A::splat(self.origin.y),
+            tri.z - Vec3A::splat(self.origin.z),
+        );
+        let row = |r: [f32; 3]| dx * r[0] + dy * r[1] + dz * r[2];
+        let (fx, fy, fz) = (row(self.frame[0]), row(self.frame[1]), row(self.frame[2]));
+        // Edge functions, one lane each: `u` of edge B→C (the weight of A), `v` of C→A,
+        // `w` of A→B; `x1, y1` are the edges' start corners and `x2, y2` their ends.
+        let (x1, x2, y1, y2) = (fx.yzx(), fx.zxy(), fy.yzx(), fy.zxy());
+        let mut uvw = x2 * y1 - y2 * x1;
+        if uvw.cmpeq(Vec3A::ZERO).any() {
+            uvw = Vec3A::new(
+                edge_f64(x2.x, y1.x, y2.x, x1.x),
+                edge_f64(x2.y, y1.y, y2.y, x1.y),
+                edge_f64(x2.z, y1.z, y2.z, x1.z),
+            );
         }
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        if uvw.cmplt(Vec3A::ZERO).any() && uvw.cmpgt(Vec3A::ZERO).any() {
             return None;
         }
-        let det = u + v + w;
+        let det = uvw.element_sum();
         if det == 0.0 || det.is_nan() {
             return None;
         }
-        if rule == EdgeRule::Owned && (u == 0.0 || v == 0.0 || w == 0.0) {
-            let flip = det < 0.0;
-            let owns = |zero: bool, ex: f32, ey: f32| !zero || owned(ex, ey, flip);
-            if !(owns(u == 0.0, cx - bx, cy - by)
-                && owns(v == 0.0, ax - cx, ay - cy)
-                && owns(w == 0.0, bx - ax, by - ay))
-            {
-                return None;
+        if rule == EdgeRule::Owned {
+            let zero = uvw.cmpeq(Vec3A::ZERO);
+            if zero.any() {
+                let (ex, ey, flip) = (x2 - x1, y2 - y1, det < 0.0);
+                if (0..3).any(|k| zero.test(k) && !owned(ex[k], ey[k], flip)) {
+                    return None;
+                }
             }
         }
-        let s = self.shear[2];
-        let scaled_t = u * (s * az) + v * (s * bz) + w * (s * cz);
+        let scaled_t = (uvw * (fz * self.inv_dz)).element_sum();
         let inv_det = 1.0 / det;
         let t = scaled_t * inv_det;
         if !(t >= t_min && t <= t_max) {
@@ -141,8 +168,8 @@ impl PreparedRay {
         }
         Some(Crossing {
             t,
-            b1: v * inv_det,
-            b2: w * inv_det,
+            b1: uvw.y * inv_det,
+            b2: uvw.z * inv_det,
         })
     }
 }
@@ -171,7 +198,7 @@ fn owned(ex: f32, ey: f32, flip: bool) -> bool {
 }
 
 /// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle (zero for a degenerate one).
-pub(crate) fn unit_normal(tri: &[[f32; 3]; 3]) -> Vec3 {
+pub(crate) fn unit_normal(tri: &Corners) -> Vec3 {
     let [a, b, c] = tri.map(Vec3::from);
     (b - a).cross(c - a).normalize_or_zero()
 }
