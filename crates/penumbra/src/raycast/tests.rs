@@ -384,3 +384,59 @@ fn a_cancelled_query_stops_with_an_error() {
         Err(RaycastError::Cancelled)
     );
 }
+
+#[test]
+fn oblique_rays_at_a_flat_box_boundary_edge_hit() {
+    // The renderer's slab test misses some of these (see the ignored
+    // `accel::tests::edges::oblique_hits_on_a_flat_box_boundary_edge`): the triangle's box is
+    // flat in z and the rays meet the edge y = 0 on the box's boundary. The exit distance
+    // scaled by 1 + 2γ₃ keeps the box test conservative.
+    let s = scene_of(&[(
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )]);
+    let rays: Vec<[f32; 6]> = (1..40)
+        .flat_map(|i| (1..40).map(move |j| (i as f32 * 0.37, j as f32 * 1.13)))
+        .map(|(a, b)| [0.25, -a, -b, 0.0, a, b])
+        .collect();
+    // The box test must never skip what the triangle test alone accepts. (On an unshared
+    // boundary edge the sheared ray may fall just outside; that is not a gap between
+    // triangles, so the triangle test is the reference here.)
+    let cast = s.cast_rays(&rays, &on(2)).unwrap();
+    let mut hits = 0;
+    for (ray, t) in rays.iter().zip(&cast.t_hit) {
+        let want = closest_brute(&s, ray);
+        assert_eq!(t.is_finite(), want.is_some(), "{ray:?}");
+        if want.is_some() {
+            hits += 1;
+            assert!((t - 1.0).abs() < 1e-6, "{ray:?}: {t}");
+        }
+    }
+    assert!(hits > rays.len() / 4, "{hits} of {}", rays.len());
+    check_rays(&s, &rays);
+}
+
+#[test]
+fn a_world_becomes_one_geometry_per_object() {
+    let mut builder = crate::world::WorldBuilder::new();
+    let tri = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]];
+    builder.add_triangles(&tri, &[[0, 1, 2]], 0).unwrap();
+    let far = tri.map(|p| [p[0], p[1], p[2] - 5.0]);
+    builder
+        .add_triangles(&far, &[[0, 1, 2], [2, 1, 0]], 0)
+        .unwrap();
+    let s = RaycastingScene::from_world(&builder.build(1));
+    assert_eq!((s.geometry_count(), s.triangle_count()), (2, 3));
+    let rays = [
+        [0.0, 0.0, 1.0, 0.0, 0.0, -1.0],
+        [0.0, 0.0, -9.0, 0.0, 0.0, 1.0],
+    ];
+    let cast = s.cast_rays(&rays, &on(1)).unwrap();
+    assert_eq!(cast.geometry_ids, [0, 1]);
+    assert_eq!(cast.t_hit, [1.0, 4.0]);
+    assert!(cast.primitive_ids[1] < 2);
+    let list = s.list_intersections(&rays[..1], &on(1)).unwrap();
+    assert_eq!(list.geometry_ids, [0, 1, 1]);
+    assert_eq!(list.primitive_ids[0], 0);
+    assert_eq!(list.t_hit, [1.0, 6.0, 6.0]);
+}
