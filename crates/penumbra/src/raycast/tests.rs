@@ -440,3 +440,20 @@ fn a_world_becomes_one_geometry_per_object() {
     assert_eq!(list.primitive_ids[0], 0);
     assert_eq!(list.t_hit, [1.0, 6.0, 6.0]);
 }
+
+#[test]
+fn a_scene_can_be_shared_between_threads() {
+    fn shareable<T: Send + Sync>() {}
+    shareable::<RaycastingScene>();
+    // Queries from two threads at once on one scene (the first builds the BVH).
+    let s = scene_of(&[(
+        vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )]);
+    let rays = vec![[0.0, 0.0, 2.0, 0.0, 0.0, -1.0]; 3000];
+    std::thread::scope(|scope| {
+        let a = scope.spawn(|| s.cast_rays(&rays, &on(1)).unwrap());
+        let b = scope.spawn(|| s.cast_rays(&rays, &on(2)).unwrap());
+        assert_eq!(a.join().unwrap(), b.join().unwrap());
+    });
+}

@@ -39,11 +39,12 @@ pub(crate) struct PreparedRay {
     pub inv_dir: Vec3A,
     /// Origin.
     pub origin: Vec3A,
-    /// The sheared frame, row by row: the axis permutation (the direction's largest
-    /// component becomes z) and the shear `x' = x − (d_x/d_z)·z`, `y' = y − (d_y/d_z)·z`.
-    /// Each row has one or two non-zero entries, so applying it rounds exactly as the scalar
-    /// formulas (adding a zero is exact).
-    frame: [[f32; 3]; 3],
+    /// Axis permutation: the direction's largest component is axis `k[2]`; `k[0]` and
+    /// `k[1]` become the frame's x and y.
+    k: [usize; 3],
+    /// Shear: `x' = x + shear[0]·z`, `y' = y + shear[1]·z` in the permuted axes, with
+    /// `shear = (−d_x/d_z, −d_y/d_z)`.
+    shear: [f32; 2],
     /// `1/d_z`: scales the frame's z into ray parameters.
     inv_dz: f32,
 }
@@ -100,16 +101,11 @@ impl PreparedRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = direction[kz];
-        let mut frame = [[0.0; 3]; 3];
-        frame[0][kx] = 1.0;
-        frame[0][kz] = -direction[kx] / dz;
-        frame[1][ky] = 1.0;
-        frame[1][kz] = -direction[ky] / dz;
-        frame[2][kz] = 1.0;
         Some(PreparedRay {
             inv_dir: Vec3A::from(direction).recip(),
             origin: Vec3A::from(origin),
-            frame,
+            k: [kx, ky, kz],
+            shear: [-direction[kx] / dz, -direction[ky] / dz],
             inv_dz: 1.0 / dz,
         })
     }
@@ -126,13 +122,14 @@ impl PreparedRay {
     ) -> Option<Crossing> {
         // The corners in the ray's sheared frame, one lane per corner. Each lane depends on
         // its vertex alone, so a vertex shared by two triangles lands on the same point.
-        let (dx, dy, dz) = (
+        let d = [
             tri.x - Vec3A::splat(self.origin.x),
             tri.y - Vec3A::splat(self.origin.y),
             tri.z - Vec3A::splat(self.origin.z),
-        );
-        let row = |r: [f32; 3]| dx * r[0] + dy * r[1] + dz * r[2];
-        let (fx, fy, fz) = (row(self.frame[0]), row(self.frame[1]), row(self.frame[2]));
+        ];
+        let [kx, ky, kz] = self.k;
+        let fz = d[kz];
+        let (fx, fy) = (d[kx] + self.shear[0] * fz, d[ky] + self.shear[1] * fz);
         // Edge functions, one lane each: `u` of edge B→C (the weight of A), `v` of C→A,
         // `w` of A→B; `x1, y1` are the edges' start corners and `x2, y2` their ends.
         let (x1, x2, y1, y2) = (fx.yzx(), fx.zxy(), fy.yzx(), fy.zxy());
