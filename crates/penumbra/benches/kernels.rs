@@ -1,7 +1,8 @@
 //! Kernel benchmarks on the seed's room (`scenes/cornell.toml`): the shadow rays of one
 //! shading point (the 25 segments to its 5×5 light samples) traced as packets on every SIMD
 //! path this machine has, against the same segments traced one ray at a time; and camera
-//! rays through the closest-hit traversal.
+//! rays through the closest-hit traversal, in packets of 16 sharing the camera's origin on
+//! every path, and one at a time.
 //!
 //! ```text
 //! cargo bench -p penumbra --bench kernels
@@ -74,16 +75,41 @@ fn bench_shadow(c: &mut Criterion) {
 fn bench_camera(c: &mut Criterion) {
     let world = world();
     let camera = PinholeCamera::new(&world.cameras()[0].1, 64, 64);
+    // Rows of pixels, as the renderer batches them: 16 rays of neighbouring pixels at a time.
     let rays: Vec<Ray> = (0..64 * 64)
         .map(|i| camera.ray((i % 64) as f32 + 0.5, (i / 64) as f32 + 0.5))
         .collect();
-    c.bench_function("closest_hit_4096_camera_rays", |b| {
+    let dirs: Vec<Vec3> = rays.iter().map(|r| r.direction).collect();
+    let mut group = c.benchmark_group("closest_hit_4096_camera_rays");
+    for path in supported_paths() {
+        group.bench_function(format!("packets_of_16_{}", path.name()), |b| {
+            let mut hits = vec![None; 16];
+            b.iter(|| {
+                let mut count = 0;
+                for batch in dirs.chunks(16) {
+                    let hits = &mut hits[..batch.len()];
+                    world.accel().intersect_from_on(
+                        path,
+                        camera.eye(),
+                        batch,
+                        1e-4,
+                        f32::INFINITY,
+                        hits,
+                    );
+                    count += hits.iter().filter(|h| h.is_some()).count();
+                }
+                black_box(count)
+            })
+        });
+    }
+    group.bench_function("single_rays", |b| {
         b.iter(|| {
             rays.iter()
                 .filter(|r| world.intersect(r, 1e-4, f32::INFINITY).is_some())
                 .count()
         })
     });
+    group.finish();
 }
 
 criterion_group!(benches, bench_shadow, bench_camera);

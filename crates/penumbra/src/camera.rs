@@ -125,6 +125,11 @@ impl PinholeCamera {
         }
     }
 
+    /// Where every ray starts: the camera's position.
+    pub fn eye(&self) -> Vec3 {
+        self.eye
+    }
+
     /// The ray through film point `(x, y)`: x in `[0, width)` from the left edge, y in
     /// `[0, height)` from the top edge. The direction is normalized.
     pub fn ray(&self, x: f32, y: f32) -> Ray {

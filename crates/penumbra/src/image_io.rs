@@ -10,6 +10,7 @@ use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
 use thiserror::Error;
 
+use crate::encode8::encode_all;
 use crate::film::Film;
 use crate::texture::{linear_to_srgb, srgb_to_linear, Image};
 
@@ -122,11 +123,7 @@ fn write_to(
     let err = |e: image::ImageError| e.to_string();
     match format {
         OutputFormat::Png | OutputFormat::Jpeg => {
-            let bytes: Vec<u8> = film
-                .pixels
-                .iter()
-                .flat_map(|p| p.to_array().map(|c| encode_8bit(c, gamma)))
-                .collect();
+            let bytes = encode_all(&film.pixels, gamma);
             let img = RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?;
             if format == OutputFormat::Png {
                 img.write_to(&mut w, image::ImageFormat::Png).map_err(err)?;

@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod encode8;
 mod files;
 mod film;
 mod geometry;
@@ -85,8 +86,9 @@ pub use raycast::{
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
 };
 pub use render::{
-    render, PixelBounds, RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError,
-    View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
+    render, render_with_aovs, AovFilm, AovPixel, PixelBounds, RenderError, RenderOptions,
+    RenderSettings, RenderStats, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
+    NO_ID,
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{

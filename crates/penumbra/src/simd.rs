@@ -75,15 +75,114 @@ pub fn simd_path() -> SimdPath {
     })
 }
 
-/// Work to compile per instruction set: `run::<N>` with `N` lanes per vector group. Its
-/// implementation, and every function it calls that should use the instruction set, must be
-/// `#[inline(always)]`: code that is not inlined into the dispatching function is compiled
-/// for the baseline only.
+/// Work to compile per instruction set: `run::<N, I>` with `N` lanes per vector group and the
+/// instruction set's own operations in `I`. Its implementation, and every function it calls
+/// that should use the instruction set, must be `#[inline(always)]`: code that is not inlined
+/// into the dispatching function is compiled for the baseline only.
 pub(crate) trait Kernel {
     /// What the work returns.
     type Output;
     /// Does the work with `N` lanes.
-    fn run<const N: usize>(self) -> Self::Output;
+    fn run<const N: usize, I: Isa>(self) -> Self::Output;
+}
+
+/// The few operations that plain Rust does not compile well, per instruction set.
+pub(crate) trait Isa {
+    /// Bit `i` set where lane `i` is negative (all ones, for a comparison's result): one
+    /// move-mask instruction where the instruction set has it for `N` lanes.
+    fn mask<const N: usize>(lanes: &[i32; N]) -> u32;
+}
+
+/// The sign bits of `lanes` one by one: what every path falls back on.
+#[inline(always)]
+fn mask_by_lane<const N: usize>(lanes: &[i32; N]) -> u32 {
+    let mut bits = 0;
+    for (i, &lane) in lanes.iter().enumerate() {
+        bits |= ((lane as u32) >> 31) << i;
+    }
+    bits
+}
+
+/// AVX-512 F/VL/BW/DQ.
+struct Avx512;
+/// AVX2.
+struct Avx2;
+/// The target's baseline (SSE2 on x86-64).
+struct Baseline;
+
+impl Isa for Avx512 {
+    #[inline(always)]
+    fn mask<const N: usize>(lanes: &[i32; N]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if N == 16 {
+            // SAFETY: `Avx512` is only used by `run_avx512`, which runs only on CPUs with
+            // AVX-512 F/DQ; the 16 lanes are 64 readable bytes.
+            return unsafe { mask16_avx512(lanes.as_ptr()) };
+        }
+        mask_by_lane(lanes)
+    }
+}
+
+impl Isa for Avx2 {
+    #[inline(always)]
+    fn mask<const N: usize>(lanes: &[i32; N]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if N == 8 {
+            // SAFETY: `Avx2` is only used by `run_avx2`, which runs only on CPUs with AVX2;
+            // the 8 lanes are 32 readable bytes.
+            return unsafe { mask8_avx2(lanes.as_ptr()) };
+        }
+        mask_by_lane(lanes)
+    }
+}
+
+impl Isa for Baseline {
+    #[inline(always)]
+    fn mask<const N: usize>(lanes: &[i32; N]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if N == 8 {
+            // SAFETY: SSE2 is part of every x86-64 CPU; the 8 lanes are 32 readable bytes.
+            return unsafe { mask8_sse2(lanes.as_ptr()) };
+        }
+        mask_by_lane(lanes)
+    }
+}
+
+/// `vpmovd2m` of 16 lanes at `lanes`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq")]
+#[inline]
+unsafe fn mask16_avx512(lanes: *const i32) -> u32 {
+    use std::arch::x86_64::{_mm512_loadu_si512, _mm512_movepi32_mask};
+    // SAFETY: the caller guarantees 64 readable bytes; `loadu` takes any alignment.
+    let v = unsafe { _mm512_loadu_si512(lanes.cast()) };
+    _mm512_movepi32_mask(v) as u32
+}
+
+/// `vmovmskps` of 8 lanes at `lanes`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn mask8_avx2(lanes: *const i32) -> u32 {
+    use std::arch::x86_64::{_mm256_castsi256_ps, _mm256_loadu_si256, _mm256_movemask_ps};
+    // SAFETY: the caller guarantees 32 readable bytes; `loadu` takes any alignment.
+    let v = unsafe { _mm256_loadu_si256(lanes.cast()) };
+    _mm256_movemask_ps(_mm256_castsi256_ps(v)) as u32
+}
+
+/// Two `movmskps` of 4 lanes each at `lanes`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+unsafe fn mask8_sse2(lanes: *const i32) -> u32 {
+    use std::arch::x86_64::{_mm_castsi128_ps, _mm_loadu_si128, _mm_movemask_ps};
+    // SAFETY: the caller guarantees 32 readable bytes; `loadu` takes any alignment, and SSE2
+    // is baseline on x86-64.
+    unsafe {
+        let lo = _mm_loadu_si128(lanes.cast());
+        let hi = _mm_loadu_si128(lanes.add(4).cast());
+        (_mm_movemask_ps(_mm_castsi128_ps(lo)) | (_mm_movemask_ps(_mm_castsi128_ps(hi)) << 4))
+            as u32
+    }
 }
 
 /// Runs `kernel` compiled for `path` (the portable build when the CPU lacks `path`).
@@ -101,17 +200,17 @@ pub(crate) fn dispatch<K: Kernel>(path: SimdPath, kernel: K) -> K::Output {
             SimdPath::Portable => {}
         }
     }
-    kernel.run::<8>()
+    kernel.run::<8, Baseline>()
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
 unsafe fn run_avx512<K: Kernel>(kernel: K) -> K::Output {
-    kernel.run::<16>()
+    kernel.run::<16, Avx512>()
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn run_avx2<K: Kernel>(kernel: K) -> K::Output {
-    kernel.run::<8>()
+    kernel.run::<8, Avx2>()
 }

@@ -13,6 +13,7 @@
 //! - `split`: one node's split: binning (in parallel chunks for large nodes), the SAH sweep
 //!   and the partition;
 //! - `traverse`: the slab test and the closest-hit, any-hit and batch queries;
+//! - `closest` and `packet`: closest-hit and any-hit SIMD packets of rays sharing an origin;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
 use glam::Vec3;
@@ -22,6 +23,7 @@ use crate::math::{Aabb, Ray};
 use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
+mod closest;
 mod packet;
 mod split;
 mod traverse;
@@ -160,7 +162,10 @@ impl Bvh {
         &self.prim_ids
     }
 
-    /// The closest hit with `t` in `(t_min, t_max)`, if any.
+    /// The closest hit with `t` in `(t_min, t_max)`, if any. Among triangles hit at exactly the
+    /// same `t` (a ray through an edge two triangles share) the one with the smallest index
+    /// wins, whatever the tree's shape, so that every query and the brute-force reference
+    /// agree.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         traverse::intersect(self, ray, t_min, t_max)
@@ -176,6 +181,45 @@ impl Bvh {
     /// (which must be as long as `rays`). Each result equals [`Bvh::intersect`]'s.
     pub fn intersect_batch(&self, rays: &[Ray], t_min: f32, t_max: f32, hits: &mut [Option<Hit>]) {
         traverse::intersect_batch(self, rays, t_min, t_max, hits);
+    }
+
+    /// The closest hit of each ray from `origin` along `dirs[i]` with `t` in `(t_min, t_max)`,
+    /// written to `hits[i]` (which must be as long as `dirs`): the camera rays of a pinhole
+    /// camera share their origin. Each result equals [`Bvh::intersect`]'s.
+    ///
+    /// The rays are traced as SIMD packets on this process's [`simd_path`]; every path gives
+    /// the same answers.
+    pub fn intersect_from(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        t_min: f32,
+        t_max: f32,
+        hits: &mut [Option<Hit>],
+    ) {
+        self.intersect_from_on(simd_path(), origin, dirs, t_min, t_max, hits);
+    }
+
+    /// [`Bvh::intersect_from`] on a given SIMD path (the portable one when `path` is not
+    /// supported), so that tests can run every path the machine has.
+    pub fn intersect_from_on(
+        &self,
+        path: SimdPath,
+        origin: Vec3,
+        dirs: &[Vec3],
+        t_min: f32,
+        t_max: f32,
+        hits: &mut [Option<Hit>],
+    ) {
+        let kernel = closest::Closest {
+            bvh: self,
+            origin,
+            dirs,
+            t_min,
+            t_max,
+            hits,
+        };
+        dispatch(path, kernel);
     }
 
     /// Occlusion of the segments from `origin` to each point of `ends`: `occluded[i]` is true

@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use super::{traverse, Bvh, BvhNode, STACK_SIZE};
 use crate::math::Ray;
-use crate::simd::Kernel;
+use crate::simd::{Isa, Kernel};
 
 /// [`Bvh::occlude_from`] as a [`Kernel`]: the segments in packets of `N` lanes.
 pub(super) struct Occlude<'a> {
@@ -32,7 +32,7 @@ impl Kernel for Occlude<'_> {
 
     /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
     #[inline(always)]
-    fn run<const N: usize>(self) {
+    fn run<const N: usize, I: Isa>(self) {
         let Occlude {
             bvh,
             origin,
@@ -56,7 +56,7 @@ impl Kernel for Occlude<'_> {
                     }
                 }
             } else {
-                occlude_packet::<N>(bvh, origin, ends, t_max, blocked);
+                occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
             }
         }
     }
@@ -65,7 +65,7 @@ impl Kernel for Occlude<'_> {
 /// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
 /// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-pub(super) fn occlude_packet<const N: usize>(
+pub(super) fn occlude_packet<const N: usize, I: Isa>(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
@@ -76,18 +76,23 @@ pub(super) fn occlude_packet<const N: usize>(
     let count = ends.len();
     // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
     let mut dir = [[0.0f32; N]; 3];
-    let mut inv = [[0.0f32; N]; 3];
     // Lane i is bit i.
     let mut active: u32 = 0;
     for i in 0..N {
         let d = ends[i.min(count - 1)] - origin;
         for a in 0..3 {
             dir[a][i] = d[a];
-            inv[a][i] = 1.0 / d[a];
         }
         active |= ((i < count && !blocked[i]) as u32) << i;
     }
+    let mut inv = [[0.0f32; N]; 3];
+    for a in 0..3 {
+        for i in 0..N {
+            inv[a][i] = 1.0 / dir[a][i];
+        }
+    }
     let o = origin.to_array();
+    let far = [t_max; N];
 
     // Children are tested at their parent and the one the first live lane enters first is
     // visited first, so that occluders near the shading point end the packet early; the other
@@ -96,14 +101,14 @@ pub(super) fn occlude_packet<const N: usize>(
     let mut sp = 0;
     let root = &bvh.nodes[0];
     let mut node = root;
-    if slab(root, &o, &inv, t_max).0 & active == 0 {
+    if slab::<N, I>(root, &o, &inv, 0.0, &far).0 & active == 0 {
         return;
     }
     'nodes: loop {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !triangle(tri, origin, &dir, t_max);
+                active &= !triangle::<N, I>(tri, origin, &dir, t_max);
                 if active == 0 {
                     break 'nodes;
                 }
@@ -113,7 +118,10 @@ pub(super) fn occlude_packet<const N: usize>(
                 &bvh.nodes[node.first as usize],
                 &bvh.nodes[node.first as usize + 1],
             );
-            let ((ml, nl), (mr, nr)) = (slab(l, &o, &inv, t_max), slab(r, &o, &inv, t_max));
+            let ((ml, nl), (mr, nr)) = (
+                slab::<N, I>(l, &o, &inv, 0.0, &far),
+                slab::<N, I>(r, &o, &inv, 0.0, &far),
+            );
             let (ml, mr) = (ml & active, mr & active);
             if ml != 0 && mr != 0 {
                 let lane = active.trailing_zeros() as usize;
@@ -154,7 +162,7 @@ pub(super) fn occlude_packet<const N: usize>(
 
 /// `a < b ? a : b` and `a > b ? a : b`: the vector min and max instructions' semantics.
 #[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
+pub(super) fn min(a: f32, b: f32) -> f32 {
     if a < b {
         a
     } else {
@@ -163,7 +171,7 @@ fn min(a: f32, b: f32) -> f32 {
 }
 
 #[inline(always)]
-fn max(a: f32, b: f32) -> f32 {
+pub(super) fn max(a: f32, b: f32) -> f32 {
     if a > b {
         a
     } else {
@@ -171,75 +179,83 @@ fn max(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max)`, and each
-/// lane's entry distance.
+/// The lanes (bit i for lane i) that enter the node's box within `(t_min, t_max[i])`, and each
+/// lane's entry distance. A box entered exactly at `t_max[i]` counts.
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn slab<const N: usize>(
+pub(super) fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
     o: &[f32; 3],
     inv: &[[f32; N]; 3],
-    t_max: f32,
+    t_min: f32,
+    t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
     // The box relative to the shared origin, once for all lanes.
     let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
     let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
-    let mut hit = 0;
+    let mut inside = [0i32; N];
     let mut entry = [0.0; N];
     for i in 0..N {
         let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
         let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
         let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max);
-        hit |= ((near <= far) as u32) << i;
+        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
+        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max[i]);
+        inside[i] = -((near <= far) as i32);
         entry[i] = near;
     }
-    (hit, entry)
+    (I::mask(&inside), entry)
 }
 
-/// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`: Möller–Trumbore exactly as
-/// `geometry::intersect_triangle` computes it, with the origin's terms shared by all lanes.
-// The comparisons are written out, negations included, to keep the scalar test's answers for
-// NaN values (a NaN `b2` passes its two tests there, and must here).
-#[allow(
-    clippy::neg_cmp_op_on_partial_ord,
-    clippy::manual_range_contains,
-    clippy::needless_range_loop
-)]
+/// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn triangle<const N: usize>(
+fn triangle<const N: usize, I: Isa>(
     tri: &super::TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],
     t_max: f32,
 ) -> u32 {
-    let (e1, e2) = (tri.e1, tri.e2);
     let tvec = origin - tri.v0;
-    let qvec = tvec.cross(e1);
-    let t_num = e2.dot(qvec);
-    let mut hit = 0;
+    let qvec = tvec.cross(tri.e1);
+    let t_num = tri.e2.dot(qvec);
+    let mut hit = [0i32; N];
     for i in 0..N {
-        let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
-        // pvec = dir × e2, as glam's cross product.
-        let px = dy * e2.z - e2.y * dz;
-        let py = dz * e2.x - e2.z * dx;
-        let pz = dx * e2.y - e2.x * dy;
-        let det = e1.x * px + e1.y * py + e1.z * pz;
-        let inv_det = 1.0 / det;
-        let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
-        let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;
-        let t = t_num * inv_det;
-        let ok = (det != 0.0)
-            & det.is_finite()
-            & (0.0 <= b1)
-            & (b1 <= 1.0)
-            & !(b2 < 0.0)
-            & !(b1 + b2 > 1.0)
-            & (t > 0.0)
-            & (t < t_max);
-        hit |= (ok as u32) << i;
+        let (inside, t, _, _) = moller_trumbore(tri, tvec, qvec, t_num, dir, i);
+        hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
     }
-    hit
+    I::mask(&hit)
+}
+
+/// Lane `i` of Möller–Trumbore exactly as `geometry::intersect_triangle` computes it, with the
+/// origin's terms (`tvec = origin − v0`, `qvec = tvec × e1`, `t_num = e2·qvec`) shared by all
+/// lanes: whether the ray meets the triangle's inside (edges included), and `t`, `b1`, `b2`.
+/// The caller bounds `t`.
+// The comparisons are written out, negations included, to keep the scalar test's answers for
+// NaN values (a NaN `b2` passes its two tests there, and must here).
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+#[inline(always)]
+pub(super) fn moller_trumbore<const N: usize>(
+    tri: &super::TriAccel,
+    tvec: Vec3,
+    qvec: Vec3,
+    t_num: f32,
+    dir: &[[f32; N]; 3],
+    i: usize,
+) -> (bool, f32, f32, f32) {
+    let (e1, e2) = (tri.e1, tri.e2);
+    let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
+    // pvec = dir × e2, as glam's cross product.
+    let px = dy * e2.z - e2.y * dz;
+    let py = dz * e2.x - e2.z * dx;
+    let pz = dx * e2.y - e2.x * dy;
+    let det = e1.x * px + e1.y * py + e1.z * pz;
+    let inv_det = 1.0 / det;
+    let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
+    let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;
+    let t = t_num * inv_det;
+    let inside =
+        (det != 0.0) & det.is_finite() & (0.0 <= b1) & (b1 <= 1.0) & !(b2 < 0.0) & !(b1 + b2 > 1.0);
+    (inside, t, b1, b2)
 }

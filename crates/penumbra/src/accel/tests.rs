@@ -71,8 +71,8 @@ fn assert_agree(g: &Geometry, bvh: &Bvh, ray: &Ray) {
     assert_agree_in(g, bvh, ray, 1e-4, f32::INFINITY);
 }
 
-/// Closest hit and occlusion over `(t_min, t_max)` agree with brute force: the same distance
-/// (the triangle may differ only on an exact tie), the reported barycentrics are the hit
+/// Closest hit and occlusion over `(t_min, t_max)` agree with brute force: the same hit (on an
+/// exact tie, the triangle with the smallest index), the reported barycentrics are the hit
 /// triangle's own, and nothing blocks the ray strictly before its closest hit.
 fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
     let a = bvh.intersect(ray, t_min, t_max);
@@ -80,7 +80,7 @@ fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
     match (a, b) {
         (None, None) => {}
         (Some(a), Some(b)) => {
-            assert_eq!(a.t, b.t, "closest distance differs for {ray:?}");
+            assert_eq!(a, b, "closest hit differs for {ray:?}");
             let tri = accel(g.corners(a.triangle as usize));
             let own = tri
                 .hit(ray, t_min, t_max)
@@ -105,6 +105,39 @@ fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
 /// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
 /// blocks exactly the others that brute force finds occluded (packets of every fill, with
 /// some lanes blocked from the start).
+/// [`Bvh::intersect_from`] on every SIMD path gives each ray's brute-force closest hit.
+fn assert_from_agrees(
+    g: &Geometry,
+    bvh: &Bvh,
+    origin: Vec3,
+    dirs: &[Vec3],
+    t_min: f32,
+    t_max: f32,
+) {
+    let expected: Vec<Option<Hit>> = dirs
+        .iter()
+        .map(|&d| intersect_brute_force(g, &Ray::new(origin, d), t_min, t_max))
+        .collect();
+    for path in supported_paths() {
+        // Stale contents must be overwritten, misses included.
+        let stale = Hit {
+            t: -1.0,
+            b1: 0.5,
+            b2: 0.5,
+            triangle: 7,
+        };
+        let mut hits = vec![Some(stale); dirs.len()];
+        bvh.intersect_from_on(path, origin, dirs, t_min, t_max, &mut hits);
+        for (i, (hit, want)) in hits.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                hit, want,
+                "{path:?}: ray {i} from {origin} along {}",
+                dirs[i]
+            );
+        }
+    }
+}
+
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
     let expected: Vec<bool> = ends
         .iter()

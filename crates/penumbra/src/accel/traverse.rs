@@ -14,7 +14,12 @@ pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Opt
         return None;
     }
     let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+    // The best hit so far: its leaf-order index, barycentrics and scene index (`u32::MAX`
+    // before the first). A later triangle at exactly `t_max` wins when its scene index is
+    // smaller, so the answer does not depend on the order of the visit.
     let mut best: Option<(usize, f32, f32)> = None;
+    let mut best_id = u32::MAX;
+    let mut limit = t_max;
     let mut stack = [0u32; STACK_SIZE];
     let mut sp = 0;
     let mut node = &bvh.nodes[0];
@@ -24,10 +29,15 @@ pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Opt
             let first = node.first as usize;
             for i in first..first + node.count as usize {
                 let tri = &bvh.tris[i];
-                let hit = tri.hit(ray, t_min, t_max);
+                let hit = tri.hit(ray, t_min, limit);
                 if let Some(h) = hit {
-                    t_max = h.t;
-                    best = Some((i, h.b1, h.b2));
+                    let id = bvh.prim_ids[i];
+                    if h.t < t_max || id < best_id {
+                        t_max = h.t;
+                        limit = h.t.next_up();
+                        best_id = id;
+                        best = Some((i, h.b1, h.b2));
+                    }
                 }
             }
         } else {

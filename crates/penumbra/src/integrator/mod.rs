@@ -18,7 +18,7 @@ use glam::Vec3;
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
-use crate::simd::{dispatch, simd_path, Kernel, SimdPath};
+use crate::simd::{dispatch, simd_path, Isa, Kernel, SimdPath};
 use crate::world::World;
 use model::{Lanes, Lobe, Model, Physical, Seed};
 use plan::{plan, Directions, LightPlan, Points, Source};
@@ -109,7 +109,7 @@ impl Kernel for Shade<'_, '_> {
     type Output = (Rgb, u64);
 
     #[inline(always)]
-    fn run<const N: usize>(self) -> (Rgb, u64) {
+    fn run<const N: usize, I: Isa>(self) -> (Rgb, u64) {
         self.integrator
             .shade_lanes(self.ray, self.surface, self.rng, self.scratch)
     }

@@ -1,25 +1,30 @@
 //! Renders a [`World`] with per-call [`RenderSettings`] into a [`Film`]: tiles over a local
 //! rayon pool, each pixel the box-filtered mean of its samples. A pixel's value depends only on
 //! its coordinates in the full film, so any thread count, scheduling or region gives the same
-//! bits.
+//! bits. [`render_with_aovs`] also returns per-pixel AOVs (see [`AovPixel`]); [`render`] computes
+//! none of them.
 
+mod aov;
+mod job;
 mod settings;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::Vec2;
 use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::camera::PinholeCamera;
 use crate::film::Film;
-use crate::integrator::{Integrator, Scratch, CAMERA_T_MIN};
+use crate::integrator::Integrator;
 use crate::math::Rgb;
 use crate::pool::thread_pool;
-use crate::sampling::{fixed_offsets, jittered_offset, Rng};
+use crate::sampling::fixed_offsets;
 use crate::world::World;
+use aov::AovContext;
+use job::{Buffers, Job};
 
+pub use aov::{AovFilm, AovPixel, NO_ID};
 pub use settings::{RenderSettings, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 
 /// A half-open pixel rectangle `[x0, x1) × [y0, y1)` of the full film (pbrt's
@@ -123,6 +128,51 @@ pub fn render(
     settings: &RenderSettings,
     options: &RenderOptions,
 ) -> Result<(Film, RenderStats), RenderError> {
+    let (film, _, stats) = render_impl(world, settings, options, false)?;
+    Ok((film, stats))
+}
+
+/// Renders like [`render`] and also returns the AOVs of every pixel of the film (or region):
+/// the colour is the same, bit for bit. Costs one more camera ray per pixel and the albedo of
+/// every sample.
+pub fn render_with_aovs(
+    world: &World,
+    settings: &RenderSettings,
+    options: &RenderOptions,
+) -> Result<(Film, AovFilm, RenderStats), RenderError> {
+    let (film, aovs, stats) = render_impl(world, settings, options, true)?;
+    let aovs = AovFilm {
+        width: film.width,
+        height: film.height,
+        pixels: aovs,
+    };
+    Ok((film, aovs, stats))
+}
+
+/// A buffer of `len` values, or the error that the image does not fit in memory.
+fn buffer<T: Clone>(
+    len: usize,
+    value: T,
+    (width, height): (u32, u32),
+) -> Result<Vec<T>, RenderError> {
+    let mut v: Vec<T> = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| RenderError::OutOfMemory { width, height })?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// What a tile's worker returns: its colours, its AOVs (empty unless asked for) and the shadow
+/// rays it traced.
+type TileOut = (Vec<Rgb>, Vec<AovPixel>, u64);
+
+/// [`render`], with the AOVs of every pixel when `with_aovs` (else an empty vector).
+fn render_impl(
+    world: &World,
+    settings: &RenderSettings,
+    options: &RenderOptions,
+    with_aovs: bool,
+) -> Result<(Film, Vec<AovPixel>, RenderStats), RenderError> {
     let camera = settings.check(world)?;
     let (width, height) = (settings.width, settings.height);
     let region = options.region.unwrap_or(PixelBounds {
@@ -143,14 +193,9 @@ pub fn render(
         });
     }
     let (rw, rh) = (region.x1 - region.x0, region.y1 - region.y0);
-    let mut pixels: Vec<Rgb> = Vec::new();
-    pixels
-        .try_reserve_exact(rw as usize * rh as usize)
-        .map_err(|_| RenderError::OutOfMemory {
-            width: rw,
-            height: rh,
-        })?;
-    pixels.resize(rw as usize * rh as usize, Rgb::ZERO);
+    let len = rw as usize * rh as usize;
+    let mut pixels = buffer(len, Rgb::ZERO, (rw, rh))?;
+    let mut aov_pixels = buffer(if with_aovs { len } else { 0 }, AovPixel::MISS, (rw, rh))?;
 
     let (pool, threads) = thread_pool(options.threads).map_err(|e| RenderError::Threads {
         threads: options.threads,
@@ -162,6 +207,7 @@ pub fn render(
         world,
         settings,
         offsets: fixed_offsets(settings.sampler, settings.samples_per_axis()),
+        aovs: with_aovs.then(|| AovContext::new(world)),
     };
 
     let tiles: Vec<PixelBounds> = (region.y0..region.y1)
@@ -182,34 +228,31 @@ pub fn render(
     let start = Instant::now();
     let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
 
-    let results: Vec<Option<(Vec<Rgb>, u64)>> = pool.install(|| {
+    let results: Vec<Option<TileOut>> = pool.install(|| {
         tiles
             .par_iter()
             .map(|tile| {
                 if cancelled() {
                     return None;
                 }
-                let mut out =
-                    Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+                let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
+                let mut out = Vec::with_capacity(n);
+                let mut aovs = Vec::with_capacity(if with_aovs { n } else { 0 });
                 let mut shadow = 0;
-                let mut scratch = Scratch::default();
+                let mut buffers = Buffers::default();
                 for y in tile.y0..tile.y1 {
                     // A row of a tile can take long at high sample counts: check per row.
                     if cancelled() {
                         return None;
                     }
-                    for x in tile.x0..tile.x1 {
-                        let (c, s) = job.pixel(x, y, &mut scratch);
-                        out.push(c);
-                        shadow += s;
-                    }
+                    shadow += job.row(y, tile.x0..tile.x1, &mut buffers, &mut out, &mut aovs);
                 }
                 let n = out.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;
                 if let Some(progress) = options.progress {
                     progress(d, total);
                 }
-                Some((out, shadow))
+                Some((out, aovs, shadow))
             })
             .collect()
     });
@@ -219,7 +262,7 @@ pub fn render(
 
     let mut shadow_rays = 0;
     for (tile, result) in tiles.iter().zip(results) {
-        let (values, shadow) = result.ok_or(RenderError::Cancelled)?;
+        let (values, aovs, shadow) = result.ok_or(RenderError::Cancelled)?;
         shadow_rays += shadow;
         let tw = (tile.x1 - tile.x0) as usize;
         for (row, chunk) in values.chunks(tw).enumerate() {
@@ -227,6 +270,11 @@ pub fn render(
             let x = (tile.x0 - region.x0) as usize;
             let at = y * rw as usize + x;
             pixels[at..at + tw].copy_from_slice(chunk);
+        }
+        for (row, chunk) in aovs.chunks(tw).enumerate() {
+            let y = (tile.y0 - region.y0) as usize + row;
+            let at = y * rw as usize + (tile.x0 - region.x0) as usize;
+            aov_pixels[at..at + tw].copy_from_slice(chunk);
         }
     }
     let stats = RenderStats {
@@ -240,46 +288,5 @@ pub fn render(
         height: rh,
         pixels,
     };
-    Ok((film, stats))
-}
-
-/// One render's fixed parts, shared by its workers.
-struct Job<'a> {
-    world: &'a World,
-    settings: &'a RenderSettings,
-    camera: PinholeCamera,
-    integrator: Integrator<'a>,
-    /// The pixel offsets of a deterministic sampler; `None` for jittered.
-    offsets: Option<Vec<Vec2>>,
-}
-
-impl Job<'_> {
-    /// The value of pixel `(x, y)` of the full film and the shadow rays it took.
-    fn pixel(&self, x: u32, y: u32, scratch: &mut Scratch) -> (Rgb, u64) {
-        let settings = self.settings;
-        let n = settings.samples_per_axis();
-        let pixel_index = y as u64 * settings.width as u64 + x as u64;
-        let mut sum = Rgb::ZERO;
-        let mut shadow = 0;
-        for s in 0..n * n {
-            let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
-            let offset = match &self.offsets {
-                Some(o) => o[s as usize],
-                None => jittered_offset(n, s / n, s % n, rng.uniform2()),
-            };
-            let ray = self
-                .camera
-                .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-            match self.world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) {
-                Some(hit) => {
-                    let surface = self.world.surface(&hit);
-                    let (c, rays) = self.integrator.shade(&ray, &surface, &mut rng, scratch);
-                    sum += c;
-                    shadow += rays;
-                }
-                None => sum += settings.background,
-            }
-        }
-        (sum / (n * n) as f32, shadow)
-    }
+    Ok((film, aov_pixels, stats))
 }

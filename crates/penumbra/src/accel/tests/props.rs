@@ -109,8 +109,7 @@ proptest! {
         bvh.intersect_batch(&rays, t_min, t_max, &mut hits);
         for (ray, hit) in rays.iter().zip(&hits) {
             prop_assert_eq!(*hit, bvh.intersect(ray, t_min, t_max));
-            let reference = intersect_brute_force(&g, ray, t_min, t_max);
-            prop_assert_eq!(hit.map(|h| h.t), reference.map(|h| h.t));
+            prop_assert_eq!(*hit, intersect_brute_force(&g, ray, t_min, t_max));
         }
     }
 
@@ -134,6 +133,23 @@ proptest! {
         let bvh = build_checked(&g);
         let ends: Vec<Vec3> = samples.iter().map(|&(a, b)| corner + a * u + b * v).collect();
         assert_segments_agree(&g, &bvh, Vec3::from(origin), &ends, T_MAX);
+    }
+
+    /// Rays sharing an origin, as a pinhole camera's, in packets of every width.
+    #[test]
+    fn intersect_from_equals_brute_force(
+        tris in arb_soup(),
+        origin in arb_point(),
+        targets in prop::collection::vec(arb_point(), 0..40),
+        t_min in arb_t_min(),
+        t_max in arb_t_max(),
+    ) {
+        let g = soup(&tris);
+        let bvh = build_checked(&g);
+        let origin = Vec3::from(origin);
+        let dirs: Vec<Vec3> = targets.iter().map(|&p| Vec3::from(p) - origin).collect();
+        assert_from_agrees(&g, &bvh, origin, &dirs, t_min, t_max);
+        assert_from_agrees(&g, &bvh, origin, &dirs, 1e-4, f32::INFINITY);
     }
 
     /// Integer coordinates: rays and segments between lattice points meet triangles exactly on
@@ -162,6 +178,9 @@ proptest! {
         for (ray, hit) in rays.iter().zip(&hits) {
             prop_assert_eq!(*hit, bvh.intersect(ray, 0.0, f32::INFINITY));
         }
+        let dirs: Vec<Vec3> = rays.iter().map(|r| r.direction).collect();
+        assert_from_agrees(&g, &bvh, origin, &dirs, 0.0, f32::INFINITY);
+        assert_from_agrees(&g, &bvh, origin, &dirs, 1e-4, 1.0);
         let ends: Vec<Vec3> = ends.iter().map(|&(e, _)| e).collect();
         assert_segments_agree(&g, &bvh, origin, &ends, T_MAX);
     }

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 
-use super::lines::{continues, for_each_line_from, numbers, rest_of_line};
+use super::lines::{continues, find, for_each_line_from, numbers, rest_of_line};
 use super::NONE;
 
 /// The material of faces before a chunk's first `usemtl`: the one current where it starts.
@@ -212,9 +212,15 @@ fn parse_corner(
     mut relative: impl FnMut(usize, i64) -> u32,
 ) -> Result<[u32; 3], String> {
     let mut out = [NONE; 3];
-    let mut parts = word.split('/');
+    // The parts as `word.split('/')` gives them, found by a byte scan.
+    let mut start = 0;
     for (k, slot) in out.iter_mut().enumerate() {
-        let Some(part) = parts.next() else { break };
+        if start > word.len() {
+            break;
+        }
+        let end = find(word.as_bytes(), start, b'/', b'/');
+        let part = &word[start..end];
+        start = end + 1;
         if part.is_empty() {
             if k == 0 {
                 return Err(format!("face corner \"{word}\" has no vertex index"));
@@ -240,10 +246,41 @@ fn parse_corner(
             x => relative(k, x),
         };
     }
-    if parts.next().is_some() {
+    if start <= word.len() {
         return Err(format!(
             "face corner \"{word}\" has more than three indices"
         ));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Face corners split as `str::split('/')` splits them: one to three parts, empty parts
+    /// skipped after the vertex, a fourth part refused.
+    #[test]
+    fn corners_split_on_slashes() {
+        let absolute = |_: usize, _: i64| unreachable!("no relative indices here");
+        let ok = |word: &str| parse_corner(word, absolute).unwrap();
+        assert_eq!(ok("7"), [6, NONE, NONE]);
+        assert_eq!(ok("7/8"), [6, 7, NONE]);
+        assert_eq!(ok("7//9"), [6, NONE, 8]);
+        assert_eq!(ok("7/8/9"), [6, 7, 8]);
+        assert_eq!(ok("7//"), [6, NONE, NONE]);
+        for bad in ["7/8/9/", "7/8/9/10", "/8/9", "", "7/x", "7/8/ 9"] {
+            assert!(parse_corner(bad, absolute).is_err(), "{bad:?}");
+        }
+        let relative: Vec<(usize, i64)> = {
+            let mut seen = Vec::new();
+            parse_corner("-1/-2/-3", |k, x| {
+                seen.push((k, x));
+                0
+            })
+            .unwrap();
+            seen
+        };
+        assert_eq!(relative, [(0, -1), (1, -2), (2, -3)]);
+    }
 }

@@ -43,6 +43,7 @@ use crate::files::read_bounded;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
+use lines::decode;
 use mtl::{resolve, Library};
 
 /// A material from an MTL file.
@@ -148,7 +149,7 @@ fn read(
     let ranges = chunk::split(bytes, chunk_bytes.max(1));
     let lines = |r: &Range<usize>| bytes[r.clone()].iter().filter(|&&b| b == b'\n').count();
     let parse = |(r, first_line): (&Range<usize>, usize)| {
-        chunk::parse(&String::from_utf8_lossy(&bytes[r.clone()]), first_line)
+        chunk::parse(&decode(&bytes[r.clone()]), first_line)
     };
     // The line each chunk starts on.
     let first_lines = |counts: Vec<usize>| -> Vec<usize> {

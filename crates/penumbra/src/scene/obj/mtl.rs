@@ -10,7 +10,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use super::lines::{for_each_line, numbers, rest_of_line};
+use super::lines::{decode, for_each_line, numbers, rest_of_line};
 use super::{ObjMaterial, MAX_FILE_BYTES};
 use crate::files::read_bounded;
 
@@ -48,7 +48,7 @@ impl Library {
 fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
     let bytes = read_bounded(path, MAX_FILE_BYTES)
         .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
-    parse_mtl(&String::from_utf8_lossy(&bytes), path, library)
+    parse_mtl(&decode(&bytes), path, library)
 }
 
 /// Reads the text of the MTL file `path` into `library`; `path` names the file in messages

@@ -1,0 +1,87 @@
+//! The library's errors as Python exceptions: scene mistakes as `SceneError` (a `ValueError`)
+//! with their location, unreadable files as `OSError` subclasses, bad settings as
+//! `ValueError`, an interrupted render as `KeyboardInterrupt`.
+
+use penumbra::{AssetKind, ErrorKind, ImageError, RenderError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+pyo3::create_exception!(
+    penumbra,
+    SceneError,
+    PyValueError,
+    "A mistake in a scene: its attributes `file`, `line`, `column` (1-based, or None), `key` \
+     (the key path such as `objects[2].material`, or None) and `kind` say where and what."
+);
+
+/// The name of an error kind, as the Python API spells it.
+fn kind_name(kind: ErrorKind) -> &'static str {
+    match kind {
+        ErrorKind::Syntax => "syntax",
+        ErrorKind::UnknownKey => "unknown_key",
+        ErrorKind::MissingKey => "missing_key",
+        ErrorKind::BadValue => "bad_value",
+        ErrorKind::UnknownName => "unknown_name",
+        ErrorKind::Asset(AssetKind::Mesh) => "asset_mesh",
+        ErrorKind::Asset(AssetKind::Image) => "asset_image",
+        ErrorKind::File => "file",
+    }
+}
+
+/// An `OSError` of the right subclass (`FileNotFoundError`, `PermissionError`, ...) for `e`,
+/// naming `path`, as `open()` raises it.
+pub(crate) fn os_error(e: &std::io::Error, path: &std::path::Path) -> PyErr {
+    let path = path.display().to_string();
+    match e.raw_os_error() {
+        Some(errno) => PyOSError::new_err((errno, e.to_string(), path)),
+        None => PyOSError::new_err(format!("{path}: {e}")),
+    }
+}
+
+/// A scene error as Python sees it. A scene file that cannot be read is an `OSError`, with the
+/// operating system's error number and the file name; everything else is a [`SceneError`].
+pub(crate) fn scene_error(py: Python<'_>, e: penumbra::SceneError) -> PyErr {
+    if let penumbra::SceneError::Read { path, source } = &e {
+        return os_error(source, path);
+    }
+    let err = SceneError::new_err(e.to_string());
+    let value = err.value(py);
+    let location = e.location();
+    let file = match (&e, location) {
+        (_, Some(l)) => Some(l.file.display().to_string()),
+        (penumbra::SceneError::UnknownFormat { path }, None) => Some(path.display().to_string()),
+        _ => None,
+    };
+    // Setting attributes on a fresh exception object cannot fail but for memory exhaustion;
+    // the message stays right either way.
+    let _ = value.setattr("file", file);
+    let _ = value.setattr("line", location.and_then(|l| l.line));
+    let _ = value.setattr("column", location.and_then(|l| l.column));
+    let _ = value.setattr("key", location.and_then(|l| l.key.clone()));
+    let _ = value.setattr("kind", kind_name(e.kind()));
+    err
+}
+
+/// A render error as Python sees it.
+pub(crate) fn render_error(e: RenderError) -> PyErr {
+    match e {
+        RenderError::Cancelled => PyKeyboardInterrupt::new_err("render interrupted"),
+        RenderError::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
+        RenderError::Settings(_) | RenderError::BadRegion { .. } => {
+            PyValueError::new_err(e.to_string())
+        }
+        RenderError::Threads { threads, .. } if threads > penumbra::MAX_THREADS => {
+            PyValueError::new_err(e.to_string())
+        }
+        RenderError::Threads { .. } => PyOSError::new_err(e.to_string()),
+    }
+}
+
+/// An image error as Python sees it: an unknown extension is a `ValueError`, a failed write an
+/// `OSError`.
+pub(crate) fn image_error(e: ImageError) -> PyErr {
+    match e {
+        ImageError::UnknownFormat { .. } => PyValueError::new_err(e.to_string()),
+        ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
+    }
+}

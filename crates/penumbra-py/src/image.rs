@@ -1,0 +1,73 @@
+//! Images from arrays: writing an (H, W, 3) float32 array with the library's atomic image
+//! writer, and its 8-bit encoding (the bytes the CLI puts in a PNG).
+
+use std::path::PathBuf;
+
+use numpy::ndarray::Array3;
+use numpy::{IntoPyArray, PyArray3, PyReadonlyArray3};
+use penumbra::{encode_8bit, Film, Rgb};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::errors::image_error;
+
+/// The pixels of an (H, W, 3) float32 array as a film.
+fn film(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Film> {
+    let view = array.as_array();
+    let (h, w, c) = view.dim();
+    if c != 3 || h == 0 || w == 0 {
+        return Err(PyValueError::new_err(format!(
+            "an image is a non-empty (height, width, 3) array, not shape ({h}, {w}, {c})"
+        )));
+    }
+    let (width, height) = (
+        u32::try_from(w).map_err(|_| PyValueError::new_err("image too wide"))?,
+        u32::try_from(h).map_err(|_| PyValueError::new_err("image too high"))?,
+    );
+    let pixels = view
+        .outer_iter()
+        .flat_map(|row| {
+            row.outer_iter()
+                .map(|p| Rgb::new(p[0], p[1], p[2]))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok(Film {
+        width,
+        height,
+        pixels,
+    })
+}
+
+/// Writes an (H, W, 3) float32 linear RGB array to `path` in the format its extension names
+/// (PNG, JPEG, EXR, PFM), atomically, as the command line writes images.
+#[pyfunction]
+#[pyo3(signature = (path, array, gamma = None))]
+pub fn write_image(
+    py: Python<'_>,
+    path: PathBuf,
+    array: PyReadonlyArray3<'_, f32>,
+    gamma: Option<f32>,
+) -> PyResult<()> {
+    let film = film(&array)?;
+    py.detach(|| penumbra::write_image(&film, &path, gamma))
+        .map_err(image_error)
+}
+
+/// The 8-bit encoding of an (H, W, 3) float32 linear RGB array: clamped to [0, 1], then the
+/// sRGB curve (or `c^(1/gamma)`), rounded; the bytes the command line writes to a PNG.
+#[pyfunction]
+#[pyo3(signature = (array, gamma = None))]
+pub fn to_srgb8<'py>(
+    py: Python<'py>,
+    array: PyReadonlyArray3<'py, f32>,
+    gamma: Option<f32>,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let view = array.as_array();
+    let dim = view.dim();
+    let values: Vec<f32> = view.iter().copied().collect();
+    let bytes: Vec<u8> = py.detach(|| values.iter().map(|&c| encode_8bit(c, gamma)).collect());
+    let out =
+        Array3::from_shape_vec(dim, bytes).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(out.into_pyarray(py))
+}

@@ -1,0 +1,30 @@
+//! The `penumbra._core` Python extension module: a thin layer over the `penumbra` library.
+//! It converts arguments and results between Python and Rust, releases the GIL while the
+//! library works, and turns the library's errors into Python exceptions; it renders nothing
+//! itself. The public Python API (`penumbra`) is the pure-Python package in `python/penumbra`,
+//! which wraps these functions.
+
+use pyo3::prelude::*;
+
+mod camera;
+mod errors;
+mod image;
+mod render;
+mod scene;
+
+/// The compiled core of the `penumbra` package.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("SceneError", py.get_type::<errors::SceneError>())?;
+    m.add_class::<scene::CoreScene>()?;
+    m.add_function(wrap_pyfunction!(scene::load, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::loads, m)?)?;
+    m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
+    m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
+    m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
+    m.add("AOV_NAMES", render::AOV_NAMES.to_vec())?;
+    m.add("NO_ID", penumbra::NO_ID)?;
+    m.add("MAX_THREADS", penumbra::MAX_THREADS)?;
+    Ok(())
+}

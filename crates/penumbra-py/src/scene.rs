@@ -1,0 +1,157 @@
+//! Loading scenes: `load` and `loads` parse and build a scene with the GIL released, into a
+//! [`CoreScene`] that holds the built world (shared, never rebuilt) and the file's settings.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use penumbra::{RenderSettings, SceneFile, SceneFormat, World};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::errors::scene_error;
+use crate::render::{render_scene, CameraArgs, Request};
+
+/// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
+/// scene file's default render settings.
+#[pyclass(frozen, module = "penumbra._core")]
+pub struct CoreScene {
+    world: Arc<World>,
+    settings: RenderSettings,
+    /// The file's `render.samples`, the sample count a sampler change falls back to.
+    file_samples: Option<i64>,
+    load_seconds: f64,
+}
+
+/// Parses and builds with the GIL released.
+fn build(
+    py: Python<'_>,
+    threads: usize,
+    parse: impl FnOnce() -> Result<SceneFile, penumbra::SceneError> + Send,
+) -> PyResult<CoreScene> {
+    let built = py.detach(|| {
+        let file = parse()?;
+        let scene = file.build(threads)?;
+        Ok::<_, penumbra::SceneError>((file, scene))
+    });
+    let (file, scene) = built.map_err(|e| scene_error(py, e))?;
+    Ok(CoreScene {
+        world: scene.world,
+        settings: scene.settings,
+        file_samples: file.desc.render.samples,
+        load_seconds: scene.load_time.as_secs_f64(),
+    })
+}
+
+/// Loads and builds the `.toml` or `.json` scene file at `path`.
+#[pyfunction]
+#[pyo3(signature = (path, threads = 0))]
+pub fn load(py: Python<'_>, path: PathBuf, threads: usize) -> PyResult<CoreScene> {
+    build(py, threads, || SceneFile::load(&path))
+}
+
+/// Parses and builds scene text in `format` ("toml" or "json"); `name` names it in messages
+/// and relative paths resolve against `base_dir`.
+#[pyfunction]
+#[pyo3(signature = (text, format = "toml", base_dir = PathBuf::from("."), name = "<string>".to_owned(), threads = 0))]
+pub fn loads(
+    py: Python<'_>,
+    text: String,
+    format: &str,
+    base_dir: PathBuf,
+    name: String,
+    threads: usize,
+) -> PyResult<CoreScene> {
+    let format = match format.to_ascii_lowercase().as_str() {
+        "toml" => SceneFormat::Toml,
+        "json" => SceneFormat::Json,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown scene format {other:?} (use \"toml\" or \"json\")"
+            )))
+        }
+    };
+    build(py, threads, move || {
+        SceneFile::from_str(&text, format, name, base_dir)
+    })
+}
+
+#[pymethods]
+impl CoreScene {
+    /// Renders with the file's settings changed by the given ones; see `penumbra.Scene.render`.
+    #[pyo3(signature = (camera_name, camera, spp, sampler, light_samples, seed, width, height, region, threads, progress, aovs))]
+    #[allow(clippy::too_many_arguments)]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        camera_name: Option<String>,
+        camera: Option<CameraArgs>,
+        spp: Option<u32>,
+        sampler: Option<String>,
+        light_samples: Option<u32>,
+        seed: Option<u64>,
+        width: Option<u32>,
+        height: Option<u32>,
+        region: Option<(u32, u32, u32, u32)>,
+        threads: usize,
+        progress: Option<Bound<'py, PyAny>>,
+        aovs: Vec<String>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let request = Request {
+            camera_name,
+            camera,
+            spp,
+            sampler,
+            light_samples,
+            seed,
+            width,
+            height,
+            region,
+            threads,
+            progress,
+            aovs,
+        };
+        render_scene(py, &self.world, &self.settings, self.file_samples, request)
+    }
+
+    /// The names of the scene's cameras, in file order (the first is the default).
+    #[getter]
+    fn cameras(&self) -> Vec<String> {
+        self.world
+            .cameras()
+            .iter()
+            .map(|(n, _)| n.clone())
+            .collect()
+    }
+
+    /// The file's default settings as a dict.
+    #[getter]
+    fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.settings;
+        let d = PyDict::new(py);
+        d.set_item("width", s.width)?;
+        d.set_item("height", s.height)?;
+        d.set_item("spp", s.spp)?;
+        d.set_item("sampler", s.sampler.name())?;
+        d.set_item("light_samples", s.light_samples)?;
+        d.set_item("seed", s.seed)?;
+        Ok(d)
+    }
+
+    /// Counts and build times of the world as a dict.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let st = self.world.stats();
+        let d = PyDict::new(py);
+        d.set_item("triangles", st.triangles)?;
+        d.set_item("objects", st.objects)?;
+        d.set_item("lights", st.lights)?;
+        d.set_item("materials", st.materials)?;
+        d.set_item("textures", st.textures)?;
+        d.set_item("cameras", st.cameras)?;
+        d.set_item("bvh_nodes", st.bvh_nodes)?;
+        d.set_item("bvh_build_seconds", st.bvh_build_time.as_secs_f64())?;
+        d.set_item("load_seconds", self.load_seconds)?;
+        Ok(d)
+    }
+}

@@ -1,0 +1,213 @@
+//! Arbitrary output variables (AOVs): per-pixel geometric and material data beside the colour,
+//! as dataset generators and denoisers use them (Mitsuba's `aov` integrator, Blender's passes).
+//!
+//! How each is taken over a pixel:
+//! - `depth`, `position`, `normal`, `object_id` and `primitive_id` come from one ray: the ray
+//!   through the pixel's center, whatever the sampler and sample count. They never blend two
+//!   surfaces at a silhouette, they agree with each other (`position` is the camera position
+//!   plus `depth` along that ray's unit direction), and they do not change with the seed or
+//!   the samples per pixel.
+//! - `albedo` is filtered like the colour: the mean over all of the pixel's samples, a sample
+//!   that misses counting as black. It matches the colour's edges, as denoisers expect.
+//!
+//! On a miss: depth is `+inf`, position, normal and albedo are zero, and both ids are
+//! [`NO_ID`].
+
+use glam::Vec3;
+
+use crate::camera::PinholeCamera;
+use crate::geometry::Surface;
+use crate::integrator::CAMERA_T_MIN;
+use crate::math::{Ray, Rgb};
+use crate::world::World;
+
+/// The id of "nothing hit" in [`AovPixel::object_id`] and [`AovPixel::primitive_id`].
+pub const NO_ID: u32 = u32::MAX;
+
+/// The AOVs of one pixel. See the [module documentation](self) for how each is filtered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AovPixel {
+    /// Distance from the camera to the surface along the ray through the pixel center (not
+    /// the z-depth); `+inf` on a miss.
+    pub depth: f32,
+    /// World-space hit point of the center ray; zero on a miss.
+    pub position: Vec3,
+    /// World-space unit shading normal of the center ray's hit, turned to the camera's side
+    /// as shading turns it; zero on a miss.
+    pub normal: Vec3,
+    /// The diffuse reflectance k_d times the texture, averaged over the pixel's samples.
+    pub albedo: Rgb,
+    /// Index of the object hit (the scene file's `objects` entry, in order), or [`NO_ID`].
+    pub object_id: u32,
+    /// Index of the triangle hit within its object, in the order its mesh lists them, or
+    /// [`NO_ID`].
+    pub primitive_id: u32,
+}
+
+impl AovPixel {
+    /// The value of a pixel whose center ray hits nothing and whose samples all miss.
+    pub const MISS: AovPixel = AovPixel {
+        depth: f32::INFINITY,
+        position: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        albedo: Rgb::ZERO,
+        object_id: NO_ID,
+        primitive_id: NO_ID,
+    };
+}
+
+/// The AOVs of a rendered film (or region), row-major, row 0 at the top, like
+/// [`Film`](crate::Film).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovFilm {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height` pixels.
+    pub pixels: Vec<AovPixel>,
+}
+
+impl AovFilm {
+    /// The pixel in column `x`, row `y` (from the top).
+    pub fn get(&self, x: u32, y: u32) -> AovPixel {
+        self.pixels[(y as usize) * (self.width as usize) + x as usize]
+    }
+}
+
+/// What a render needs to compute AOVs: the first triangle of every object, to number
+/// triangles within their object.
+pub(crate) struct AovContext {
+    first_triangle: Vec<u32>,
+}
+
+impl AovContext {
+    /// Indexes the objects of `world`. Objects' triangles are contiguous and in object order.
+    pub(crate) fn new(world: &World) -> Self {
+        let mut first_triangle = Vec::new();
+        for (i, tri) in world.geometry().triangles.iter().enumerate() {
+            if tri.object as usize >= first_triangle.len() {
+                first_triangle.resize(tri.object as usize + 1, i as u32);
+            }
+        }
+        Self { first_triangle }
+    }
+
+    /// The geometric AOVs of pixel `(x, y)` from the ray through its center; albedo zero.
+    pub(crate) fn center(&self, world: &World, camera: &PinholeCamera, x: u32, y: u32) -> AovPixel {
+        let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+        let Some(hit) = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) else {
+            return AovPixel::MISS;
+        };
+        let surface = world.surface(&hit);
+        let first = self
+            .first_triangle
+            .get(surface.object as usize)
+            .copied()
+            .unwrap_or(0);
+        AovPixel {
+            // The camera's rays have unit directions, so t is the distance.
+            depth: hit.t,
+            position: surface.position,
+            normal: facing_normal(&ray, &surface),
+            albedo: Rgb::ZERO,
+            object_id: surface.object,
+            primitive_id: surface.triangle - first,
+        }
+    }
+}
+
+/// The shading normal turned as the integrator turns it: the geometric normal toward the
+/// ray's origin, the shading normal onto the geometric normal's side.
+pub(crate) fn facing_normal(ray: &Ray, surface: &Surface) -> Vec3 {
+    let mut n_geom = surface.geometric_normal;
+    let mut n = surface.shading_normal;
+    if n_geom.dot(ray.direction) > 0.0 {
+        n_geom = -n_geom;
+        n = -n;
+    }
+    if n.dot(n_geom) < 0.0 {
+        n = -n;
+    }
+    n
+}
+
+/// The diffuse reflectance at `surface`: the material's k_d times its texture, as shading
+/// uses it.
+pub(crate) fn albedo(world: &World, surface: &Surface) -> Rgb {
+    let material = &world.materials()[surface.material as usize];
+    let tex = match material.texture {
+        Some(t) => world.textures()[t as usize].eval(surface.uv),
+        None => Vec3::ONE,
+    };
+    tex * material.diffuse
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::geometry::{cube, quad};
+    use crate::material::Material;
+    use crate::math::Transform;
+    use crate::world::WorldBuilder;
+
+    #[test]
+    fn triangles_are_numbered_within_their_object() {
+        let mut b = WorldBuilder::new();
+        let m = b
+            .add_material(Material {
+                diffuse: Rgb::new(0.5, 0.25, 1.0),
+                ..Material::default()
+            })
+            .unwrap();
+        // Object 0: a cube far off to the side; object 1: a quad facing the camera at z = 0.
+        let far = Transform::from_srt(Vec3::ONE, Vec3::ZERO, Vec3::new(100.0, 0.0, 0.0));
+        b.add_mesh(&cube(Vec3::ONE), &far, &[m]).unwrap();
+        let q = quad(Vec3::new(-1.0, -1.0, 0.0), 2.0 * Vec3::X, 2.0 * Vec3::Y);
+        b.add_mesh(&q, &Transform::IDENTITY, &[m]).unwrap();
+        let world = b.build(1);
+        let cam = Camera::new(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0).unwrap();
+        let camera = PinholeCamera::new(&cam, 1, 1);
+        let ctx = AovContext::new(&world);
+        let px = ctx.center(&world, &camera, 0, 0);
+        assert_eq!(px.depth, 3.0);
+        assert_eq!(px.object_id, 1);
+        assert!(px.primitive_id < 2, "{}", px.primitive_id);
+        assert_eq!(px.normal, Vec3::Z);
+        assert!(px.position.length() < 1e-6);
+
+        let ray = camera.ray(0.5, 0.5);
+        let hit = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY).unwrap();
+        let s = world.surface(&hit);
+        assert_eq!(albedo(&world, &s), Rgb::new(0.5, 0.25, 1.0));
+    }
+
+    #[test]
+    fn a_miss_has_the_documented_values() {
+        let world = WorldBuilder::new().build(1);
+        let cam = Camera::new(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0).unwrap();
+        let px = AovContext::new(&world).center(&world, &PinholeCamera::new(&cam, 2, 2), 1, 1);
+        assert_eq!(px, AovPixel::MISS);
+        assert_eq!((px.object_id, px.primitive_id), (NO_ID, NO_ID));
+    }
+
+    #[test]
+    fn normals_face_the_viewer_like_shading() {
+        let s = Surface {
+            position: Vec3::ZERO,
+            geometric_normal: Vec3::Z,
+            shading_normal: -Vec3::Z,
+            uv: glam::Vec2::ZERO,
+            triangle: 0,
+            object: 0,
+            material: 0,
+        };
+        // Seen from +z, a shading normal that disagrees with the geometric one is flipped.
+        let from_front = Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z);
+        assert_eq!(facing_normal(&from_front, &s), Vec3::Z);
+        // Seen from -z, both are turned to the back.
+        let from_back = Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z);
+        assert_eq!(facing_normal(&from_back, &s), -Vec3::Z);
+    }
+}

@@ -1,0 +1,138 @@
+//! One render's fixed parts and the work on a row of pixels: camera rays of a few neighbouring
+//! pixels traced together (a pinhole's rays share their origin), then every hit shaded.
+
+use std::ops::Range;
+
+use glam::{Vec2, Vec3};
+
+use super::aov::{self, AovContext, AovPixel};
+use super::RenderSettings;
+use crate::camera::PinholeCamera;
+use crate::geometry::Hit;
+use crate::integrator::{Integrator, Scratch, CAMERA_T_MIN};
+use crate::math::{Ray, Rgb};
+use crate::sampling::{jittered_offset, Rng};
+use crate::world::World;
+
+/// Camera rays traced together: a packet of the widest SIMD path, four pixels of the usual
+/// 4 samples. More pixels per batch only when they have fewer samples.
+const BATCH_RAYS: u32 = 16;
+
+/// One render's fixed parts, shared by its workers.
+pub(super) struct Job<'a> {
+    pub(super) world: &'a World,
+    pub(super) settings: &'a RenderSettings,
+    pub(super) camera: PinholeCamera,
+    pub(super) integrator: Integrator<'a>,
+    /// The pixel offsets of a deterministic sampler; `None` for jittered.
+    pub(super) offsets: Option<Vec<Vec2>>,
+    /// Present when the render computes AOVs.
+    pub(super) aovs: Option<AovContext>,
+}
+
+/// Buffers one worker reuses from one batch of pixels to the next.
+#[derive(Default)]
+pub(super) struct Buffers {
+    scratch: Scratch,
+    /// Each camera ray's direction, its sample's generator (after the pixel jitter, ready for
+    /// the light jitter) and its hit.
+    dirs: Vec<Vec3>,
+    rngs: Vec<Rng>,
+    hits: Vec<Option<Hit>>,
+}
+
+impl Job<'_> {
+    /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their
+    /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took.
+    pub(super) fn row(
+        &self,
+        y: u32,
+        xs: Range<u32>,
+        buffers: &mut Buffers,
+        out: &mut Vec<Rgb>,
+        aovs: &mut Vec<AovPixel>,
+    ) -> u64 {
+        let spp = self.settings.samples_per_axis().pow(2);
+        let per_batch = (BATCH_RAYS / spp).max(1);
+        let mut shadow = 0;
+        let mut x0 = xs.start;
+        while x0 < xs.end {
+            let x1 = (x0 + per_batch).min(xs.end);
+            shadow += self.pixels(y, x0..x1, buffers, out, aovs);
+            x0 = x1;
+        }
+        shadow
+    }
+
+    /// [`Job::row`] for a few pixels: every sample's camera ray first, traced in one call,
+    /// then each pixel's mean in sample order.
+    fn pixels(
+        &self,
+        y: u32,
+        xs: Range<u32>,
+        buffers: &mut Buffers,
+        out: &mut Vec<Rgb>,
+        aovs: &mut Vec<AovPixel>,
+    ) -> u64 {
+        let settings = self.settings;
+        let n = settings.samples_per_axis();
+        let spp = (n * n) as usize;
+        let Buffers {
+            scratch,
+            dirs,
+            rngs,
+            hits,
+        } = buffers;
+        dirs.clear();
+        rngs.clear();
+        for x in xs.clone() {
+            let pixel_index = y as u64 * settings.width as u64 + x as u64;
+            for s in 0..n * n {
+                let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
+                let offset = match &self.offsets {
+                    Some(o) => o[s as usize],
+                    None => jittered_offset(n, s / n, s % n, rng.uniform2()),
+                };
+                let ray = self
+                    .camera
+                    .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+                dirs.push(ray.direction);
+                rngs.push(rng);
+            }
+        }
+        let eye = self.camera.eye();
+        hits.resize(dirs.len(), None);
+        self.world
+            .accel()
+            .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
+
+        let mut shadow = 0;
+        for (pixel, x) in xs.enumerate() {
+            let mut sum = Rgb::ZERO;
+            let mut albedo = Rgb::ZERO;
+            for i in pixel * spp..(pixel + 1) * spp {
+                match &hits[i] {
+                    Some(hit) => {
+                        let ray = Ray::new(eye, dirs[i]);
+                        let surface = self.world.surface(hit);
+                        if self.aovs.is_some() {
+                            albedo += aov::albedo(self.world, &surface);
+                        }
+                        let (c, rays) =
+                            self.integrator.shade(&ray, &surface, &mut rngs[i], scratch);
+                        sum += c;
+                        shadow += rays;
+                    }
+                    None => sum += settings.background,
+                }
+            }
+            out.push(sum / spp as f32);
+            if let Some(ctx) = &self.aovs {
+                let mut px = ctx.center(self.world, &self.camera, x, y);
+                px.albedo = albedo / spp as f32;
+                aovs.push(px);
+            }
+        }
+        shadow
+    }
+}

@@ -1,0 +1,48 @@
+"""penumbra: a fast, exact CPU ray tracer, from Python.
+
+Load a scene file (or text, or a dict with the file's schema), then render it as often as you
+like with other cameras, sizes, samplers or seeds: the world (meshes, textures, BVH) is built
+once. Images are C-contiguous ``float32`` numpy arrays of linear RGB, shape (height, width, 3),
+row 0 at the top: the numbers the command line writes to EXR and PFM files.
+
+>>> import penumbra
+>>> scene = penumbra.loads('''
+... [film]
+... width = 4
+... height = 3
+... [camera]
+... position = [0, 0, 3]
+... look_at = [0, 0, 0]
+... fov = 40
+... [[lights]]
+... type = "point"
+... position = [0, 0, 3]
+... [[objects]]
+... type = "quad"
+... corner = [-1, -1, 0]
+... u = [2, 0, 0]
+... v = [0, 2, 0]
+... ''')
+>>> image = scene.render(width=8, height=6, spp=1, sampler="center")
+>>> image.shape, image.dtype
+((6, 8, 3), dtype('float32'))
+"""
+
+from ._camera import Camera
+from ._core import MAX_THREADS, NO_ID, SceneError
+from ._image import to_srgb8, write_image
+from ._scene import AOV_NAMES, Scene, load, load_dict, loads
+
+__all__ = [
+    "AOV_NAMES",
+    "Camera",
+    "MAX_THREADS",
+    "NO_ID",
+    "Scene",
+    "SceneError",
+    "load",
+    "load_dict",
+    "loads",
+    "to_srgb8",
+    "write_image",
+]

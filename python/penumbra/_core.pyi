@@ -1,0 +1,58 @@
+"""Type stubs of penumbra._core, the compiled core of the penumbra package. Use the public
+names of ``penumbra`` instead: they wrap these."""
+
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+
+_Vec = Tuple[float, float, float]
+
+AOV_NAMES: List[str]
+NO_ID: int
+MAX_THREADS: int
+
+class SceneError(ValueError):
+    """A mistake in a scene, located by ``file``, ``line``, ``column`` and ``key``."""
+
+    file: Optional[str]
+    line: Optional[int]
+    column: Optional[int]
+    key: Optional[str]
+    kind: str
+
+class CoreScene:
+    """A built scene: the world and the file's default settings."""
+
+    @property
+    def cameras(self) -> List[str]: ...
+    @property
+    def settings(self) -> Dict[str, Any]: ...
+    @property
+    def stats(self) -> Dict[str, Any]: ...
+    def render(
+        self,
+        camera_name: Optional[str],
+        camera: Optional[Tuple[_Vec, _Vec, _Vec, float]],
+        spp: Optional[int],
+        sampler: Optional[str],
+        light_samples: Optional[int],
+        seed: Optional[int],
+        width: Optional[int],
+        height: Optional[int],
+        region: Optional[Tuple[int, int, int, int]],
+        threads: int,
+        progress: Optional[Callable[[int, int], Any]],
+        aovs: List[str],
+    ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]: ...
+
+def load(path: str, threads: int = 0) -> CoreScene: ...
+def loads(
+    text: str,
+    format: str = "toml",
+    base_dir: str = ".",
+    name: str = "<string>",
+    threads: int = 0,
+) -> CoreScene: ...
+def check_camera(position: _Vec, look_at: _Vec, up: _Vec, fov: float) -> None: ...
+def write_image(path: str, array: np.ndarray, gamma: Optional[float] = None) -> None: ...
+def to_srgb8(array: np.ndarray, gamma: Optional[float] = None) -> np.ndarray: ...

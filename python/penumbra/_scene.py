@@ -1,0 +1,226 @@
+"""Scenes: loading them (from a file, text or a dict) and rendering them to numpy arrays."""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    Iterable,
+    List,
+    Mapping,
+    Optional,
+    Tuple,
+    Union,
+)
+
+import numpy as np
+
+from . import _core
+from ._camera import Camera
+
+#: The AOV names ``Scene.render(aovs=...)`` takes.
+AOV_NAMES: Tuple[str, ...] = tuple(_core.AOV_NAMES)
+
+PathLike = Union[str, "os.PathLike[str]"]
+Progress = Union[None, bool, Callable[[int, int], Any]]
+
+
+class _Bar:
+    """A tqdm progress bar fed with (pixels done, pixels in all), when tqdm is installed."""
+
+    def __init__(self) -> None:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            self._bar = None
+        else:
+            self._bar = tqdm(total=0, unit="px", unit_scale=True, desc="render", leave=False)
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._bar is not None:
+            self._bar.total = total
+            self._bar.update(done - self._bar.n)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+class Scene:
+    """A built scene: its world (geometry with its BVH, materials, textures, lights and every
+    camera) and the scene file's default render settings. Make one with :func:`load`,
+    :func:`loads` or :func:`load_dict`. The world is built once; every :meth:`render` call
+    reuses it, whatever camera, size, sampler or seed it asks for.
+    """
+
+    __slots__ = ("_core",)
+
+    def __init__(self, core: "_core.CoreScene") -> None:
+        self._core = core
+
+    @property
+    def cameras(self) -> List[str]:
+        """The names of the scene's cameras, in file order; the first is the default."""
+        return self._core.cameras
+
+    @property
+    def settings(self) -> Dict[str, Any]:
+        """The file's default render settings: ``width``, ``height``, ``spp``, ``sampler``,
+        ``light_samples`` (None: each light's own) and ``seed``."""
+        return self._core.settings
+
+    @property
+    def stats(self) -> Dict[str, Any]:
+        """Counts (``triangles``, ``objects``, ``lights``, ``materials``, ``textures``,
+        ``cameras``, ``bvh_nodes``) and times (``load_seconds``, ``bvh_build_seconds``)."""
+        return self._core.stats
+
+    def __repr__(self) -> str:
+        s = self.stats
+        return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
+
+    def render(
+        self,
+        camera: Union[None, str, Camera] = None,
+        spp: Optional[int] = None,
+        sampler: Optional[str] = None,
+        light_samples: Optional[int] = None,
+        seed: Optional[int] = None,
+        width: Optional[int] = None,
+        height: Optional[int] = None,
+        region: Optional[Tuple[int, int, int, int]] = None,
+        threads: int = 0,
+        progress: Progress = None,
+        aovs: Union[str, Iterable[str]] = (),
+    ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
+        """Render the scene and return a C-contiguous float32 array of shape
+        (height, width, 3): linear RGB, row 0 at the top, the values the command line writes
+        to EXR and PFM files, bit for bit.
+
+        Every argument left as None keeps the scene file's setting:
+
+        - ``camera``: a camera name of the scene, or a :class:`Camera`.
+        - ``spp``: samples per pixel, a perfect square (1, 4, 9, ...).
+        - ``sampler``: ``"center"``, ``"grid"``, ``"rgss"`` or ``"jittered"``; without
+          ``spp`` it takes its own default count (1 for center, else the file's samples).
+        - ``light_samples``: N, for N×N samples of every area light.
+        - ``seed``: the seed of jittered pixel and light samples.
+        - ``width``, ``height``: the film size in pixels.
+        - ``region``: ``(x0, x1, y0, y1)``, render only the pixels [x0, x1) × [y0, y1) of the
+          film; the result has the region's size and its pixels equal the full image's.
+        - ``threads``: worker threads of a pool of the render's own (0: one per core).
+          The image does not depend on it.
+        - ``progress``: ``True`` for a tqdm bar on stderr (when tqdm is installed), or a
+          callable receiving (pixels done, pixels in all), called from this thread.
+        - ``aovs``: names from :data:`AOV_NAMES`. When given, the result is a tuple
+          ``(image, {name: array})`` instead of the image alone; see the Python docs for what
+          each AOV holds and how it is filtered.
+
+        The GIL is released while rendering. Ctrl-C stops the render within about 0.1 s and
+        raises ``KeyboardInterrupt``. Bad settings raise ``ValueError``.
+        """
+        if isinstance(aovs, str):
+            aovs = (aovs,)
+        names = [str(a) for a in aovs]
+        camera_name = explicit = None
+        if isinstance(camera, Camera):
+            explicit = camera._args()
+        elif isinstance(camera, str):
+            camera_name = camera
+        elif camera is not None:
+            raise TypeError(
+                f"camera must be a camera name or a penumbra.Camera, not {type(camera).__name__}"
+            )
+        if region is not None:
+            region = tuple(int(v) for v in region)
+            if len(region) != 4:
+                raise ValueError("region must be (x0, x1, y0, y1)")
+        bar = None
+        callback = None
+        if progress is True:
+            bar = _Bar()
+            callback = bar
+        elif callable(progress):
+            callback = progress
+        elif progress not in (None, False):
+            raise TypeError("progress must be True, False, None or a callable (done, total)")
+        try:
+            return self._core.render(
+                camera_name,
+                explicit,
+                spp,
+                sampler,
+                light_samples,
+                seed,
+                width,
+                height,
+                region,
+                threads,
+                callback,
+                names,
+            )
+        finally:
+            if bar is not None:
+                bar.close()
+
+
+def load(path: PathLike, threads: int = 0) -> Scene:
+    """Load and build the ``.toml`` or ``.json`` scene file at ``path`` (meshes and textures
+    included), with ``threads`` workers for reading meshes and building the BVH (0: all
+    cores). The GIL is released meanwhile.
+
+    Raises :class:`SceneError` (a ``ValueError``) for a mistake in the scene, located by its
+    ``file``, ``line``, ``column`` and ``key``; ``OSError`` (``FileNotFoundError``, ...) when
+    the file cannot be read.
+    """
+    return Scene(_core.load(os.fspath(path), threads))
+
+
+def loads(
+    text: str,
+    format: str = "toml",
+    base_dir: PathLike = ".",
+    threads: int = 0,
+) -> Scene:
+    """Load and build a scene from its text in ``format`` (``"toml"`` or ``"json"``).
+    Relative paths in it (meshes, textures) resolve against ``base_dir``. Errors as in
+    :func:`load`, with ``file`` ``"<string>"``.
+    """
+    return Scene(_core.loads(text, format, os.fspath(base_dir), "<string>", threads))
+
+
+def load_dict(
+    scene: Mapping[str, Any],
+    base_dir: PathLike = ".",
+    threads: int = 0,
+) -> Scene:
+    """Load and build a scene from a dict with the scene file's schema (the JSON form of a
+    scene file, Mitsuba's ``load_dict`` habit). Tuples and numpy arrays are taken as lists.
+    Errors as in :func:`load`, with ``file`` ``"<dict>"``; their ``key`` names the entry,
+    such as ``objects[2].material``.
+
+    >>> scene = load_dict({
+    ...     "film": {"width": 4, "height": 4},
+    ...     "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40},
+    ...     "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
+    ... })
+    >>> scene.stats["objects"]
+    1
+    """
+    text = json.dumps(scene, indent=1, default=_to_json)
+    return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
+
+
+def _to_json(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (tuple, set, frozenset)):
+        return list(value)
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    raise TypeError(f"a scene dict cannot hold {type(value).__name__} values")

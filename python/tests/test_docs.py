@@ -1,0 +1,35 @@
+"""The package's own documentation: every public name has a docstring, and the examples in
+docstrings run (docs/python.md's examples run through pytest's --doctest-glob)."""
+
+from __future__ import annotations
+
+import doctest
+import inspect
+
+import pytest
+
+import penumbra
+from penumbra import _camera, _image, _scene
+
+
+@pytest.mark.parametrize("module", [penumbra, _camera, _image, _scene], ids=lambda m: m.__name__)
+def test_docstring_examples_run(module):
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0 and result.attempted > 0
+
+
+def test_every_public_name_is_documented():
+    undocumented = []
+    for name in penumbra.__all__:
+        obj = getattr(penumbra, name)
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            if not (obj.__doc__ or "").strip():
+                undocumented.append(name)
+            for member, value in vars(obj).items():
+                if member.startswith("_"):
+                    continue
+                if isinstance(value, property) or inspect.isfunction(value):
+                    if not (value.__doc__ or "").strip():
+                        undocumented.append(f"{name}.{member}")
+    assert undocumented == []
+    assert set(penumbra.__all__) >= {"load", "loads", "load_dict", "Scene", "Camera", "SceneError"}

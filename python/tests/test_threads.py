@@ -1,0 +1,110 @@
+"""Threads, the GIL, Ctrl-C and progress: renders run with the GIL released, stop within
+about 0.1 s of Ctrl-C, and report progress on the calling thread."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+import _thread
+
+import pytest
+
+import penumbra
+from conftest import SCENES
+
+# Big enough to take many seconds on any machine: ~1 M pixels × 16 samples × 100 light samples.
+LONG = dict(width=1024, height=1024, spp=16, light_samples=10)
+
+
+@pytest.fixture(scope="module")
+def cornell() -> penumbra.Scene:
+    return penumbra.load(SCENES / "cornell.toml")
+
+
+def interrupt_after(seconds: float, how) -> dict:
+    sent = {}
+
+    def fire():
+        time.sleep(seconds)
+        sent["at"] = time.perf_counter()
+        how()
+
+    threading.Thread(target=fire, daemon=True).start()
+    return sent
+
+
+@pytest.mark.parametrize(
+    "how",
+    [_thread.interrupt_main, lambda: os.kill(os.getpid(), signal.SIGINT)],
+    ids=["interrupt_main", "SIGINT"],
+)
+def test_ctrl_c_stops_a_long_render_fast(cornell, how):
+    sent = interrupt_after(0.3, how)
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        cornell.render(threads=2, **LONG)
+    raised = time.perf_counter()
+    assert raised - start > 0.25  # it was interrupted, not refused
+    latency = raised - sent["at"]
+    print(f"KeyboardInterrupt {1000 * latency:.0f} ms after the signal")
+    assert latency < 0.25, latency
+    # The scene renders normally afterwards.
+    assert cornell.render(width=8, height=8).shape == (8, 8, 3)
+
+
+def test_the_gil_is_released_while_rendering(cornell):
+    counts = []
+    stop = threading.Event()
+
+    def count():
+        n = 0
+        while not stop.is_set():
+            n += 1
+            if n % 1000 == 0:
+                counts.append(n)
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        before = len(counts)
+        cornell.render(width=128, height=128, spp=4, threads=1)
+        during = len(counts) - before
+    finally:
+        stop.set()
+        t.join()
+    # A Python thread kept running throughout the render.
+    assert during > 10, during
+
+
+def test_a_progress_callable_runs_on_the_calling_thread(cornell):
+    calls = []
+    me = threading.get_ident()
+
+    def progress(done, total):
+        calls.append((done, total, threading.get_ident()))
+
+    cornell.render(width=160, height=120, spp=16, threads=2, progress=progress)
+    assert calls, "no progress reported"
+    assert all(ident == me for _, _, ident in calls)
+    assert all(total == 160 * 120 for _, total, _ in calls)
+    done = [d for d, _, _ in calls]
+    assert done == sorted(done) and done[-1] == 160 * 120
+
+
+def test_an_exception_in_the_progress_callable_stops_the_render(cornell):
+    def progress(done, total):
+        raise RuntimeError("stop here")
+
+    start = time.perf_counter()
+    with pytest.raises(RuntimeError, match="stop here"):
+        cornell.render(threads=2, **LONG, progress=progress)
+    assert time.perf_counter() - start < 5
+
+
+def test_progress_true_shows_a_tqdm_bar(cornell, capsys):
+    pytest.importorskip("tqdm")
+    image = cornell.render(width=64, height=64, spp=4, progress=True)
+    assert image.shape == (64, 64, 3)
+    assert "px" in capsys.readouterr().err

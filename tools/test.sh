@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The one test command: every Rust test, then the Python package built as `pip install .`
+# builds it and tested with pytest (python/tests and the examples of docs/python.md).
+#
+#   tools/test.sh              # everything
+#   tools/test.sh -k aov       # extra arguments go to pytest
+#
+# Needs the Rust toolchain and Python 3.9+ with pip; the first run downloads maturin, numpy,
+# pytest and tqdm from PyPI into a virtual environment under target/ (kept between runs;
+# PENUMBRA_TEST_VENV picks another place). The extension is built with cargo's dev profile
+# (opt-level 2, as `cargo test` builds the library, so only the binding compiles anew);
+# PENUMBRA_PY_PROFILE=release builds it as a plain `pip install .` does.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+start=$SECONDS
+
+cargo test --workspace
+# The binary the Python tests compare images with (the CLI's tests have built it already).
+cargo build -p penumbra-cli
+cli="$PWD/target/debug/penumbra"
+
+venv="${PENUMBRA_TEST_VENV:-target/py-test-venv}"
+if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv" || {
+        # Some distributions ship Python without the venv module.
+        python3 -m pip install --quiet --user virtualenv && python3 -m virtualenv --quiet "$venv"
+    }
+fi
+venv="$(cd "$venv" && pwd)"
+py="$venv/bin/python"
+"$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm
+
+profile="${PENUMBRA_PY_PROFILE:-dev}"
+PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile $profile" \
+    "$py" -m pip install --quiet --no-build-isolation --no-deps --force-reinstall .
+
+# python/ is not on sys.path: the tests import the installed package.
+PENUMBRA_CLI="$cli" "$py" -m pytest -q -p no:cacheprovider --rootdir "$PWD" \
+    -c "$PWD/pyproject.toml" "$PWD/python/tests" "$PWD/docs/python.md" "$@"
+
+echo "tools/test.sh: all tests passed in $((SECONDS - start)) s"
