@@ -59,6 +59,7 @@ mod material;
 mod math;
 mod memory;
 mod pool;
+mod raycast;
 mod render;
 mod sampling;
 mod scene;
@@ -83,6 +84,10 @@ pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use pool::MAX_THREADS;
+pub use raycast::{
+    create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
+    QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
+};
 pub use render::{
     render, render_with_aovs, AovFilm, AovPixel, PixelBounds, RenderError, RenderOptions,
     RenderSettings, RenderStats, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,

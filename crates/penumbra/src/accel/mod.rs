@@ -57,6 +57,27 @@ impl BvhNode {
     fn is_leaf(&self) -> bool {
         self.count > 0
     }
+
+    /// Smallest corner of the (padded) box, for traversals outside this module.
+    pub(crate) fn min_corner(&self) -> [f32; 3] {
+        self.min
+    }
+
+    /// Largest corner of the (padded) box.
+    pub(crate) fn max_corner(&self) -> [f32; 3] {
+        self.max
+    }
+
+    /// For an interior node (`count == 0`) the index of the first child (the second follows
+    /// it); for a leaf the first of its `count` leaf-order triangles.
+    pub(crate) fn first(&self) -> u32 {
+        self.first
+    }
+
+    /// Number of leaf-order triangles of a leaf; 0 for an interior node.
+    pub(crate) fn count(&self) -> u32 {
+        self.count
+    }
 }
 
 /// A triangle ready for intersection: `v0` and the two edges from it.
@@ -128,6 +149,17 @@ impl Bvh {
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// The flat node array (root at 0; empty for an empty scene), for traversals outside this
+    /// module.
+    pub(crate) fn nodes(&self) -> &[BvhNode] {
+        &self.nodes
+    }
+
+    /// For each leaf-order triangle slot, the index of the scene triangle it holds.
+    pub(crate) fn prim_ids(&self) -> &[u32] {
+        &self.prim_ids
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`, if any. Among triangles hit at exactly the

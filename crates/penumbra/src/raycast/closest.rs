@@ -1,0 +1,94 @@
+//! The closest point of a triangle to a point, by Voronoi regions (Ericson, "Real-Time
+//! Collision Detection", 2005, §5.1.5).
+
+use glam::Vec3;
+
+/// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
+/// and third corners. Degenerate triangles give a point of their segment or corner.
+pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
+    let [a, b, c] = tri;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    // Vertex region of a.
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, 0.0, 0.0);
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, 1.0, 0.0);
+    }
+    // Edge region of ab.
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let s = d1 / (d1 - d3);
+        return (a + s * ab, s, 0.0);
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, 0.0, 1.0);
+    }
+    // Edge region of ac.
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let s = d2 / (d2 - d6);
+        return (a + s * ac, 0.0, s);
+    }
+    // Edge region of bc.
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + s * (c - b), 1.0 - s, s);
+    }
+    // Inside the face.
+    let denom = va + vb + vc;
+    if denom.is_finite() && denom != 0.0 {
+        let (v, w) = (vb / denom, vc / denom);
+        return (a + v * ab + w * ac, v, w);
+    }
+    // A degenerate triangle whose regions all failed (NaN input): its first corner.
+    (a, 0.0, 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    #[test]
+    fn each_region_gives_the_expected_point_and_weights() {
+        let cases = [
+            // (query, closest, b1, b2)
+            ([0.25, 0.25, 2.0], [0.25, 0.25, 0.0], 0.25, 0.25),
+            ([-1.0, -1.0, 0.5], [0.0, 0.0, 0.0], 0.0, 0.0),
+            ([2.0, -0.5, 0.0], [1.0, 0.0, 0.0], 1.0, 0.0),
+            ([-0.5, 3.0, 0.0], [0.0, 1.0, 0.0], 0.0, 1.0),
+            ([0.5, -2.0, 1.0], [0.5, 0.0, 0.0], 0.5, 0.0),
+            ([-2.0, 0.25, -1.0], [0.0, 0.25, 0.0], 0.0, 0.25),
+            ([1.0, 1.0, 0.0], [0.5, 0.5, 0.0], 0.5, 0.5),
+        ];
+        for (q, want, b1, b2) in cases {
+            let (p, u, v) = closest_on_triangle(Vec3::from(q), TRI.map(Vec3::from));
+            assert!(p.distance(Vec3::from(want)) < 1e-6, "{q:?} → {p}");
+            assert!(
+                (u - b1).abs() < 1e-6 && (v - b2).abs() < 1e-6,
+                "{q:?} → {u} {v}"
+            );
+            // The weights reproduce the point.
+            let [a, b, c] = TRI.map(Vec3::from);
+            assert!(((1.0 - u - v) * a + u * b + v * c).distance(p) < 1e-6);
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_give_a_point_on_them() {
+        let seg = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        let (p, _, _) = closest_on_triangle(Vec3::new(1.5, 1.0, 0.0), seg.map(Vec3::from));
+        assert!(p.distance(Vec3::new(1.5, 0.0, 0.0)) < 1e-6, "{p}");
+        let dot = [[1.0, 1.0, 1.0]; 3];
+        let (p, _, _) = closest_on_triangle(Vec3::ZERO, dot.map(Vec3::from));
+        assert_eq!(p, Vec3::ONE);
+    }
+}

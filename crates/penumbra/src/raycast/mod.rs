@@ -1,0 +1,268 @@
+//! Ray casting against triangle meshes with Open3D's `RaycastingScene` names and semantics,
+//! watertight: a ray aimed exactly at an edge shared by two triangles, or at a vertex, hits
+//! the surface; it never slips through and never leaks to the far side.
+//!
+//! Meshes are added with [`RaycastingScene::add_triangles`] (geometry ids 0, 1, … in order);
+//! a BVH over all of them is built on the first query (or by [`RaycastingScene::commit`]).
+//! Every batch query takes flat arrays (`[f32; 6]` rays `[ox, oy, oz, dx, dy, dz]`,
+//! `[f32; 3]` points) and returns flat arrays in the same order, running on a pool of the
+//! scene's own sized by [`QueryOptions::threads`]; results do not depend on the thread
+//! count.
+//!
+//! ```
+//! use penumbra::{QueryOptions, RaycastingScene, INVALID_ID};
+//!
+//! let mut scene = RaycastingScene::new();
+//! // A unit square in the z = 0 plane, as two triangles.
+//! let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+//! let id = scene.add_triangles(&vertices, &[[0, 1, 2], [0, 2, 3]])?;
+//! assert_eq!(id, 0);
+//!
+//! // Straight down through the shared diagonal, and one ray beside the square.
+//! let rays = [[0.5, 0.5, 2.0, 0.0, 0.0, -2.0], [3.0, 0.5, 2.0, 0.0, 0.0, -1.0]];
+//! let hits = scene.cast_rays(&rays, &QueryOptions::default())?;
+//! assert_eq!(hits.t_hit[0], 1.0); // in units of the direction's length
+//! assert_eq!(hits.geometry_ids, [0, INVALID_ID]);
+//! assert_eq!(hits.t_hit[1], f32::INFINITY);
+//! // The ray through the diagonal crosses the surface once.
+//! assert_eq!(scene.count_intersections(&rays, &QueryOptions::default())?, [1, 0]);
+//! # Ok::<(), penumbra::RaycastError>(())
+//! ```
+//!
+//! Edges and vertices: the closest-hit and occlusion queries count a ray on a boundary as a
+//! hit of every triangle there (the closest-hit query reports one of them). The counting
+//! queries ([`RaycastingScene::count_intersections`],
+//! [`RaycastingScene::list_intersections`], and through them occupancy and the sign of the
+//! signed distance) count each crossing of the surface once: a ray through an edge shared by
+//! two triangles, or through a vertex, crossing from one side to the other, counts one hit
+//! (Open3D merges equal distances within a geometry to the same end); where the ray only
+//! touches the surface at a fold (a silhouette edge) it counts 0 or 2, so the parity stays
+//! right. See `watertight` for the rule.
+
+mod closest;
+mod pinhole;
+mod queries;
+mod run;
+mod traverse;
+mod watertight;
+
+#[cfg(test)]
+mod tests;
+#[cfg(test)]
+mod tests_edges;
+#[cfg(test)]
+mod tests_meshes;
+
+use std::sync::OnceLock;
+
+use glam::Vec3;
+
+use crate::geometry::{Geometry, Triangle};
+use crate::world::{World, MAX_TRIANGLES};
+
+pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
+pub use queries::{CastRays, ClosestPoints, Intersections};
+pub use run::QueryOptions;
+
+use run::Pools;
+use traverse::Accel;
+
+/// The id of nothing: the geometry and primitive id of a miss (Open3D's `INVALID_ID`,
+/// 4294967295).
+pub const INVALID_ID: u32 = u32::MAX;
+
+/// What can go wrong when adding meshes or running a query.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum RaycastError {
+    /// A triangle names a vertex past the end of the vertex array.
+    #[error("triangle {triangle} uses vertex {index}, but there are only {vertices} vertices")]
+    IndexOutOfRange {
+        /// Index of the triangle in the array passed.
+        triangle: usize,
+        /// The vertex index it holds.
+        index: u32,
+        /// Number of vertices passed.
+        vertices: usize,
+    },
+    /// A vertex coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a coordinate that is not finite")]
+    NotFinite {
+        /// Index of the vertex in the array passed.
+        vertex: usize,
+    },
+    /// The scene would hold more triangles than the library supports.
+    #[error("the scene would have more than {MAX_TRIANGLES} triangles")]
+    TooManyTriangles,
+    /// The worker pool could not be made.
+    #[error("cannot start worker threads: {0}")]
+    Threads(String),
+    /// The query was stopped through [`QueryOptions::cancel`].
+    #[error("the query was cancelled")]
+    Cancelled,
+    /// A pinhole camera's parameters are invalid.
+    #[error("invalid camera: {0}")]
+    InvalidCamera(String),
+    /// The number of rays per point of an inside/outside vote is not odd.
+    #[error("nsamples must be an odd number from 1 to 255, not {0}")]
+    InvalidSamples(u32),
+    /// A [`RaycastingScene::list_intersections`] result would hold more than 2³² − 1 hits.
+    #[error("more than 2^32 - 1 intersections to list; pass fewer rays at a time")]
+    TooManyIntersections,
+}
+
+/// A set of triangle meshes to cast rays against, with Open3D's `RaycastingScene` queries.
+///
+/// Add meshes with [`add_triangles`](Self::add_triangles), then query; the acceleration
+/// structure is built on the first query after a change, or by [`commit`](Self::commit).
+/// Queries take `&self` and may run from several threads at once.
+#[derive(Debug, Default)]
+pub struct RaycastingScene {
+    /// Every triangle; `Triangle::object` is its geometry id.
+    geometry: Geometry,
+    /// For each triangle of `geometry`, its index within its own geometry.
+    local_ids: Vec<u32>,
+    /// Number of geometries added.
+    geometries: u32,
+    /// The BVH, built on demand.
+    accel: OnceLock<Accel>,
+    /// The worker pool of the last query.
+    pools: Pools,
+}
+
+impl RaycastingScene {
+    /// An empty scene: every ray misses.
+    pub fn new() -> RaycastingScene {
+        RaycastingScene::default()
+    }
+
+    /// The triangles of `world`, one geometry per object of the world (geometry id = object
+    /// id; primitive ids count the object's triangles in the order it added them).
+    pub fn from_world(world: &World) -> RaycastingScene {
+        let geometry = world.geometry();
+        let objects = geometry
+            .triangles
+            .iter()
+            .map(|t| t.object + 1)
+            .max()
+            .unwrap_or(0);
+        let mut counts = vec![0u32; objects as usize];
+        let local_ids = geometry
+            .triangles
+            .iter()
+            .map(|t| {
+                let c = &mut counts[t.object as usize];
+                *c += 1;
+                *c - 1
+            })
+            .collect();
+        RaycastingScene {
+            geometry: Geometry {
+                positions: geometry.positions.clone(),
+                triangles: geometry.triangles.clone(),
+                ..Geometry::default()
+            },
+            local_ids,
+            geometries: objects,
+            ..RaycastingScene::default()
+        }
+    }
+
+    /// Adds a mesh: `vertices` are positions, `triangles` index triples into them. Returns
+    /// the new geometry's id: 0 for the first mesh, then 1, 2, …. Primitive ids in query
+    /// results are indices into `triangles`.
+    ///
+    /// Nothing is added when an index is out of range ([`RaycastError::IndexOutOfRange`]) or
+    /// a used or unused vertex is not finite ([`RaycastError::NotFinite`]). Degenerate
+    /// (zero-area) triangles are kept and never hit by rays (they still have closest points).
+    pub fn add_triangles(
+        &mut self,
+        vertices: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+    ) -> Result<u32, RaycastError> {
+        if let Some(vertex) = vertices
+            .iter()
+            .position(|v| !v.iter().all(|c| c.is_finite()))
+        {
+            return Err(RaycastError::NotFinite { vertex });
+        }
+        for (triangle, tri) in triangles.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= vertices.len()) {
+                return Err(RaycastError::IndexOutOfRange {
+                    triangle,
+                    index,
+                    vertices: vertices.len(),
+                });
+            }
+        }
+        if self.geometry.len() + triangles.len() > MAX_TRIANGLES
+            || self.geometry.positions.len() + vertices.len() > u32::MAX as usize
+        {
+            return Err(RaycastError::TooManyTriangles);
+        }
+        let id = self.geometries;
+        let base = self.geometry.positions.len() as u32;
+        self.geometry
+            .positions
+            .extend(vertices.iter().map(|&v| Vec3::from(v)));
+        self.geometry
+            .triangles
+            .extend(triangles.iter().map(|t| Triangle {
+                vertices: t.map(|i| base + i),
+                material: 0,
+                object: id,
+                smooth: false,
+            }));
+        self.local_ids.extend(0..triangles.len() as u32);
+        self.geometries += 1;
+        self.accel = OnceLock::new();
+        Ok(id)
+    }
+
+    /// Number of geometries added.
+    pub fn geometry_count(&self) -> u32 {
+        self.geometries
+    }
+
+    /// Number of triangles of all geometries.
+    pub fn triangle_count(&self) -> usize {
+        self.geometry.len()
+    }
+
+    /// Builds the acceleration structure now (with `threads` workers, 0 for one per core)
+    /// rather than on the next query. Does nothing when it is already built.
+    pub fn commit(&self, threads: usize) -> Result<(), RaycastError> {
+        if self.accel.get().is_none() {
+            let pool = self.pools.get(threads)?;
+            self.accel
+                .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
+        }
+        Ok(())
+    }
+
+    /// The built structure and the pool for a query.
+    fn prepare(
+        &self,
+        options: &QueryOptions,
+    ) -> Result<(&Accel, std::sync::Arc<rayon::ThreadPool>), RaycastError> {
+        let pool = self.pools.get(options.threads)?;
+        let accel = self
+            .accel
+            .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
+        Ok((accel, pool))
+    }
+
+    /// Geometry id and primitive id of scene triangle `triangle`.
+    #[cfg(test)]
+    fn ids(&self, triangle: u32) -> (u32, u32) {
+        let t = triangle as usize;
+        (self.geometry.triangles[t].object, self.local_ids[t])
+    }
+
+    /// Corners of scene triangle `triangle`.
+    #[cfg(test)]
+    fn corners(&self, triangle: u32) -> watertight::Corners {
+        self.geometry
+            .corners(triangle as usize)
+            .map(glam::Vec3A::from)
+    }
+}

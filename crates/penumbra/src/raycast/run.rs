@@ -1,0 +1,91 @@
+//! How a batch query runs: on a pool of the scene's own (never rayon's global pool), in
+//! chunks of rays, with a cancel flag checked between chunks.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use rayon::prelude::*;
+
+use super::RaycastError;
+use crate::pool::thread_pool;
+
+/// Rays (or points) per parallel work item: large enough that scheduling costs nothing,
+/// small enough that two threads share a small batch and a cancel is seen within
+/// microseconds.
+pub(crate) const CHUNK: usize = 1024;
+
+/// How a batch query runs: its worker count and an optional cancel flag.
+///
+/// ```
+/// use std::sync::atomic::AtomicBool;
+/// use penumbra::QueryOptions;
+///
+/// let cancel = AtomicBool::new(false);
+/// let options = QueryOptions { threads: 2, cancel: Some(&cancel) };
+/// assert_eq!(QueryOptions::default().threads, 0);
+/// # let _ = options;
+/// ```
+#[derive(Clone, Copy, Debug, Default)]
+pub struct QueryOptions<'a> {
+    /// Worker threads: 0 for one per core this process may use. The work runs on a pool of
+    /// the scene's own, kept between calls with the same count.
+    pub threads: usize,
+    /// When set to true (from another thread, a signal handler…), the query stops within a
+    /// chunk of 1024 rays per thread and returns [`RaycastError::Cancelled`].
+    pub cancel: Option<&'a AtomicBool>,
+}
+
+impl QueryOptions<'_> {
+    /// True when the caller asked the query to stop.
+    pub(crate) fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+/// The scene's worker pool, rebuilt only when the requested thread count changes.
+#[derive(Debug, Default)]
+pub(crate) struct Pools {
+    pool: Mutex<Option<(usize, Arc<rayon::ThreadPool>)>>,
+}
+
+impl Pools {
+    /// A pool of `threads` workers (0: one per core).
+    pub fn get(&self, threads: usize) -> Result<Arc<rayon::ThreadPool>, RaycastError> {
+        let mut slot = self.pool.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((n, pool)) = slot.as_ref() {
+            if *n == threads {
+                return Ok(pool.clone());
+            }
+        }
+        let (pool, _) = thread_pool(threads).map_err(RaycastError::Threads)?;
+        let pool = Arc::new(pool);
+        *slot = Some((threads, pool.clone()));
+        Ok(pool)
+    }
+}
+
+/// Runs `f` on every item of `items` on `pool`, skipping the rest once `options` is
+/// cancelled; `Err(Cancelled)` then.
+pub(crate) fn run<I, F>(
+    pool: &rayon::ThreadPool,
+    options: &QueryOptions,
+    items: I,
+    f: F,
+) -> Result<(), RaycastError>
+where
+    I: IndexedParallelIterator,
+    F: Fn(I::Item) + Sync + Send,
+{
+    pool.install(|| {
+        items.for_each(|item| {
+            if !options.cancelled() {
+                f(item)
+            }
+        })
+    });
+    if options.cancelled() {
+        Err(RaycastError::Cancelled)
+    } else {
+        Ok(())
+    }
+}

@@ -1,0 +1,316 @@
+//! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit, every hit and
+//! the closest point, with the watertight triangle test and a conservative box test.
+//!
+//! The renderer's kernels (`accel::traverse`, `accel::packet`) are left as they are; this
+//! file reads the same nodes through crate-private accessors and keeps its own copy of the
+//! triangles in leaf order with their exact corners (the renderer stores `v0` and two edges,
+//! and `v0 + e1` is not always `v1` in `f32`, which would break watertightness).
+//!
+//! The box test is Ize's ("Robust BVH Ray Traversal", JCGT 2013): the exit distance is
+//! scaled by `1 + 2γ₃`, which covers the rounding of the slab distances, so a box is never
+//! skipped by a ray that meets it. The build pads boxes so that `bound − origin` is never zero
+//! for a ray touching the true box, hence no `0·∞` NaN there.
+
+use glam::{Vec3, Vec3A};
+
+use super::closest::closest_on_triangle;
+use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
+use crate::accel::{Bvh, BvhNode};
+use crate::geometry::Geometry;
+
+/// Entries of the traversal stacks: the build's depth limit keeps every stack below this.
+const STACK_SIZE: usize = 64;
+
+/// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
+/// the `f32` slab test conservative (Ize 2013).
+const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
+const EPS: f32 = f32::EPSILON * 0.5;
+
+/// The BVH over every triangle of a scene with the triangles' exact corners and ids in the
+/// BVH's leaf order.
+#[derive(Debug, Default)]
+pub(crate) struct Accel {
+    bvh: Bvh,
+    /// Corners of the triangle in each leaf slot.
+    tris: Vec<SoaTriangle>,
+    /// Geometry id and primitive id of the triangle in each leaf slot.
+    ids: Vec<[u32; 2]>,
+}
+
+/// A hit of the closest-hit or every-hit traversal: where, and which triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SlotHit {
+    pub crossing: Crossing,
+    /// Geometry id.
+    pub geometry: u32,
+    /// Primitive id within the geometry.
+    pub primitive: u32,
+    /// Leaf slot, for [`Accel::normal`].
+    pub slot: u32,
+}
+
+/// The closest point on the surface to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Nearest {
+    pub point: Vec3,
+    pub distance_sq: f32,
+    pub b1: f32,
+    pub b2: f32,
+    pub geometry: u32,
+    pub primitive: u32,
+    pub slot: u32,
+}
+
+impl Accel {
+    /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
+    /// is its `object`, its primitive id `local_ids[triangle]`.
+    pub fn build(
+        geometry: &Geometry,
+        local_ids: &[u32],
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Accel {
+        let bvh = match pool {
+            Some(pool) => Bvh::build_parallel(geometry, pool),
+            None => Bvh::build(geometry),
+        };
+        let slots = bvh.prim_ids();
+        let tris = slots
+            .iter()
+            .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
+            .collect();
+        let ids = slots
+            .iter()
+            .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
+            .collect();
+        Accel { bvh, tris, ids }
+    }
+
+    /// The hit record of `crossing` on leaf slot `slot`.
+    fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
+        let [geometry, primitive] = self.ids[slot];
+        SlotHit {
+            crossing,
+            geometry,
+            primitive,
+            slot: slot as u32,
+        }
+    }
+
+    /// The unit normal `(v1 − v0) × (v2 − v0)` of the triangle in leaf slot `slot`.
+    pub fn normal(&self, slot: u32) -> Vec3 {
+        unit_normal(&self.tris[slot as usize].corners())
+    }
+
+    /// The corners of scene triangle slot `slot` (leaf order).
+    fn slot(&self, slot: usize) -> &SoaTriangle {
+        &self.tris[slot]
+    }
+
+    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
+    pub fn closest(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<SlotHit> {
+        self.first_hit::<false>(ray, t_min, t_max)
+            .map(|(i, c)| self.slot_hit(i, c))
+    }
+
+    /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
+    /// inclusive; stops at the first.
+    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> bool {
+        self.first_hit::<true>(ray, t_min, t_max).is_some()
+    }
+
+    /// Nearer child first, the far one on a stack: the closest hit (shrinking `t_max` at each
+    /// hit) or, when `ANY`, the first hit found. Returns the leaf slot and the crossing.
+    #[inline(always)]
+    fn first_hit<const ANY: bool>(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        mut t_max: f32,
+    ) -> Option<(usize, Crossing)> {
+        let nodes = self.bvh.nodes();
+        if nodes.is_empty() {
+            return None;
+        }
+        let mut best: Option<(usize, Crossing)> = None;
+        let mut stack = [0u32; STACK_SIZE];
+        let mut sp = 0;
+        let mut node = &nodes[0];
+        enter(node, ray, t_min, t_max)?;
+        loop {
+            if node.count() > 0 {
+                let first = node.first() as usize;
+                for i in first..first + node.count() as usize {
+                    if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
+                        if ANY {
+                            return Some((i, c));
+                        }
+                        t_max = c.t;
+                        best = Some((i, c));
+                    }
+                }
+            } else {
+                let (l, r) = (node.first() as usize, node.first() as usize + 1);
+                let dl = enter(&nodes[l], ray, t_min, t_max);
+                let dr = enter(&nodes[r], ray, t_min, t_max);
+                match (dl, dr) {
+                    (Some(a), Some(b)) => {
+                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
+                        stack[sp] = far as u32;
+                        sp += 1;
+                        node = &nodes[near];
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = &nodes[l];
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = &nodes[r];
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Pop the next subtree that can still hold a (closer) hit.
+            loop {
+                if sp == 0 {
+                    return best;
+                }
+                sp -= 1;
+                let candidate = &nodes[stack[sp] as usize];
+                if ANY || enter(candidate, ray, t_min, t_max).is_some() {
+                    node = candidate;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
+    /// per crossing of the surface), in traversal order.
+    pub fn each_hit(&self, ray: &PreparedRay, t_min: f32, f: &mut impl FnMut(SlotHit)) {
+        self.visit(ray, t_min, f32::INFINITY, EdgeRule::Owned, &mut |h| {
+            f(h);
+            true
+        });
+    }
+
+    /// Visits the hits with `t` in `[t_min, t_max]` under `rule` until `f` returns false.
+    fn visit(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        t_max: f32,
+        rule: EdgeRule,
+        f: &mut impl FnMut(SlotHit) -> bool,
+    ) {
+        let nodes = self.bvh.nodes();
+        if nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; STACK_SIZE];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &nodes[stack[sp] as usize];
+            if enter(node, ray, t_min, t_max).is_none() {
+                continue;
+            }
+            let first = node.first() as usize;
+            if node.count() > 0 {
+                for i in first..first + node.count() as usize {
+                    if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
+                        let hit = self.slot_hit(i, crossing);
+                        if !f(hit) {
+                            return;
+                        }
+                    }
+                }
+            } else {
+                stack[sp] = first as u32;
+                stack[sp + 1] = first as u32 + 1;
+                sp += 2;
+            }
+        }
+    }
+
+    /// The closest point of any triangle to `p`, nearer boxes first; `None` for an empty
+    /// scene. Ties keep the first triangle found.
+    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
+        let nodes = self.bvh.nodes();
+        if nodes.is_empty() {
+            return None;
+        }
+        let mut best: Option<Nearest> = None;
+        let mut best_d = f32::INFINITY;
+        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+        let mut sp = 1;
+        let pa = Vec3A::from(p);
+        while sp > 0 {
+            sp -= 1;
+            let (index, d_box) = stack[sp];
+            if d_box > best_d {
+                continue;
+            }
+            let node = &nodes[index as usize];
+            let first = node.first() as usize;
+            if node.count() > 0 {
+                for i in first..first + node.count() as usize {
+                    let (q, b1, b2) =
+                        closest_on_triangle(p, self.slot(i).corners().map(Vec3::from));
+                    let d = (q - p).length_squared();
+                    if d < best_d {
+                        best_d = d;
+                        best = Some(Nearest {
+                            point: q,
+                            distance_sq: d,
+                            b1,
+                            b2,
+                            geometry: self.ids[i][0],
+                            primitive: self.ids[i][1],
+                            slot: i as u32,
+                        });
+                    }
+                }
+            } else {
+                let (l, r) = (first, first + 1);
+                let (dl, dr) = (
+                    box_distance_sq(&nodes[l], pa),
+                    box_distance_sq(&nodes[r], pa),
+                );
+                // Push the farther child first so the nearer one is visited next.
+                let (near, far) = if dl <= dr {
+                    ((l, dl), (r, dr))
+                } else {
+                    ((r, dr), (l, dl))
+                };
+                stack[sp] = (far.0 as u32, far.1);
+                stack[sp + 1] = (near.0 as u32, near.1);
+                sp += 2;
+            }
+        }
+        best
+    }
+}
+
+/// The entry distance of the ray into the node's box within `[t_min, t_max]`, or `None`;
+/// conservative (see the module docs).
+#[inline(always)]
+fn enter(node: &BvhNode, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<f32> {
+    let t0 = (Vec3A::from(node.min_corner()) - ray.origin) * ray.inv_dir;
+    let t1 = (Vec3A::from(node.max_corner()) - ray.origin) * ray.inv_dir;
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element() * EXIT_SCALE;
+    let near = if near > t_min { near } else { t_min };
+    let far = if far < t_max { far } else { t_max };
+    (near <= far).then_some(near)
+}
+
+/// Squared distance from `p` to the node's box (0 inside).
+#[inline(always)]
+fn box_distance_sq(node: &BvhNode, p: Vec3A) -> f32 {
+    let lo = Vec3A::from(node.min_corner());
+    let hi = Vec3A::from(node.max_corner());
+    let d = (lo - p).max(p - hi).max(Vec3A::ZERO);
+    d.length_squared()
+}

@@ -1,0 +1,201 @@
+//! The watertight ray–triangle test of Woop, Benthin and Wald ("Watertight Ray/Triangle
+//! Intersection", JCGT 2013), as pbrt-v3 and pbrt-v4 describe it.
+//!
+//! The ray is made the +z axis of a sheared frame (a permutation of the axes so that the
+//! direction's largest component is z, then a shear that maps the direction onto z). Each
+//! triangle vertex is moved into that frame on its own, so a vertex shared by two triangles
+//! lands on exactly the same 2-D point in both. The three 2-D edge functions then decide
+//! inside or outside; for an edge shared by two triangles the two computed values are exact
+//! negatives of each other (the same two rounded products, subtracted in the other order), so
+//! a ray can never pass between two triangles: it is inside at least one of them. Values that
+//! round to exactly zero are recomputed in `f64`, where the products of `f32` are exact and
+//! the sign is right.
+//!
+//! Two edge rules:
+//! - [`EdgeRule::Inclusive`]: a ray on an edge or vertex hits every triangle there (closest
+//!   hit, occlusion: never a miss).
+//! - [`EdgeRule::Owned`]: a ray on an edge or vertex hits exactly one of the triangles that
+//!   meet there when the surface crosses the ray (and none or two where it only touches it, at
+//!   a silhouette fold), so that counting hits gives the crossing parity. Each boundary point
+//!   is given to the triangle that holds it after an infinitesimal displacement of the ray by
+//!   `(ε, ε²)` in the sheared frame (a simulation of simplicity), which is the top-left rule of
+//!   rasterization.
+
+use glam::{Vec3, Vec3A, Vec3Swizzles};
+
+/// How a ray exactly on a triangle's edge or vertex counts; see the module docs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EdgeRule {
+    /// Every triangle that holds the point counts it.
+    Inclusive,
+    /// One triangle of a crossing counts it.
+    Owned,
+}
+
+/// A ray prepared for the watertight test and for the conservative box test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PreparedRay {
+    /// `1 / direction`, per component (±∞ for a zero component).
+    pub inv_dir: Vec3A,
+    /// Origin.
+    pub origin: Vec3A,
+    /// Axis permutation: the direction's largest component is axis `k[2]`; `k[0]` and
+    /// `k[1]` become the frame's x and y.
+    k: [usize; 3],
+    /// Shear: `x' = x + shear[0]·z`, `y' = y + shear[1]·z` in the permuted axes, with
+    /// `shear = (−d_x/d_z, −d_y/d_z)`.
+    shear: [f32; 2],
+    /// `1/d_z`: scales the frame's z into ray parameters.
+    inv_dz: f32,
+}
+
+/// The three corners of a triangle.
+pub(crate) type Corners = [Vec3A; 3];
+
+/// A triangle's corners by coordinate, as the traversal stores them:
+/// `x = (v0.x, v1.x, v2.x)`, and so on, so that the test runs on all three at once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SoaTriangle {
+    x: Vec3A,
+    y: Vec3A,
+    z: Vec3A,
+}
+
+impl SoaTriangle {
+    /// The triangle with corners `c`.
+    pub fn new(c: &Corners) -> SoaTriangle {
+        SoaTriangle {
+            x: Vec3A::new(c[0].x, c[1].x, c[2].x),
+            y: Vec3A::new(c[0].y, c[1].y, c[2].y),
+            z: Vec3A::new(c[0].z, c[1].z, c[2].z),
+        }
+    }
+
+    /// Its corners.
+    pub fn corners(&self) -> Corners {
+        [0, 1, 2].map(|k| Vec3A::new(self.x[k], self.y[k], self.z[k]))
+    }
+}
+
+/// A hit of [`PreparedRay::hit`]: the ray parameter and the barycentric weights of the
+/// triangle's second and third vertices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Crossing {
+    pub t: f32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+impl PreparedRay {
+    /// Prepares `origin + t·direction`; `None` when a component is not finite or the
+    /// direction is zero (such rays hit nothing).
+    pub fn new(origin: Vec3, direction: Vec3) -> Option<PreparedRay> {
+        if !origin.is_finite() || !direction.is_finite() || direction == Vec3::ZERO {
+            return None;
+        }
+        let kz = direction.abs().max_position();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Keep the frame right-handed so that a triangle's winding keeps its sign.
+        if direction[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let dz = direction[kz];
+        Some(PreparedRay {
+            inv_dir: Vec3A::from(direction).recip(),
+            origin: Vec3A::from(origin),
+            k: [kx, ky, kz],
+            shear: [-direction[kx] / dz, -direction[ky] / dz],
+            inv_dz: 1.0 / dz,
+        })
+    }
+
+    /// Intersects the triangle `tri` for `t` in `[t_min, t_max]` under `rule`. Two-sided;
+    /// degenerate triangles and triangles seen exactly edge-on are missed.
+    #[inline(always)]
+    pub fn hit(
+        &self,
+        tri: &SoaTriangle,
+        t_min: f32,
+        t_max: f32,
+        rule: EdgeRule,
+    ) -> Option<Crossing> {
+        // The corners in the ray's sheared frame, one lane per corner. Each lane depends on
+        // its vertex alone, so a vertex shared by two triangles lands on the same point.
+        let d = [
+            tri.x - Vec3A::splat(self.origin.x),
+            tri.y - Vec3A::splat(self.origin.y),
+            tri.z - Vec3A::splat(self.origin.z),
+        ];
+        let [kx, ky, kz] = self.k;
+        let fz = d[kz];
+        let (fx, fy) = (d[kx] + self.shear[0] * fz, d[ky] + self.shear[1] * fz);
+        // Edge functions, one lane each: `u` of edge B→C (the weight of A), `v` of C→A,
+        // `w` of A→B; `x1, y1` are the edges' start corners and `x2, y2` their ends.
+        let (x1, x2, y1, y2) = (fx.yzx(), fx.zxy(), fy.yzx(), fy.zxy());
+        let mut uvw = x2 * y1 - y2 * x1;
+        if uvw.cmpeq(Vec3A::ZERO).any() {
+            uvw = Vec3A::new(
+                edge_f64(x2.x, y1.x, y2.x, x1.x),
+                edge_f64(x2.y, y1.y, y2.y, x1.y),
+                edge_f64(x2.z, y1.z, y2.z, x1.z),
+            );
+        }
+        if uvw.cmplt(Vec3A::ZERO).any() && uvw.cmpgt(Vec3A::ZERO).any() {
+            return None;
+        }
+        let det = uvw.element_sum();
+        if det == 0.0 || det.is_nan() {
+            return None;
+        }
+        if rule == EdgeRule::Owned {
+            let zero = uvw.cmpeq(Vec3A::ZERO);
+            if zero.any() {
+                let (ex, ey, flip) = (x2 - x1, y2 - y1, det < 0.0);
+                if (0..3).any(|k| zero.test(k) && !owned(ex[k], ey[k], flip)) {
+                    return None;
+                }
+            }
+        }
+        let scaled_t = (uvw * (fz * self.inv_dz)).element_sum();
+        let inv_det = 1.0 / det;
+        let t = scaled_t * inv_det;
+        if !(t >= t_min && t <= t_max) {
+            return None;
+        }
+        Some(Crossing {
+            t,
+            b1: uvw.y * inv_det,
+            b2: uvw.z * inv_det,
+        })
+    }
+}
+
+/// `a·b − c·d` in `f64` (exact products of `f32`), rounded to `f32` keeping its sign: a
+/// non-zero value never becomes zero.
+#[inline(never)]
+fn edge_f64(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let e = a as f64 * b as f64 - c as f64 * d as f64;
+    let r = e as f32;
+    if r == 0.0 && e != 0.0 {
+        f32::MIN_POSITIVE.copysign(e.signum() as f32)
+    } else {
+        r
+    }
+}
+
+/// Whether the triangle owns its edge with 2-D direction `(ex, ey)` (in its A→B→C cycle) when
+/// the ray passes exactly through that edge: true when the ray, moved by `(ε, ε²)`, is on the
+/// triangle's side. Every triangle here has its inside on the right of its cycle after
+/// flipping the edges of those whose determinant is negative (`flip`).
+#[inline]
+fn owned(ex: f32, ey: f32, flip: bool) -> bool {
+    let (ex, ey) = if flip { (-ex, -ey) } else { (ex, ey) };
+    ey > 0.0 || (ey == 0.0 && ex < 0.0)
+}
+
+/// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle (zero for a degenerate one).
+pub(crate) fn unit_normal(tri: &Corners) -> Vec3 {
+    let [a, b, c] = tri.map(Vec3::from);
+    (b - a).cross(c - a).normalize_or_zero()
+}
