@@ -1,4 +1,5 @@
-//! 8-bit encoding of a whole film: the codes of [`encode_8bit`] without a `powf` per channel.
+//! 8-bit encoding: [`encode_8bit`] for one value, and for a whole film the same codes without
+//! a `powf` per channel.
 //!
 //! The code of a value is a non-decreasing step function of it, so it is the number of the 255
 //! step thresholds at or below the value: found once per film by bisection over the `f32`
@@ -10,8 +11,19 @@
 //! input move the exact result by many ulps of the output, and the linear segment of the sRGB
 //! curve is a single exact product.
 
-use crate::image_io::encode_8bit;
 use crate::math::Rgb;
+use crate::texture::linear_to_srgb;
+
+/// The 8-bit code of a linear value: `round(255·encode(clamp(c, 0, 1)))` with the sRGB curve,
+/// or `c^(1/gamma)` when `gamma` is given.
+pub fn encode_8bit(c: f32, gamma: Option<f32>) -> u8 {
+    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+    let e = match gamma {
+        Some(g) => c.powf(1.0 / g),
+        None => linear_to_srgb(c),
+    };
+    (255.0 * e).round() as u8
+}
 
 /// Inputs this many representable values or fewer from a threshold are encoded directly.
 const WINDOW: i64 = 64;
@@ -125,6 +137,19 @@ pub(crate) fn encode_all(pixels: &[Rgb], gamma: Option<f32>) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eight_bit_encoding_follows_the_srgb_curve_and_clamps() {
+        assert_eq!(encode_8bit(0.0, None), 0);
+        assert_eq!(encode_8bit(1.0, None), 255);
+        assert_eq!(encode_8bit(7.0, None), 255);
+        assert_eq!(encode_8bit(-1.0, None), 0);
+        // sRGB(0.18) = 0.4614 → 117.7 → 118.
+        assert_eq!(encode_8bit(0.18, None), 118);
+        // gamma 2.2: 0.5^(1/2.2) = 0.7297 → 186.
+        assert_eq!(encode_8bit(0.5, Some(2.2)), 186);
+        assert_eq!(encode_8bit(f32::NAN, None), 0);
+    }
 
     const GAMMAS: [Option<f32>; 5] = [None, Some(2.2), Some(1.0), Some(1.8), Some(0.45)];
 

@@ -12,7 +12,7 @@ use thiserror::Error;
 
 use crate::encode8::encode_all;
 use crate::film::Film;
-use crate::texture::{linear_to_srgb, srgb_to_linear, Image};
+use crate::texture::{srgb_to_linear, Image};
 
 /// Output file formats, chosen by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,17 +91,6 @@ pub enum ImageError {
     /// The cancel flag was set before the image was complete; the file is as it was.
     #[error("interrupted")]
     Cancelled,
-}
-
-/// The 8-bit code of a linear value: `round(255·encode(clamp(c, 0, 1)))` with the sRGB curve,
-/// or `c^(1/gamma)` when `gamma` is given.
-pub fn encode_8bit(c: f32, gamma: Option<f32>) -> u8 {
-    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-    let e = match gamma {
-        Some(g) => c.powf(1.0 / g),
-        None => linear_to_srgb(c),
-    };
-    (255.0 * e).round() as u8
 }
 
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not
@@ -380,19 +369,6 @@ pub fn load_texture_image(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn eight_bit_encoding_follows_the_srgb_curve_and_clamps() {
-        assert_eq!(encode_8bit(0.0, None), 0);
-        assert_eq!(encode_8bit(1.0, None), 255);
-        assert_eq!(encode_8bit(7.0, None), 255);
-        assert_eq!(encode_8bit(-1.0, None), 0);
-        // sRGB(0.18) = 0.4614 → 117.7 → 118.
-        assert_eq!(encode_8bit(0.18, None), 118);
-        // gamma 2.2: 0.5^(1/2.2) = 0.7297 → 186.
-        assert_eq!(encode_8bit(0.5, Some(2.2)), 186);
-        assert_eq!(encode_8bit(f32::NAN, None), 0);
-    }
 
     #[test]
     fn textures_decode_8_and_16_bit_grey_rgb_and_rgba_to_linear() {

@@ -74,11 +74,10 @@ pub mod shapes {
 
 pub use accel::{intersect_brute_force, occluded_brute_force, Bvh};
 pub use camera::{Camera, CameraError, PinholeCamera};
+pub use encode8::encode_8bit;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
-pub use image_io::{
-    encode_8bit, encode_image, write_image, write_image_unless, ImageError, OutputFormat,
-};
+pub use image_io::{encode_image, write_image, write_image_unless, ImageError, OutputFormat};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
