@@ -12,6 +12,12 @@ use super::{Geometry, Hit};
 pub struct Surface {
     /// The hit point, interpolated from the vertices by the barycentrics.
     pub position: Vec3,
+    /// A bound on the rounding error of `position`, per axis: γ₇·Σ|bᵢ·pᵢ| (pbrt's bound for a
+    /// point interpolated from a triangle's vertices), plus γ₃·(|e₁| + |e₂|) on every axis for
+    /// the rounding of the ray–triangle test itself, whose terms grow with the triangle's size.
+    /// Rays leaving the surface start this far off it, projected on the normal, so they clear
+    /// it at any scale and distance from the origin.
+    pub error: Vec3,
     /// Unit `e1 × e2` of the triangle; zero for a sliver whose cross product underflows.
     pub geometric_normal: Vec3,
     /// Unit interpolated vertex normal of a smooth triangle, else the geometric normal.
@@ -25,6 +31,12 @@ pub struct Surface {
     /// The triangle's material index.
     pub material: u32,
 }
+
+/// γ₇ = 7u / (1 − 7u) with u the unit roundoff of `f32` (Pharr, Jakob and Humphreys, *Physically
+/// Based Rendering*, 3rd ed., §3.9): the relative error bound of a sum of three products.
+const GAMMA_7: f32 = 7.0 * (f32::EPSILON / 2.0) / (1.0 - 7.0 * (f32::EPSILON / 2.0));
+/// γ₃, the bound for a dot or cross product of two 3-vectors.
+const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
 
 impl Surface {
     /// The surface of `geometry` at `hit`.
@@ -48,6 +60,8 @@ impl Surface {
         };
         Surface {
             position: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
+            error: GAMMA_7 * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
+                + Vec3::splat(GAMMA_3 * ((p1 - p0).length() + (p2 - p0).length())),
             geometric_normal,
             shading_normal,
             uv: b0 * geometry.uvs[i0] + hit.b1 * geometry.uvs[i1] + hit.b2 * geometry.uvs[i2],

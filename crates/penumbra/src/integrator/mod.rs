@@ -60,9 +60,10 @@ pub struct ShadingSettings {
 
 /// Smallest camera-ray distance that counts as a hit, in scene units.
 pub const CAMERA_T_MIN: f32 = 1e-4;
-/// Shadow rays start this far off the surface, relative to the hit point's magnitude (so
-/// that scenes far from the origin or at large scale still clear their own surface).
-pub const SHADOW_OFFSET: f32 = 1e-4;
+/// Shadow rays start this many times the bound on the hit point's rounding error off the
+/// surface (see [`Surface::error`]): enough to clear it whatever the scene's scale and distance
+/// from the origin, and no more.
+pub const SHADOW_OFFSET: f32 = 1.0;
 /// Shadow rays stop this fraction short of the light sample.
 pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 
@@ -199,7 +200,7 @@ impl<'w> Integrator<'w> {
             LightModel::Physical => self.gather::<Physical>(x, n_geom, &lobe, rng, scratch),
         }
         let traced = scratch.blocked.iter().filter(|&&b| !b).count() as u64;
-        let offset = SHADOW_OFFSET * (1.0 + x.abs().max_element());
+        let offset = SHADOW_OFFSET * n_geom.abs().dot(surface.error);
         self.occlude(x + offset * n_geom, x + offset * (-n_geom), scratch);
 
         let mut radiance = tex * material.ambient * self.settings.ambient;

@@ -196,6 +196,7 @@ mod tests {
     fn normals_face_the_viewer_like_shading() {
         let s = Surface {
             position: Vec3::ZERO,
+            error: Vec3::ZERO,
             geometric_normal: Vec3::Z,
             shading_normal: -Vec3::Z,
             uv: glam::Vec2::ZERO,
