@@ -31,13 +31,16 @@ row 0 at the top: the numbers the command line writes to EXR and PFM files.
 from ._camera import Camera
 from ._core import MAX_THREADS, NO_ID, SceneError
 from ._image import to_srgb8, write_image
+from ._raycast import INVALID_ID, RaycastingScene
 from ._scene import AOV_NAMES, Scene, load, load_dict, loads
 
 __all__ = [
     "AOV_NAMES",
     "Camera",
+    "INVALID_ID",
     "MAX_THREADS",
     "NO_ID",
+    "RaycastingScene",
     "Scene",
     "SceneError",
     "load",

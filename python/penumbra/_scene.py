@@ -20,6 +20,7 @@ import numpy as np
 
 from . import _core
 from ._camera import Camera
+from ._raycast import RaycastingScene
 
 #: The AOV names ``Scene.render(aovs=...)`` takes.
 AOV_NAMES: Tuple[str, ...] = tuple(_core.AOV_NAMES)
@@ -81,6 +82,13 @@ class Scene:
     def __repr__(self) -> str:
         s = self.stats
         return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
+
+    def raycasting_scene(self) -> RaycastingScene:
+        """A :class:`RaycastingScene` of the scene's triangles (spheres tessellated as they
+        are rendered), one geometry per object: geometry id = the object's index in the file, primitive
+        ids count the object's triangles in order. Its queries use every core unless they
+        pass ``nthreads``."""
+        return RaycastingScene._wrap(self._core.raycasting_scene())
 
     def render(
         self,

@@ -9,10 +9,10 @@ import inspect
 import pytest
 
 import penumbra
-from penumbra import _camera, _image, _scene
+from penumbra import _camera, _image, _raycast, _scene
 
 
-@pytest.mark.parametrize("module", [penumbra, _camera, _image, _scene], ids=lambda m: m.__name__)
+@pytest.mark.parametrize("module", [penumbra, _camera, _image, _raycast, _scene], ids=lambda m: m.__name__)
 def test_docstring_examples_run(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0 and result.attempted > 0
@@ -32,4 +32,4 @@ def test_every_public_name_is_documented():
                     if not (value.__doc__ or "").strip():
                         undocumented.append(f"{name}.{member}")
     assert undocumented == []
-    assert set(penumbra.__all__) >= {"load", "loads", "load_dict", "Scene", "Camera", "SceneError"}
+    assert set(penumbra.__all__) >= {"load", "loads", "load_dict", "Scene", "Camera", "SceneError", "RaycastingScene", "INVALID_ID"}

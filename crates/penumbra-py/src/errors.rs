@@ -2,7 +2,7 @@
 //! with their location, unreadable files as `OSError` subclasses, bad settings as
 //! `ValueError`, an interrupted render as `KeyboardInterrupt`.
 
-use penumbra::{AssetKind, ErrorKind, ImageError, RenderError};
+use penumbra::{AssetKind, ErrorKind, ImageError, RaycastError, RenderError};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 
@@ -87,5 +87,15 @@ pub(crate) fn image_error(e: ImageError) -> PyErr {
         | ImageError::NonFinite { .. } => PyValueError::new_err(e.to_string()),
         ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
         ImageError::Cancelled => PyKeyboardInterrupt::new_err(e.to_string()),
+    }
+}
+
+/// A ray-casting error as Python sees it: bad meshes, cameras or arguments are a `ValueError`,
+/// a cancelled query `KeyboardInterrupt`, worker threads that cannot start an `OSError`.
+pub(crate) fn raycast_error(e: RaycastError) -> PyErr {
+    match e {
+        RaycastError::Cancelled => PyKeyboardInterrupt::new_err("ray casting interrupted"),
+        RaycastError::Threads(_) => PyOSError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
     }
 }

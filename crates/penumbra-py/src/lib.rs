@@ -9,6 +9,8 @@ use pyo3::prelude::*;
 mod camera;
 mod errors;
 mod image;
+mod interrupt;
+mod raycast;
 mod render;
 mod scene;
 
@@ -18,6 +20,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add_class::<scene::CoreScene>()?;
+    m.add_class::<raycast::CoreRaycastingScene>()?;
+    m.add_function(wrap_pyfunction!(raycast::create_rays_pinhole, m)?)?;
+    m.add_function(wrap_pyfunction!(raycast::create_rays_pinhole_fov, m)?)?;
+    m.add("INVALID_ID", penumbra::INVALID_ID)?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::loads, m)?)?;
     m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;

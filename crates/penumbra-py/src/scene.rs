@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::scene_error;
+use crate::raycast::CoreRaycastingScene;
 use crate::render::{render_scene, CameraArgs, Request};
 
 /// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
@@ -112,6 +113,11 @@ impl CoreScene {
             aovs,
         };
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
+    }
+
+    /// A ray-casting scene of the world's triangles, geometry id = object index.
+    fn raycasting_scene(&self, py: Python<'_>) -> CoreRaycastingScene {
+        py.detach(|| CoreRaycastingScene::from_world(&self.world))
     }
 
     /// The names of the scene's cameras, in file order (the first is the default).

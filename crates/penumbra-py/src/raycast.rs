@@ -1,0 +1,293 @@
+//! Ray casting from Python: [`CoreRaycastingScene`] holds a library `RaycastingScene` and runs
+//! its batch queries with the GIL released (Ctrl-C stops them); arrays come in as flat
+//! C-contiguous float32 rows (`penumbra.RaycastingScene` reshapes and converts them) and go
+//! out as numpy arrays in dicts keyed as Open3D's results.
+
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{Element, IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
+use penumbra::{QueryOptions, RaycastingScene, World};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::errors::raycast_error;
+use crate::interrupt::interruptible;
+
+/// Triangle meshes to cast rays against; see `penumbra.RaycastingScene`.
+#[pyclass(module = "penumbra._core")]
+pub struct CoreRaycastingScene {
+    scene: RaycastingScene,
+    /// Worker threads of a query whose own `nthreads` is 0 (0: one per core).
+    threads: usize,
+}
+
+impl CoreRaycastingScene {
+    /// The triangles of a built world, geometry id = object index.
+    pub fn from_world(world: &World) -> CoreRaycastingScene {
+        CoreRaycastingScene {
+            scene: RaycastingScene::from_world(world),
+            threads: 0,
+        }
+    }
+
+    /// Runs `query` on the scene with the GIL released and the thread count of the call.
+    fn query<T: Send>(
+        &self,
+        py: Python<'_>,
+        nthreads: usize,
+        query: impl FnOnce(&RaycastingScene, &QueryOptions) -> Result<T, penumbra::RaycastError> + Send,
+    ) -> PyResult<T> {
+        let threads = if nthreads == 0 {
+            self.threads
+        } else {
+            nthreads
+        };
+        if threads > penumbra::MAX_THREADS {
+            return Err(PyValueError::new_err(format!(
+                "nthreads must be from 0 to {}, not {threads}",
+                penumbra::MAX_THREADS
+            )));
+        }
+        let scene = &self.scene;
+        interruptible(py, move |cancel| {
+            let options = QueryOptions {
+                threads,
+                cancel: Some(cancel),
+            };
+            query(scene, &options)
+        })?
+        .map_err(raycast_error)
+    }
+}
+
+/// The rows of an (n, N) C-contiguous array.
+fn rows<'a, T: Element, const N: usize>(
+    array: &'a PyReadonlyArray2<'_, T>,
+    what: &str,
+) -> PyResult<&'a [[T; N]]> {
+    let cols = array.shape()[1];
+    if cols != N {
+        return Err(PyValueError::new_err(format!(
+            "{what} must have shape (n, {N}), not (n, {cols})"
+        )));
+    }
+    let flat = array
+        .as_slice()
+        .map_err(|_| PyValueError::new_err(format!("{what} must be C-contiguous")))?;
+    Ok(flat.as_chunks::<N>().0)
+}
+
+/// A vector as a 1-D array.
+fn vec1<T: Element>(py: Python<'_>, v: Vec<T>) -> Bound<'_, PyAny> {
+    Array1::from_vec(v).into_pyarray(py).into_any()
+}
+
+/// A vector of rows as an (n, N) array.
+fn vec2<T: Element, const N: usize>(py: Python<'_>, v: Vec<[T; N]>) -> PyResult<Bound<'_, PyAny>> {
+    let n = v.len();
+    Ok(Array2::from_shape_vec((n, N), v.into_flattened())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?
+        .into_pyarray(py)
+        .into_any())
+}
+
+/// Rays as an (height, width, 6) array.
+fn ray_image(py: Python<'_>, rays: Vec<[f32; 6]>, w: u32, h: u32) -> PyResult<Bound<'_, PyAny>> {
+    Ok(
+        Array3::from_shape_vec((h as usize, w as usize, 6), rays.into_flattened())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .into_pyarray(py)
+            .into_any(),
+    )
+}
+
+#[pymethods]
+impl CoreRaycastingScene {
+    /// An empty scene whose queries use `nthreads` workers unless they name their own.
+    #[new]
+    #[pyo3(signature = (nthreads = 0))]
+    fn new(nthreads: usize) -> Self {
+        CoreRaycastingScene {
+            scene: RaycastingScene::new(),
+            threads: nthreads,
+        }
+    }
+
+    /// Adds an (N, 3) float32 vertex array and an (M, 3) uint32 index array; returns the id.
+    fn add_triangles(
+        &mut self,
+        vertices: PyReadonlyArray2<'_, f32>,
+        triangles: PyReadonlyArray2<'_, u32>,
+    ) -> PyResult<u32> {
+        let v = rows::<f32, 3>(&vertices, "vertices")?;
+        let t = rows::<u32, 3>(&triangles, "triangles")?;
+        self.scene.add_triangles(v, t).map_err(raycast_error)
+    }
+
+    /// Number of geometries added.
+    #[getter]
+    fn geometry_count(&self) -> u32 {
+        self.scene.geometry_count()
+    }
+
+    /// Number of triangles of all geometries.
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.scene.triangle_count()
+    }
+
+    /// Closest hits of (n, 6) rays.
+    fn cast_rays<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let rays = rows::<f32, 6>(&rays, "rays")?;
+        let hits = self.query(py, nthreads, |s, o| s.cast_rays(rays, o))?;
+        let d = PyDict::new(py);
+        d.set_item("t_hit", vec1(py, hits.t_hit))?;
+        d.set_item("geometry_ids", vec1(py, hits.geometry_ids))?;
+        d.set_item("primitive_ids", vec1(py, hits.primitive_ids))?;
+        d.set_item("primitive_uvs", vec2(py, hits.primitive_uvs)?)?;
+        d.set_item("primitive_normals", vec2(py, hits.primitive_normals)?)?;
+        Ok(d)
+    }
+
+    /// Whether each of (n, 6) rays meets a triangle with t in [tnear, tfar].
+    fn test_occlusions<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        tnear: f32,
+        tfar: f32,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let rays = rows::<f32, 6>(&rays, "rays")?;
+        let hit = self.query(py, nthreads, |s, o| s.test_occlusions(rays, tnear, tfar, o))?;
+        Ok(vec1(py, hit))
+    }
+
+    /// Surface crossings of each of (n, 6) rays, int32.
+    fn count_intersections<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let rays = rows::<f32, 6>(&rays, "rays")?;
+        let counts = self.query(py, nthreads, |s, o| s.count_intersections(rays, o))?;
+        Ok(vec1(py, counts))
+    }
+
+    /// Every crossing of (n, 6) rays, as Open3D lists them.
+    fn list_intersections<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let rays = rows::<f32, 6>(&rays, "rays")?;
+        let all = self.query(py, nthreads, |s, o| s.list_intersections(rays, o))?;
+        let d = PyDict::new(py);
+        d.set_item("ray_splits", vec1(py, all.ray_splits))?;
+        d.set_item("ray_ids", vec1(py, all.ray_ids))?;
+        d.set_item("t_hit", vec1(py, all.t_hit))?;
+        d.set_item("geometry_ids", vec1(py, all.geometry_ids))?;
+        d.set_item("primitive_ids", vec1(py, all.primitive_ids))?;
+        d.set_item("primitive_uvs", vec2(py, all.primitive_uvs)?)?;
+        Ok(d)
+    }
+
+    /// Closest surface points of (n, 3) query points.
+    fn compute_closest_points<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let points = rows::<f32, 3>(&points, "query_points")?;
+        let near = self.query(py, nthreads, |s, o| s.compute_closest_points(points, o))?;
+        let d = PyDict::new(py);
+        d.set_item("points", vec2(py, near.points)?)?;
+        d.set_item("geometry_ids", vec1(py, near.geometry_ids))?;
+        d.set_item("primitive_ids", vec1(py, near.primitive_ids))?;
+        d.set_item("primitive_uvs", vec2(py, near.primitive_uvs)?)?;
+        d.set_item("primitive_normals", vec2(py, near.primitive_normals)?)?;
+        Ok(d)
+    }
+
+    /// Distances of (n, 3) query points to the surface.
+    fn compute_distance<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let points = rows::<f32, 3>(&points, "query_points")?;
+        let d = self.query(py, nthreads, |s, o| s.compute_distance(points, o))?;
+        Ok(vec1(py, d))
+    }
+
+    /// Signed distances of (n, 3) query points, negative inside.
+    fn compute_signed_distance<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+        nsamples: u32,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let points = rows::<f32, 3>(&points, "query_points")?;
+        let d = self.query(py, nthreads, |s, o| {
+            s.compute_signed_distance(points, nsamples, o)
+        })?;
+        Ok(vec1(py, d))
+    }
+
+    /// Occupancy (1.0 inside, 0.0 outside) of (n, 3) query points.
+    fn compute_occupancy<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f32>,
+        nthreads: usize,
+        nsamples: u32,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let points = rows::<f32, 3>(&points, "query_points")?;
+        let d = self.query(py, nthreads, |s, o| {
+            s.compute_occupancy(points, nsamples, o)
+        })?;
+        Ok(vec1(py, d))
+    }
+}
+
+/// The (height, width, 6) rays of a camera given by its intrinsic and extrinsic matrices.
+#[pyfunction]
+pub fn create_rays_pinhole(
+    py: Python<'_>,
+    intrinsic: [[f64; 3]; 3],
+    extrinsic: [[f64; 4]; 4],
+    width: u32,
+    height: u32,
+) -> PyResult<Bound<'_, PyAny>> {
+    let rays = py
+        .detach(|| penumbra::create_rays_pinhole(intrinsic, extrinsic, width, height))
+        .map_err(raycast_error)?;
+    ray_image(py, rays, width, height)
+}
+
+/// The (height, width, 6) rays of a camera at `eye` looking at `center`.
+#[pyfunction]
+pub fn create_rays_pinhole_fov(
+    py: Python<'_>,
+    fov_deg: f64,
+    center: [f64; 3],
+    eye: [f64; 3],
+    up: [f64; 3],
+    width: u32,
+    height: u32,
+) -> PyResult<Bound<'_, PyAny>> {
+    let rays = py
+        .detach(|| penumbra::create_rays_pinhole_fov(fov_deg, center, eye, up, width, height))
+        .map_err(raycast_error)?;
+    ray_image(py, rays, width, height)
+}

@@ -1,0 +1,245 @@
+"""Ray casting against triangle meshes with the names and semantics of Open3D's
+``open3d.t.geometry.RaycastingScene``: code written for it runs by changing the import.
+
+Differences from Open3D: results are numpy arrays (no ``.numpy()`` needed, though a plain
+``np.asarray`` of them works either way), dicts of them for the queries that return several;
+float64 (or integer) rays and points are converted to float32 rather than refused; an index
+out of range in ``add_triangles`` is a ``ValueError``; and the ray test is watertight: a ray
+aimed exactly at an edge shared by two triangles, or at a vertex, hits the surface.
+
+>>> import numpy as np, penumbra
+>>> scene = penumbra.RaycastingScene()
+>>> square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float32)
+>>> scene.add_triangles(square, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32))
+0
+>>> ans = scene.cast_rays(np.array([[0.5, 0.5, 2, 0, 0, -1], [3, 3, 2, 0, 0, -1]]))
+>>> ans["t_hit"].tolist(), ans["geometry_ids"].tolist() == [0, penumbra.INVALID_ID]
+([2.0, inf], True)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, Tuple
+
+import numpy as np
+
+from . import _core
+
+#: The geometry and primitive id of a miss (Open3D's ``RaycastingScene.INVALID_ID``).
+INVALID_ID: int = _core.INVALID_ID
+
+
+def _numpy(value: Any) -> np.ndarray:
+    """``value`` as a numpy array; Open3D tensors (anything with a ``numpy()`` method that is
+    not an array) are converted through it."""
+    if not isinstance(value, np.ndarray) and callable(getattr(value, "numpy", None)):
+        value = value.numpy()
+    return np.asarray(value)
+
+
+def _rows(value: Any, width: int, name: str) -> Tuple[np.ndarray, Tuple[int, ...]]:
+    """A (..., width) array of reals as C-contiguous float32 rows, and its leading shape."""
+    array = _numpy(value)
+    if array.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must be an array of real numbers, not dtype {array.dtype}")
+    if array.ndim == 0 or array.shape[-1] != width:
+        raise ValueError(f"{name} must have shape (..., {width}), not {array.shape}")
+    lead = array.shape[:-1]
+    rows = np.ascontiguousarray(array, dtype=np.float32).reshape(-1, width)
+    return rows, lead
+
+
+def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, np.ndarray]:
+    """Each array of ``result`` with its first axis reshaped to ``lead``."""
+    return {k: v.reshape(lead + v.shape[1:]) for k, v in result.items()}
+
+
+def _threads(nthreads: int) -> int:
+    if not isinstance(nthreads, (int, np.integer)) or nthreads < 0:
+        raise ValueError(f"nthreads must be a non-negative integer, not {nthreads!r}")
+    return int(nthreads)
+
+
+class RaycastingScene:
+    """Triangle meshes to cast rays against and to query closest points on.
+
+    ``nthreads`` is the number of worker threads of queries whose own ``nthreads`` is 0 (0:
+    one per core this process may use). Queries release the GIL, run on a pool of the
+    scene's own (never a global one), and stop within about 0.1 s on Ctrl-C with
+    ``KeyboardInterrupt``. Rays are ``(..., 6)`` arrays ``[ox, oy, oz, dx, dy, dz]`` and
+    points ``(..., 3)`` arrays, of any leading shape, which the results keep; float64 or
+    integer arrays are converted to float32, non-contiguous ones copied.
+    """
+
+    __slots__ = ("_core",)
+
+    #: The geometry and primitive id of a miss: 4294967295.
+    INVALID_ID: int = _core.INVALID_ID
+
+    def __init__(self, nthreads: int = 0) -> None:
+        self._core = _core.CoreRaycastingScene(_threads(nthreads))
+
+    @classmethod
+    def _wrap(cls, core: "_core.CoreRaycastingScene") -> "RaycastingScene":
+        scene = cls.__new__(cls)
+        scene._core = core
+        return scene
+
+    def __repr__(self) -> str:
+        c = self._core
+        return f"<penumbra.RaycastingScene: {c.geometry_count} geometries, {c.triangle_count} triangles>"
+
+    def add_triangles(self, vertex_positions: Any, triangle_indices: Any = None) -> int:
+        """Adds a mesh: ``vertex_positions`` (N, 3) float32 and ``triangle_indices`` (M, 3)
+        uint32 (other real or integer dtypes are converted). Returns its geometry id: 0 for
+        the first mesh, then 1, 2, ... . Primitive ids in results index ``triangle_indices``.
+
+        Like Open3D, also takes an ``open3d.t.geometry.TriangleMesh`` alone (its
+        ``vertex.positions`` and ``triangle.indices``). An index out of range, or a vertex
+        that is not finite, raises ``ValueError`` and adds nothing.
+        """
+        if triangle_indices is None:
+            mesh = vertex_positions
+            try:
+                vertex_positions = mesh.vertex.positions
+                triangle_indices = mesh.triangle.indices
+            except AttributeError:
+                raise TypeError(
+                    "add_triangles takes (vertex_positions, triangle_indices) or an "
+                    "open3d.t.geometry.TriangleMesh"
+                ) from None
+        vertices, _ = _rows(vertex_positions, 3, "vertex_positions")
+        indices = _numpy(triangle_indices)
+        if indices.dtype.kind not in "iu":
+            raise TypeError(f"triangle_indices must be integers, not dtype {indices.dtype}")
+        if indices.ndim != 2 or indices.shape[1] != 3:
+            raise ValueError(f"triangle_indices must have shape (M, 3), not {indices.shape}")
+        if indices.size and (indices.min() < 0 or indices.max() > INVALID_ID):
+            raise ValueError(
+                f"triangle_indices must be in [0, {len(vertices)}), "
+                f"not from {indices.min()} to {indices.max()}"
+            )
+        indices = np.ascontiguousarray(indices, dtype=np.uint32)
+        return self._core.add_triangles(vertices, indices)
+
+    def cast_rays(self, rays: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
+        """The closest hit (t >= 0) of each ray: a dict of ``t_hit`` (...) float32 in units of
+        the direction's length, inf on a miss; ``geometry_ids`` and ``primitive_ids`` (...)
+        uint32, ``INVALID_ID`` on a miss; ``primitive_uvs`` (..., 2) float32, the weights of
+        the triangle's vertices 1 and 2; ``primitive_normals`` (..., 3) float32, the unit
+        normal e1 x e2 of the triangle hit (not flipped toward the ray; zero on a miss)."""
+        r, lead = _rows(rays, 6, "rays")
+        return _shaped(self._core.cast_rays(r, _threads(nthreads)), lead)
+
+    def test_occlusions(
+        self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0
+    ) -> np.ndarray:
+        """Whether each ray meets a triangle with ``tnear <= t <= tfar``: a (...) bool
+        array."""
+        r, lead = _rows(rays, 6, "rays")
+        hit = self._core.test_occlusions(r, float(tnear), float(tfar), _threads(nthreads))
+        return hit.reshape(lead)
+
+    def count_intersections(self, rays: Any, nthreads: int = 0) -> np.ndarray:
+        """How many times each ray crosses the surface (t >= 0): a (...) int32 array. A ray
+        through an edge shared by two triangles, or through a vertex, crosses once; from
+        outside a closed mesh the count is even."""
+        r, lead = _rows(rays, 6, "rays")
+        return self._core.count_intersections(r, _threads(nthreads)).reshape(lead)
+
+    def list_intersections(self, rays: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
+        """Every crossing of every ray, as ``count_intersections`` counts them, sorted by t
+        within each ray, as Open3D lists them: ``ray_splits`` (n + 1,) uint32 (the hits of
+        ray i are ``ray_splits[i]:ray_splits[i + 1]``, rays numbered in C order of the
+        leading shape), and per hit ``ray_ids``, ``t_hit``, ``geometry_ids``,
+        ``primitive_ids`` and ``primitive_uvs`` (k, 2)."""
+        r, _ = _rows(rays, 6, "rays")
+        return self._core.list_intersections(r, _threads(nthreads))
+
+    def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
+        """The closest surface point of each query point: a dict of ``points`` (..., 3),
+        ``geometry_ids``, ``primitive_ids`` (...) uint32, ``primitive_uvs`` (..., 2) and
+        ``primitive_normals`` (..., 3). An empty scene gives NaN points and INVALID_ID."""
+        p, lead = _rows(query_points, 3, "query_points")
+        return _shaped(self._core.compute_closest_points(p, _threads(nthreads)), lead)
+
+    def compute_distance(self, query_points: Any, nthreads: int = 0) -> np.ndarray:
+        """The distance of each query point to the surface: (...) float32 (inf for an empty
+        scene)."""
+        p, lead = _rows(query_points, 3, "query_points")
+        return self._core.compute_distance(p, _threads(nthreads)).reshape(lead)
+
+    def compute_signed_distance(
+        self, query_points: Any, nthreads: int = 0, nsamples: int = 1
+    ) -> np.ndarray:
+        """The distance to the surface, negative inside (as ``compute_occupancy`` decides,
+        with ``nsamples`` rays): (...) float32. Meaningful for closed meshes."""
+        p, lead = _rows(query_points, 3, "query_points")
+        d = self._core.compute_signed_distance(p, _threads(nthreads), int(nsamples))
+        return d.reshape(lead)
+
+    def compute_occupancy(
+        self, query_points: Any, nthreads: int = 0, nsamples: int = 1
+    ) -> np.ndarray:
+        """1.0 for points inside the closed surface, 0.0 outside: (...) float32, as Open3D.
+        A point is inside when most of ``nsamples`` (odd) rays from it cross the surface an
+        odd number of times; crossings are counted exactly, so 1 is enough for a closed
+        mesh."""
+        p, lead = _rows(query_points, 3, "query_points")
+        occ = self._core.compute_occupancy(p, _threads(nthreads), int(nsamples))
+        return occ.reshape(lead)
+
+    @staticmethod
+    def create_rays_pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
+        """The rays of a pinhole camera, one per pixel center: (height_px, width_px, 6)
+        float32, as Open3D makes them, in either of its forms::
+
+            create_rays_pinhole(intrinsic_matrix, extrinsic_matrix, width_px, height_px)
+            create_rays_pinhole(fov_deg, center, eye, up, width_px, height_px)
+
+        ``intrinsic_matrix`` is 3x3 ``[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`` and
+        ``extrinsic_matrix`` 4x4 world-to-camera. Ray ``[y, x]`` starts at the camera center
+        with direction ``R^T K^-1 (x + 0.5, y + 0.5, 1)`` (not normalized: its depth along
+        the optical axis is 1, so ``t_hit`` is the depth). In the second form the camera at
+        ``eye`` looks at ``center`` with a horizontal field of view of ``fov_deg`` degrees
+        and the row index grows toward ``up``."""
+        return _pinhole(*args, **kwargs)
+
+
+def _pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
+    """Both forms of ``create_rays_pinhole``, told apart by their argument names or count."""
+    fov_names = ("fov_deg", "center", "eye", "up", "width_px", "height_px")
+    matrix_names = ("intrinsic_matrix", "extrinsic_matrix", "width_px", "height_px")
+    use_fov = "fov_deg" in kwargs or len(args) + len(kwargs) == 6
+    names = fov_names if use_fov else matrix_names
+    if len(args) > len(names):
+        raise TypeError(f"create_rays_pinhole takes at most {len(names)} arguments")
+    bound = dict(zip(names, args))
+    for key, value in kwargs.items():
+        if key not in names or key in bound:
+            raise TypeError(f"create_rays_pinhole: unexpected or repeated argument {key!r}")
+        bound[key] = value
+    missing = [n for n in names if n not in bound]
+    if missing:
+        raise TypeError(f"create_rays_pinhole: missing arguments {missing}")
+    w, h = _size(bound["width_px"], "width_px"), _size(bound["height_px"], "height_px")
+    if use_fov:
+        vec = [_vector(bound[n], (3,), n) for n in ("center", "eye", "up")]
+        return _core.create_rays_pinhole_fov(float(bound["fov_deg"]), *vec, w, h)
+    k = _vector(bound["intrinsic_matrix"], (3, 3), "intrinsic_matrix")
+    e = _vector(bound["extrinsic_matrix"], (4, 4), "extrinsic_matrix")
+    return _core.create_rays_pinhole(k, e, w, h)
+
+
+def _vector(value: Any, shape: Tuple[int, ...], name: str) -> Any:
+    array = _numpy(value).astype(np.float64)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, not {array.shape}")
+    return array.tolist()
+
+
+def _size(value: Any, name: str) -> int:
+    if not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"{name} must be a non-negative integer, not {value!r}")
+    return int(value)
