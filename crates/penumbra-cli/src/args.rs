@@ -23,6 +23,13 @@ pub enum Command {
     /// Validate a scene file (or a bare .obj mesh) and print a summary.
     #[command(version)]
     Check(CheckArgs),
+    /// Print a shell completion script: source it, or save it where the shell looks.
+    #[command(version)]
+    Completions {
+        /// bash, zsh, fish, elvish or powershell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
 }
 
 /// `penumbra check`.
