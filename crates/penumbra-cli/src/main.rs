@@ -2,12 +2,12 @@
 //! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 128 + the signal's
 //! number when a signal stopped it (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP; see `signals`).
 //!
-//! One module per concept: `args` (the grammar), `aov` (`--aov` passes), `render`, `check`, `check_obj` and `completions` (the subcommands),
-//! `warnings` (what `check` flags),
-//! `input` (the scene from a file or stdin), `cameras` (`--camera` selection), `settings`
-//! (flags over the file's settings), `output` (output names, formats, folders, stdout),
-//! `summary` (what a run reports), `signals` (SIGINT, SIGTERM, SIGHUP) and `failure` (exit codes and writing
-//! to stdout and stderr).
+//! One module per concept: `args` (the grammar); `render`, `check`, `check_obj` and
+//! `completions` (the subcommands); `aov` (`--aov` passes); `warnings` (what `check` flags);
+//! `input` (the scene from a file or stdin); `cameras` (`--camera` selection); `settings`
+//! (flags over the file's settings); `output` (output names, formats, folders, stdout);
+//! `summary` (what a run reports); `signals` (SIGINT, SIGTERM, SIGHUP); and `failure` (exit
+//! codes and writing to stdout and stderr).
 
 mod aov;
 mod args;

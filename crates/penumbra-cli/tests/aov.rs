@@ -283,3 +283,41 @@ fn passes_need_a_file_and_known_names() {
     assert!(r.stderr.contains("unknown pass `zdepth`"), "{}", r.stderr);
     assert!(!dir.join("quad.png").exists(), "nothing rendered");
 }
+
+#[test]
+fn passes_of_a_region_match_the_full_film() {
+    let dir = TempDir::new("aov-region");
+    dir.write("quad.toml", SCENE);
+    ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "quad.toml",
+            "-o",
+            "full.pfm",
+            "--aov",
+            "depth",
+            "-q",
+        ],
+    ));
+    ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "quad.toml",
+            "-o",
+            "part.pfm",
+            "--aov",
+            "depth,object_id",
+            "--pixelbounds",
+            "2,4,1,3",
+            "-q",
+        ],
+    ));
+    let (_, _, _, full) = read_pfm(&dir.join("full.depth.pfm"));
+    let (w, h, _, part) = read_pfm(&dir.join("part.depth.pfm"));
+    assert_eq!((w, h), (2, 2));
+    assert_eq!(part, [full[7], full[8], full[12], full[13]]);
+    let ids = read_exr(&dir.join("part.object_id.exr"));
+    assert_eq!(ids[0].1, FlatSamples::U32(vec![1, 1, 1, 1]));
+}
