@@ -36,11 +36,6 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             args.threads
         )));
     }
-    if args.aov.is_some() && args.output.as_deref() == Some(Path::new("-")) {
-        return Err(invalid(
-            "--aov: passes are written beside an image file, not to standard output (-o -)",
-        ));
-    }
     if args.json && args.output.as_deref() == Some(Path::new("-")) {
         return Err(invalid(
             "--json: standard output carries the image with -o -; drop --json",
@@ -152,6 +147,11 @@ fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, 
             None => pattern.clone(),
         };
         let output = Output::new(name, args.format)?;
+        if args.aov.is_some() && output.target == Target::Stdout {
+            return Err(invalid(
+                "--aov: passes are written beside an image file, not to standard output (-o -)",
+            ));
+        }
         let region = region(args, &settings);
         let (w, h) = match region {
             Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),
