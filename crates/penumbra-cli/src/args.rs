@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use penumbra::{Override, PixelBounds};
 
+use crate::aov::Passes;
+
 #[derive(Parser)]
 #[command(name = "penumbra", version, about = "A fast, exact CPU ray tracer")]
 pub struct Cli {
@@ -21,6 +23,13 @@ pub enum Command {
     /// Validate a scene file (or a bare .obj mesh) and print a summary.
     #[command(version)]
     Check(CheckArgs),
+    /// Print a shell completion script: source it, or save it where the shell looks.
+    #[command(version)]
+    Completions {
+        /// bash, zsh, fish, elvish or powershell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
 }
 
 /// `penumbra check`.
@@ -120,6 +129,11 @@ pub struct RenderArgs {
     /// --light-samples still apply.
     #[arg(long)]
     pub quick: bool,
+    /// Passes beside the image: a comma list of depth, normal, albedo, position, object_id,
+    /// primitive_id, or all. An .exr output holds them as extra channels; other outputs get
+    /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
+    #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
+    pub aov: Option<Passes>,
     /// Print the summary as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,

@@ -1,5 +1,5 @@
 //! `penumbra check`: load and build a scene, then print what it holds: totals, each object's
-//! triangles and bounds, and warnings (on stderr) for lights that cannot light anything. A
+//! triangles and bounds, and warnings (on stderr; see `warnings`) for scene mistakes. A
 //! `.obj` file is summarized on its own (see `check_obj`).
 
 use std::path::Path;
@@ -12,7 +12,7 @@ use crate::check_obj;
 use crate::failure::{note, say, Failure};
 use crate::input;
 use crate::summary::{bounds_json, bounds_text, light_samples};
-use crate::warnings::light_warnings;
+use crate::warnings::{light_warnings, unused_warnings, view_warnings};
 
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
@@ -27,11 +27,15 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     } else {
         path.display().to_string()
     };
-    let warnings = light_warnings(world, scene.settings.light_model);
+    let objects = objects(world, &file.desc);
+    let bounds: Vec<(String, Aabb)> = objects.iter().map(|o| (o.key.clone(), o.bounds)).collect();
+    let aspect = scene.settings.width as f32 / scene.settings.height as f32;
+    let mut warnings = light_warnings(world, scene.settings.light_model);
+    warnings.extend(unused_warnings(&file.desc));
+    warnings.extend(view_warnings(world, aspect, &bounds));
     for w in &warnings {
         note(&format!("warning: {name}: {w}"));
     }
-    let objects = objects(world, &file.desc);
     let s = world.stats();
     let settings = &scene.settings;
     let cameras: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();

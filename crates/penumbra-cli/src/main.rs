@@ -2,17 +2,19 @@
 //! become exit codes: 0 success, 1 runtime failure, 2 invalid input or usage, 128 + the signal's
 //! number when a signal stopped it (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP; see `signals`).
 //!
-//! One module per concept: `args` (the grammar), `render`, `check` and `check_obj` (the subcommands),
-//! `warnings` (what `check` flags),
-//! `input` (the scene from a file or stdin), `cameras` (`--camera` selection), `settings`
-//! (flags over the file's settings), `output` (output names, formats, folders, stdout),
-//! `summary` (what a run reports), `signals` (SIGINT, SIGTERM, SIGHUP) and `failure` (exit codes and writing
-//! to stdout and stderr).
+//! One module per concept: `args` (the grammar); `render`, `check`, `check_obj` and
+//! `completions` (the subcommands); `aov` (`--aov` passes); `warnings` (what `check` flags);
+//! `input` (the scene from a file or stdin); `cameras` (`--camera` selection); `settings`
+//! (flags over the file's settings); `output` (output names, formats, folders, stdout);
+//! `summary` (what a run reports); `signals` (SIGINT, SIGTERM, SIGHUP); and `failure` (exit
+//! codes and writing to stdout and stderr).
 
+mod aov;
 mod args;
 mod cameras;
 mod check;
 mod check_obj;
+mod completions;
 mod failure;
 mod input;
 mod output;
@@ -35,6 +37,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Render(args) => render::run(args),
         Command::Check(args) => check::run(args),
+        Command::Completions { shell } => completions::run(*shell),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,15 +7,16 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile, View, World,
-    MAX_THREADS,
+    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile, View,
+    World, MAX_THREADS,
 };
 
+use crate::aov;
 use crate::args::RenderArgs;
 use crate::cameras;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
-use crate::output::{expand, names_camera, scene_stem, Fields, Output};
+use crate::output::{expand, names_camera, scene_stem, Fields, Output, Target};
 use crate::settings::{flag_of, region, settings};
 use crate::signals::Interrupt;
 use crate::summary::Report;
@@ -59,12 +60,18 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             progress: None,
         };
         interrupt.defer();
-        let (film, stats) = with_progress(args.quiet, |progress| {
+        let (film, aovs, stats) = with_progress(args.quiet, |progress| {
             let options = RenderOptions {
                 progress: Some(progress),
                 ..options
             };
-            penumbra::render(&scene.world, &job.settings, &options)
+            if args.aov.is_some() {
+                penumbra::render_with_aovs(&scene.world, &job.settings, &options)
+                    .map(|(film, aovs, stats)| (film, Some(aovs), stats))
+            } else {
+                penumbra::render(&scene.world, &job.settings, &options)
+                    .map(|(film, stats)| (film, None, stats))
+            }
         })
         .map_err(|e| match e {
             RenderError::Cancelled => interrupt.failure(),
@@ -73,7 +80,17 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             e => runtime(e),
         })?;
         interrupt.check()?;
-        job.output.write(&film, scene.gamma, &interrupt)?;
+        match (&args.aov, &aovs, &job.output.target) {
+            (Some(passes), Some(aovs), Target::File(path)) => {
+                if job.output.format == OutputFormat::Exr {
+                    aov::write_exr(path, &film, aovs, passes, &interrupt)?;
+                } else {
+                    job.output.write(&film, scene.gamma, &interrupt)?;
+                    aov::write_files(path, aovs, passes, &interrupt)?;
+                }
+            }
+            _ => job.output.write(&film, scene.gamma, &interrupt)?,
+        }
 
         let report = Report {
             scene: &scene_name(&args.scene),
@@ -130,6 +147,11 @@ fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, 
             None => pattern.clone(),
         };
         let output = Output::new(name, args.format)?;
+        if args.aov.is_some() && output.target == Target::Stdout {
+            return Err(invalid(
+                "--aov: passes are written beside an image file, not to standard output (-o -)",
+            ));
+        }
         let region = region(args, &settings);
         let (w, h) = match region {
             Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),

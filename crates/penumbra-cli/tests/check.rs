@@ -1,5 +1,6 @@
 //! `penumbra check`: per-object triangles and bounds, a bare OBJ summarized on its own, and
-//! warnings (stderr, exit 0) for area lights that cannot light anything.
+//! warnings (stderr, exit 0) for area lights that cannot light anything, materials and
+//! textures never used and objects no camera sees.
 
 mod harness;
 #[path = "../../penumbra/tests/support/mod.rs"]
@@ -139,4 +140,119 @@ fn check_reads_a_scene_from_stdin() {
     ));
     assert!(r.out().starts_with("<stdin>: ok"), "{}", r.out());
     assert!(r.out().contains("triangles  14"), "{}", r.out());
+}
+
+/// The `warning:` lines of a run, without the `warning: FILE: ` prefix.
+fn warnings(r: &harness::Run, file: &str) -> Vec<String> {
+    let prefix = format!("warning: {file}: ");
+    r.stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix(&prefix).map(str::to_owned))
+        .collect()
+}
+
+#[test]
+fn check_warns_about_materials_and_textures_never_used() {
+    let dir = TempDir::new("check-unused");
+    let scene = format!(
+        "{BASE_TOML}\n[materials.blue]\ndiffuse = [0.1, 0.1, 0.8]\n\
+         [materials.boarded]\ntexture = \"board\"\n\
+         [textures.board]\ntype = \"checker\"\n\
+         [textures.spare]\ntype = \"checker\"\n"
+    );
+    dir.write("s.toml", &scene);
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let w = warnings(&r, "s.toml");
+    // `red` is the cube's; `board` is named by `boarded`, itself unused.
+    assert_eq!(
+        w,
+        [
+            "materials.blue: the material is never used (no object's `material` names it)",
+            "materials.boarded: the material is never used (no object's `material` names it)",
+            "textures.spare: the texture is never used (no material's `texture` names it)",
+        ],
+        "{}",
+        r.stderr
+    );
+    assert_eq!(json(&r)["warnings"], serde_json::json!(w));
+
+    // Once an object uses `boarded`, it and its texture are used.
+    dir.write(
+        "used.toml",
+        scene.replace("material = \"red\"", "material = \"boarded\""),
+    );
+    let r = ok(run_in(dir.path(), ["check", "used.toml"]));
+    let w = warnings(&r, "used.toml");
+    assert!(w.iter().any(|l| l.starts_with("materials.red:")), "{w:?}");
+    assert!(
+        w.iter()
+            .all(|l| !l.contains("boarded") && !l.contains("board:")),
+        "{w:?}"
+    );
+    assert!(r.out().contains("used.toml: ok"));
+}
+
+/// The base scene (camera at (0, 1, 5) looking at the origin, fov 45, 16×12) with a red cube
+/// of side 1 at `center`, as objects[2].
+fn with_cube_at(center: &str) -> String {
+    format!(
+        "{BASE_TOML}\n[[objects]]\ntype = \"cube\"\nmaterial = \"red\"\ncenter = {center}\nsize = 1\n"
+    )
+}
+
+#[test]
+fn check_warns_about_objects_no_camera_sees() {
+    let dir = TempDir::new("check-view");
+    let cases = [
+        // Behind the camera.
+        ("[0, 1, 9]", true),
+        // Far to the right, left, above and below the view.
+        ("[40, 0, 0]", true),
+        ("[-40, 0, 0]", true),
+        ("[0, 40, 0]", true),
+        ("[0, -40, 0]", true),
+        // In view, at the edge of the view (the right side at z = 0 is at x ≈ 2.75 for the
+        // 16:12 film), and straddling the camera's plane.
+        ("[1, 0, -2]", false),
+        ("[3, 0, 0]", false),
+        ("[0, 1, 5]", false),
+    ];
+    for (center, outside) in cases {
+        dir.write("s.toml", with_cube_at(center));
+        let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+        let w = warnings(&r, "s.toml");
+        let want: Vec<String> = if outside {
+            vec!["objects[2]: the object is outside the view of every camera (camera)".into()]
+        } else {
+            vec![]
+        };
+        assert_eq!(w, want, "cube at {center}");
+        assert_eq!(
+            json(&r)["warnings"],
+            serde_json::json!(want),
+            "cube at {center}"
+        );
+    }
+}
+
+#[test]
+fn an_object_one_camera_sees_is_not_outside() {
+    let dir = TempDir::new("check-view-cams");
+    // Two cameras: the first looks at the origin, the second behind itself at z = 9.
+    let scene = with_cube_at("[0, 1, 9]").replace(
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov = 45\n",
+        "[cameras.front]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nfov = 45\n\
+         [cameras.back]\nposition = [0, 1, 5]\nlook_at = [0, 1, 10]\nfov = 45\n",
+    );
+    dir.write("two.toml", &scene);
+    let r = ok(run_in(dir.path(), ["check", "two.toml"]));
+    assert!(r.stderr.is_empty(), "{}", r.stderr);
+    // Without the second camera the cube is out of view.
+    let one = scene.replace("look_at = [0, 1, 10]", "look_at = [0, 0, 0]");
+    dir.write("one.toml", one);
+    let r = ok(run_in(dir.path(), ["check", "one.toml"]));
+    assert_eq!(
+        warnings(&r, "one.toml"),
+        ["objects[2]: the object is outside the view of every camera (front, back)"]
+    );
 }

@@ -78,15 +78,15 @@ fn table() -> Vec<Case> {
         // The message says what the kind takes.
         toml("key of another object kind", edit(BASE, "size = 1\n", "size = 1\nradius = 2\n"))
             .parse_error(UnknownKey, value_of("radius = 2"), Some("objects[1].radius"),
-                         &["radius", "cube", "takes: center, size"]),
+                         &["radius", "cube", "(it takes: center, size, material, scale, rotate, translate)"]),
         toml("key of another light kind",
              edit(BASE, "position = [0, 5, 5]\n", "position = [0, 5, 5]\ncenter = [0, 1, 0]\n"))
             .parse_error(UnknownKey, value_of("center = [0, 1, 0]"), Some("lights[0].center"),
-                         &["center", "point light", "takes: position"]),
+                         &["center", "point light", "(it takes: position, color, intensity)"]),
         toml("key of another texture kind",
              format!("{BASE}\n[textures.board]\ntype = \"checker\"\nfile = \"b.png\"\n"))
             .parse_error(UnknownKey, value_of("file = \"b.png\""), Some("textures.board.file"),
-                         &["file", "checker texture", "takes: even"]),
+                         &["file", "checker texture", "(it takes: even, odd, checks, uv_scale, uv_offset)"]),
         // `radius` is a key some objects take, so it is wrong only once `type` says "cube":
         // reported at the table, whose keys are all read by then.
         toml("type after a key of another object kind",
@@ -95,6 +95,11 @@ fn table() -> Vec<Case> {
         toml("type after a key of another light kind",
              edit(BASE, POINT_LIGHT, "position = [0, 5, 5]\ncenter = [0, 1, 0]\ntype = \"point\"\n"))
             .parse_error(UnknownKey, at("[[lights]]"), Some("lights[0]"), &["center", "point light"]),
+        // Before `type`, a key no kind takes: the hint lists the keys of every kind.
+        toml("unknown key before type in [[lights]]",
+             edit(BASE, POINT_LIGHT, "colour = 1\ntype = \"point\"\nposition = [0, 5, 5]\n"))
+            .parse_error(UnknownKey, value_of("colour = 1"), Some("lights[0].colour"),
+                         &["unknown key `colour` (an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity)"]),
         toml("unknown object type", edit(BASE, "type = \"cube\"", "type = \"cylinder\""))
             .parse_error(BadValue, value_of("type = \"cylinder\""), Some("objects[1].type"),
                          &["cylinder", "sphere"]),
@@ -392,6 +397,18 @@ fn table() -> Vec<Case> {
              edit(BASE_JSON, "\"position\": [0, 5, 5]}", "\"position\": [0, 5, 5], \"center\": [0, 1, 0]}"))
             .parse_error(UnknownKey, value_of("\"center\": [0, 1, 0]"), Some("lights[0].center"),
                          &["center", "point light"]),
+        json("JSON: unknown key in a point light, with the keys it takes",
+             edit(BASE_JSON, "\"position\": [0, 5, 5]}", "\"position\": [0, 5, 5], \"colour\": [1, 0, 0]}"))
+            .parse_error(UnknownKey, value_of("\"colour\": [1, 0, 0]"), Some("lights[0].colour"),
+                         &["unknown key `colour` for a point light (it takes: position, color, intensity)"]),
+        json("JSON: unknown key before type",
+             edit(BASE_JSON, "{\"type\": \"point\"", "{\"colour\": [1, 0, 0], \"type\": \"point\""))
+            .parse_error(UnknownKey, value_of("\"colour\": [1, 0, 0]"), Some("lights[0].colour"),
+                         &["(an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity)"]),
+        json("JSON: key of another object kind, with the keys it takes",
+             edit(BASE_JSON, "\"size\": 1}", "\"size\": 1, \"file\": [1]}"))
+            .parse_error(UnknownKey, value_of("\"file\": [1]"), Some("objects[1].file"),
+                         &["(it takes: center, size, material, scale, rotate, translate)"]),
         // Found once the object is read: at its closing brace, like a missing key.
         json("JSON: type after a key of another object kind",
              edit(BASE_JSON, CUBE_JSON, "{\"material\": \"red\", \"radius\": 1, \"type\": \"cube\"}"))

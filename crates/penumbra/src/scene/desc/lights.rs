@@ -74,6 +74,8 @@ impl Tagged for LightDesc {
     const COMMON: &'static [&'static str] = &["color", "intensity"];
     const ALL: &'static [&'static str] = &["center", "u", "v", "samples", "jitter", "position"];
 
+    const KINDS: &'static [LightType] = &[LightType::Area, LightType::Point];
+
     fn keys(kind: LightType) -> &'static [&'static str] {
         match kind {
             LightType::Area => &["center", "u", "v", "samples", "jitter"],

@@ -147,6 +147,14 @@ impl Tagged for ObjectDesc {
         "vertices", "uvs", "normals", "corner", "u", "v", "center", "size", "radius", "file",
     ];
 
+    const KINDS: &'static [ObjectType] = &[
+        ObjectType::Triangle,
+        ObjectType::Quad,
+        ObjectType::Cube,
+        ObjectType::Sphere,
+        ObjectType::Mesh,
+    ];
+
     fn keys(kind: ObjectType) -> &'static [&'static str] {
         match kind {
             ObjectType::Triangle => &["vertices", "uvs", "normals"],

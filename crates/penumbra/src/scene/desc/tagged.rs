@@ -16,13 +16,15 @@ use serde::Deserialize;
 /// A table read by [`TaggedVisitor`]: a `type` key, keys every kind takes, and keys of its kind.
 pub(super) trait Tagged: Sized {
     /// The values of the `type` key.
-    type Kind: Copy + for<'de> Deserialize<'de>;
+    type Kind: Copy + 'static + for<'de> Deserialize<'de>;
     /// Storage for the value of every key any kind takes.
     type Fields: Default;
     /// Keys every kind takes, besides `type`.
     const COMMON: &'static [&'static str];
     /// Every kind-specific key of any kind.
     const ALL: &'static [&'static str];
+    /// Every kind, as the hint for a key met before `type` lists them.
+    const KINDS: &'static [Self::Kind];
     /// The kind-specific keys of `kind`.
     fn keys(kind: Self::Kind) -> &'static [&'static str];
     /// How a message names a table of `kind` ("a cube").
@@ -46,17 +48,28 @@ fn takes<T: Tagged>(kind: T::Kind, key: &str) -> bool {
     T::keys(kind).contains(&key) || T::COMMON.contains(&key)
 }
 
+/// The keys a table of `kind` takes besides `type`: its own, then those every kind takes.
+fn key_list<T: Tagged>(kind: T::Kind) -> String {
+    let keys: Vec<&str> = T::keys(kind).iter().chain(T::COMMON).copied().collect();
+    keys.join(", ")
+}
+
+/// The message for `key`, which a table of `kind` does not take; with the kind not yet known
+/// (the key comes before `type`), the keys of every kind.
 fn unknown_key<T: Tagged>(kind: Option<T::Kind>, key: &str) -> String {
     match kind {
-        Some(kind) => {
-            let keys: Vec<&str> = T::keys(kind).iter().chain(T::COMMON).copied().collect();
-            format!(
-                "unknown key `{key}` for {} (it takes: {})",
-                T::describe(kind),
-                keys.join(", ")
-            )
+        Some(kind) => format!(
+            "unknown key `{key}` for {} (it takes: {})",
+            T::describe(kind),
+            key_list::<T>(kind)
+        ),
+        None => {
+            let kinds: Vec<String> = T::KINDS
+                .iter()
+                .map(|&k| format!("{} takes: {}", T::describe(k), key_list::<T>(k)))
+                .collect();
+            format!("unknown key `{key}` ({})", kinds.join("; "))
         }
-        None => format!("unknown key `{key}`"),
     }
 }
 

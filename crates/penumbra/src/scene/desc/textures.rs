@@ -99,6 +99,8 @@ impl Tagged for TextureDesc {
         "checks",
     ];
 
+    const KINDS: &'static [TextureType] = &[TextureType::Image, TextureType::Checker];
+
     fn keys(kind: TextureType) -> &'static [&'static str] {
         match kind {
             TextureType::Image => &["file", "filter", "wrap", "colorspace"],
