@@ -39,6 +39,24 @@ const GAMMA_7: f32 = 7.0 * (f32::EPSILON / 2.0) / (1.0 - 7.0 * (f32::EPSILON / 2
 const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
 
 impl Surface {
+    /// The geometric and shading normals as seen along `direction` (SPEC §5): the geometric
+    /// normal turned toward the ray's origin, both flipped together; then the shading normal
+    /// onto the geometric normal's side. A mirroring transform (negative scale) reverses the
+    /// winding, so e1 × e2 flips while the inverse-transpose vertex normals do not, and OBJ
+    /// files can carry normals that disagree with their winding: either way the shading
+    /// normal belongs on the viewer's side, as pbrt does by face-forwarding one to the other.
+    pub fn facing(&self, direction: Vec3) -> (Vec3, Vec3) {
+        let (mut n_geom, mut n) = (self.geometric_normal, self.shading_normal);
+        if n_geom.dot(direction) > 0.0 {
+            n_geom = -n_geom;
+            n = -n;
+        }
+        if n.dot(n_geom) < 0.0 {
+            n = -n;
+        }
+        (n_geom, n)
+    }
+
     /// The surface of `geometry` at `hit`.
     pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
         let tri = &geometry.triangles[hit.triangle as usize];

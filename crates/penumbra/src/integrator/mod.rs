@@ -163,19 +163,7 @@ impl<'w> Integrator<'w> {
     ) -> (Rgb, u64) {
         let world = self.world;
         let x = surface.position;
-        let mut n_geom = surface.geometric_normal;
-        let mut n = surface.shading_normal;
-        if n_geom.dot(ray.direction) > 0.0 {
-            n_geom = -n_geom;
-            n = -n;
-        }
-        // A mirroring transform (negative scale) reverses the winding, so e1 × e2 flips while
-        // the inverse-transpose vertex normals do not; OBJ files can also carry normals that
-        // disagree with their winding. Either way the shading normal belongs on the viewer's
-        // side, as pbrt does by face-forwarding one normal to the other.
-        if n.dot(n_geom) < 0.0 {
-            n = -n;
-        }
+        let (n_geom, n) = surface.facing(ray.direction);
         let material = &world.materials()[surface.material as usize];
         let tex = match material.texture {
             Some(t) => world.textures()[t as usize].eval(surface.uv),

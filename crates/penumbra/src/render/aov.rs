@@ -117,19 +117,9 @@ impl AovContext {
     }
 }
 
-/// The shading normal turned as the integrator turns it: the geometric normal toward the
-/// ray's origin, the shading normal onto the geometric normal's side.
+/// The shading normal turned as the integrator turns it (see [`Surface::facing`]).
 pub(crate) fn facing_normal(ray: &Ray, surface: &Surface) -> Vec3 {
-    let mut n_geom = surface.geometric_normal;
-    let mut n = surface.shading_normal;
-    if n_geom.dot(ray.direction) > 0.0 {
-        n_geom = -n_geom;
-        n = -n;
-    }
-    if n.dot(n_geom) < 0.0 {
-        n = -n;
-    }
-    n
+    surface.facing(ray.direction).1
 }
 
 /// The diffuse reflectance at `surface`: the material's k_d times its texture, as shading
