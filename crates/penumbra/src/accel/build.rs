@@ -88,7 +88,7 @@ fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
 /// normal float). A ray lying exactly in a face plane of a tight box computes 0·∞ = NaN in the
 /// slab test and would skip the box; with the padding, `bound − origin` is never zero for
 /// a ray that touches the true box, and the box test stays conservative.
-fn node(bounds: Aabb, first: usize, count: usize) -> BvhNode {
+pub(super) fn node(bounds: Aabb, first: usize, count: usize) -> BvhNode {
     let pad = |v: Vec3| v.abs() * (1.0 / (1 << 20) as f32) + Vec3::splat(f32::MIN_POSITIVE);
     BvhNode {
         min: (bounds.min - pad(bounds.min)).into(),

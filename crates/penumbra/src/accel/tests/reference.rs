@@ -5,6 +5,7 @@
 //! order.
 
 use super::*;
+use crate::accel::build::node;
 use crate::math::Aabb;
 
 #[derive(Clone, Copy)]
@@ -50,20 +51,6 @@ fn bounds_of(prims: &[RefPrim]) -> (Aabb, Aabb) {
     prims.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), p| {
         (b.union(p.bounds), c.grow(p.centroid))
     })
-}
-
-/// A node whose box is `bounds` grown outward by a relative 2⁻²⁰ (and at least the smallest
-/// normal float). A ray lying exactly in a face plane of a tight box computes 0·∞ = NaN in the
-/// slab test and would skip the box; with the padding, `bound − origin` is never zero for
-/// a ray that touches the true box, and the box test stays conservative.
-fn node(bounds: Aabb, first: usize, count: usize) -> BvhNode {
-    let pad = |v: Vec3| v.abs() * (1.0 / (1 << 20) as f32) + Vec3::splat(f32::MIN_POSITIVE);
-    BvhNode {
-        min: (bounds.min - pad(bounds.min)).into(),
-        first: first as u32,
-        max: (bounds.max + pad(bounds.max)).into(),
-        count: count as u32,
-    }
 }
 
 /// Builds the subtree over `prims` into `nodes[index]`, appending its descendants.
