@@ -1,9 +1,86 @@
 //! Reading the files a scene names: only regular files, and never more than a bound, so that a
 //! folder, a device such as `/dev/zero`, a named pipe or a huge file is refused at once
-//! instead of hanging or exhausting memory.
+//! instead of hanging or exhausting memory. A scene's files come from the file system or from
+//! a pack carried in memory ([`Files`]), so that a scene built on one machine can be built
+//! again on another without a shared file system.
 
+use std::collections::BTreeMap;
 use std::io::{self, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Where the files a scene names (meshes, material libraries, images) are read from: the file
+/// system, or a set of files carried in memory, each under the path the scene resolves it to
+/// (see [`SceneFile::pack`](crate::SceneFile::pack)). Reading a path the pack does not hold is
+/// a "not found" error, as on disk.
+#[derive(Clone, Debug, Default)]
+pub struct Files {
+    packed: Option<Arc<BTreeMap<PathBuf, Vec<u8>>>>,
+}
+
+impl Files {
+    /// The file system.
+    pub fn disk() -> Files {
+        Files::default()
+    }
+
+    /// The files of `files`, by path, and no others.
+    pub fn packed(files: BTreeMap<PathBuf, Vec<u8>>) -> Files {
+        Files {
+            packed: Some(Arc::new(files)),
+        }
+    }
+
+    /// True when the files come from a pack rather than the file system.
+    pub fn is_packed(&self) -> bool {
+        self.packed.is_some()
+    }
+
+    /// The bytes of the regular file `path`, at most `limit` of them (see [`read_bounded`]).
+    pub(crate) fn read(&self, path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+        match &self.packed {
+            None => read_bounded(path, limit),
+            Some(files) => {
+                let bytes = packed_file(files, path)?;
+                if bytes.len() as u64 > limit {
+                    return Err(too_large(bytes.len() as u64, limit));
+                }
+                Ok(bytes.clone())
+            }
+        }
+    }
+
+    /// The size of `path` in bytes, or `None` when it cannot be known (a missing file).
+    pub(crate) fn size(&self, path: &Path) -> Option<u64> {
+        match &self.packed {
+            None => std::fs::metadata(path).ok().map(|m| m.len()),
+            Some(files) => files.get(path).map(|b| b.len() as u64),
+        }
+    }
+
+    /// True when `path` is a regular file (or a packed one).
+    pub(crate) fn is_file(&self, path: &Path) -> bool {
+        match &self.packed {
+            None => path.is_file(),
+            Some(files) => files.contains_key(path),
+        }
+    }
+
+    /// The name under which `path` is read once per scene: the canonical path on disk (so
+    /// that two spellings of one file share it), the path itself in a pack.
+    pub(crate) fn identity(&self, path: &Path) -> PathBuf {
+        match &self.packed {
+            None => std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned()),
+            Some(_) => path.to_owned(),
+        }
+    }
+}
+
+fn packed_file<'a>(files: &'a BTreeMap<PathBuf, Vec<u8>>, path: &Path) -> io::Result<&'a Vec<u8>> {
+    files
+        .get(path)
+        .ok_or_else(|| io::Error::new(io::ErrorKind::NotFound, "not in the scene's packed files"))
+}
 
 /// Checks that `path` is a regular file of at most `limit` bytes, before anything opens it
 /// (opening a named pipe would wait for a writer). Returns its size.
@@ -35,7 +112,7 @@ pub(crate) fn read_bounded(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
         .map_err(|_| too_large(size, limit))?;
     // Bounded even if the file grows after the check.
     std::fs::File::open(path)?
-        .take(limit + 1)
+        .take(limit.saturating_add(1))
         .read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
         return Err(too_large(bytes.len() as u64, limit));
@@ -69,5 +146,26 @@ mod tests {
         let e = read_bounded(&file, 9).unwrap_err();
         assert!(e.to_string().contains("too large"), "{e}");
         std::fs::remove_file(&file).unwrap();
+    }
+
+    #[test]
+    fn packed_files_are_read_by_their_exact_path_with_the_same_bound() {
+        let files = Files::packed(BTreeMap::from([(
+            PathBuf::from("/scenes/mesh.obj"),
+            b"v 0 0 0".to_vec(),
+        )]));
+        let path = Path::new("/scenes/mesh.obj");
+        assert_eq!(files.read(path, 100).unwrap(), b"v 0 0 0");
+        assert!(files.is_file(path) && files.size(path) == Some(7));
+        let e = files.read(path, 6).unwrap_err();
+        assert!(e.to_string().contains("too large"), "{e}");
+        // Looked up by path components: `.` is no component, `..` is.
+        assert!(files.is_file(Path::new("/scenes/./mesh.obj")));
+        let other = Path::new("/scenes/../scenes/mesh.obj");
+        assert_eq!(
+            files.read(other, 100).unwrap_err().kind(),
+            io::ErrorKind::NotFound
+        );
+        assert!(!files.is_file(other) && files.size(other).is_none());
     }
 }

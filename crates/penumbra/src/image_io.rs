@@ -12,7 +12,6 @@ use thiserror::Error;
 
 use crate::encode8::encode_all;
 use crate::film::Film;
-use crate::texture::{srgb_to_linear, Image};
 
 /// Output file formats, chosen by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -302,134 +301,9 @@ fn encode<W: Write + Seek>(
     w.flush().map_err(|e| e.to_string())
 }
 
-/// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
-pub const MAX_TEXELS: u64 = 1 << 26;
-
-/// Memory decoding takes per texel at its peak: the decoder's buffer (up to 8 bytes for
-/// 16-bit RGBA), its float copy (12) and the texels kept (12).
-pub const DECODE_BYTES_PER_TEXEL: u64 = 32;
-
-/// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
-/// through the sRGB curve when `srgb` is true, else as value/max. With `max_bytes`, an image
-/// whose decoding would take more memory than that is refused before it is decoded.
-pub fn load_texture_image(
-    path: &Path,
-    srgb: bool,
-    max_bytes: Option<u64>,
-) -> Result<Image, String> {
-    // A compressed image over 1 GiB is not a texture; a folder, device or pipe is refused
-    // before it is opened.
-    crate::files::check_regular(path, 1 << 30).map_err(|e| e.to_string())?;
-    let reader = || {
-        image::ImageReader::open(path)
-            .map_err(|e| e.to_string())?
-            .with_guessed_format()
-            .map_err(|e| e.to_string())
-    };
-    // Read the size from the header first: a small file can claim a huge image.
-    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
-    if w as u64 * h as u64 > MAX_TEXELS {
-        return Err(format!(
-            "the image is too large for memory ({w}x{h}; at most {MAX_TEXELS} texels)"
-        ));
-    }
-    let need = w as u64 * h as u64 * DECODE_BYTES_PER_TEXEL;
-    if let Some(max) = max_bytes.filter(|&max| need > max) {
-        return Err(format!(
-            "decoding this {w}x{h} image needs about {} of memory, more than the {} available",
-            crate::memory::human(need),
-            crate::memory::human(max)
-        ));
-    }
-    let img = reader()?.decode().map_err(|e| e.to_string())?;
-    let (width, height) = (img.width(), img.height());
-    if width == 0 || height == 0 {
-        return Err("the image is empty".into());
-    }
-    let rgb = img.into_rgb32f();
-    let mut texels = Vec::new();
-    texels
-        .try_reserve_exact(width as usize * height as usize)
-        .map_err(|_| format!("not enough memory for a {width}x{height} image"))?;
-    texels.extend(rgb.pixels().map(|p| {
-        let c = glam::Vec3::from(p.0);
-        if srgb {
-            c.map(srgb_to_linear)
-        } else {
-            c
-        }
-    }));
-    Ok(Image {
-        width,
-        height,
-        texels,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn textures_decode_8_and_16_bit_grey_rgb_and_rgba_to_linear() {
-        let dir = std::env::temp_dir().join(format!("penumbra-decode-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        // Each image holds one texel whose encoded value is one half (128/255 or 32768/65535).
-        let half8 = 128.0 / 255.0;
-        let half16 = 32768.0 / 65535.0;
-        let cases: Vec<(&str, image::DynamicImage, f32)> = vec![
-            (
-                "grey8.png",
-                image::GrayImage::from_pixel(1, 1, image::Luma([128])).into(),
-                half8,
-            ),
-            (
-                "grey16.png",
-                image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(1, 1, image::Luma([32768]))
-                    .into(),
-                half16,
-            ),
-            (
-                "rgb8.png",
-                image::RgbImage::from_pixel(1, 1, image::Rgb([128; 3])).into(),
-                half8,
-            ),
-            (
-                "rgba16.png",
-                image::ImageBuffer::<image::Rgba<u16>, _>::from_pixel(
-                    1,
-                    1,
-                    image::Rgba([32768, 32768, 32768, 0]),
-                )
-                .into(),
-                half16,
-            ),
-            // Alpha is ignored: a fully transparent texel keeps its color.
-            (
-                "rgba8.png",
-                image::RgbaImage::from_pixel(1, 1, image::Rgba([128, 128, 128, 0])).into(),
-                half8,
-            ),
-        ];
-        for (name, img, encoded) in cases {
-            let path = dir.join(name);
-            img.save(&path).unwrap();
-            let srgb = load_texture_image(&path, true, None).unwrap();
-            let linear = load_texture_image(&path, false, None).unwrap();
-            assert_eq!((srgb.width, srgb.height), (1, 1));
-            for c in srgb.texels[0].to_array() {
-                assert!((c - srgb_to_linear(encoded)).abs() < 1e-6, "{name}: {c}");
-            }
-            for c in linear.texels[0].to_array() {
-                assert!((c - encoded).abs() < 1e-6, "{name}: {c}");
-            }
-        }
-        let corrupt = dir.join("corrupt.png");
-        std::fs::write(&corrupt, b"not a png").unwrap();
-        assert!(load_texture_image(&corrupt, true, None).is_err());
-        assert!(load_texture_image(&dir.join("missing.png"), true, None).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
 
     #[test]
     fn a_cancelled_write_leaves_the_old_file_and_no_temporary_file() {

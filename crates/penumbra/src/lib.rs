@@ -65,6 +65,7 @@ mod sampling;
 mod scene;
 mod simd;
 mod texture;
+mod texture_file;
 mod world;
 
 /// The built-in shapes as object-space meshes, for [`WorldBuilder::add_mesh`].
@@ -75,6 +76,7 @@ pub mod shapes {
 pub use accel::{intersect_brute_force, occluded_brute_force, Bvh};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
+pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
 pub use image_io::{encode_image, write_image, write_image_unless, ImageError, OutputFormat};
@@ -95,10 +97,12 @@ pub use render::{
 pub use sampling::{Rng, Sampler};
 pub use scene::{
     desc, escape_controls, inspect_obj, AssetKind, ErrorKind, Location, ObjInfo, Override,
-    OverrideError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, MAX_SCENE_BYTES,
+    OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, ScenePack,
+    MAX_SCENE_BYTES,
 };
 pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
+pub use texture_file::decode_texture_image;
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};
 
 // The README's Rust snippets are compiled (and, unless `no_run`, run) as doc-tests.

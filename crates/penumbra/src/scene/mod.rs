@@ -8,13 +8,14 @@ mod error;
 mod locate;
 mod obj;
 mod overrides;
+mod pack;
 mod parse;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::files::read_bounded;
+use crate::files::{read_bounded, Files};
 use crate::render::RenderSettings;
 use crate::world::World;
 
@@ -22,6 +23,7 @@ pub use desc::SceneDesc;
 pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
 pub use obj::{inspect_obj, ObjInfo};
 pub use overrides::{Override, OverrideError};
+pub use pack::{PackError, ScenePack};
 use parse::Source;
 
 /// Largest scene file read: 256 MiB of text, far beyond any hand-written or exported scene.
@@ -56,6 +58,8 @@ pub struct SceneFile {
     /// Folder that relative paths in the file are relative to.
     pub base_dir: PathBuf,
     source: Source,
+    /// Where the meshes and images it names are read from.
+    files: Files,
 }
 
 /// A scene file built: the world it describes, shared, and what the file says about rendering
@@ -76,6 +80,10 @@ pub struct Scene {
     /// `world.stats().bvh_build_time`; the scene file's parsing happens before, in
     /// [`SceneFile::load`] or [`SceneFile::from_str`].
     pub load_time: Duration,
+    /// Every file the build read besides the scene file (meshes, material libraries, images),
+    /// by the path the scene resolved it to, sorted: with the scene's text, all it takes to
+    /// build it again (see [`SceneFile::pack`]).
+    pub files: Vec<PathBuf>,
 }
 
 impl SceneFile {
@@ -130,7 +138,28 @@ impl SceneFile {
             desc: source.parse(overrides)?,
             base_dir: base_dir.into(),
             source,
+            files: Files::disk(),
         })
+    }
+
+    /// The same scene file reading its meshes and images from `files` instead.
+    pub fn with_files(self, files: Files) -> SceneFile {
+        SceneFile { files, ..self }
+    }
+
+    /// Where the meshes and images the file names are read from.
+    pub fn files(&self) -> &Files {
+        &self.files
+    }
+
+    /// The text of the file, as read (before any override).
+    pub fn text(&self) -> &str {
+        self.source.text()
+    }
+
+    /// The syntax of the file.
+    pub fn format(&self) -> SceneFormat {
+        self.source.format()
     }
 
     /// The name used in messages (the path as given).

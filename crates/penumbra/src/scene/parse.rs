@@ -39,6 +39,21 @@ impl Source {
         &self.name
     }
 
+    /// The text, as read.
+    pub(super) fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The syntax of the text.
+    pub(super) fn format(&self) -> SceneFormat {
+        self.format
+    }
+
+    /// The overrides applied, as given, in order.
+    pub(super) fn overrides(&self) -> impl Iterator<Item = &str> {
+        self.set.iter().map(|(_, text)| text.as_str())
+    }
+
     /// The description: the text as written, or with `overrides` applied in order.
     pub(super) fn parse(&mut self, overrides: &[Override]) -> Result<SceneDesc, SceneError> {
         if overrides.is_empty() {

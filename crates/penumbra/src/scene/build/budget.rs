@@ -70,7 +70,7 @@ impl Builder<'_> {
     /// Refuses the OBJ `file` (named at `path`) when reading it would not fit in memory; a
     /// file that cannot be examined is left for the reader to report.
     pub(super) fn check_obj_size(&self, path: &KeyPath, file: &Path) -> Result<()> {
-        let Ok(size) = std::fs::metadata(file).map(|m| m.len()) else {
+        let Some(size) = self.file.files().size(file) else {
             return Ok(());
         };
         let need = size.saturating_mul(OBJ_BYTES_PER_FILE_BYTE);

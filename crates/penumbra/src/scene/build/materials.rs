@@ -7,13 +7,13 @@ use std::sync::Arc;
 use glam::Vec2;
 
 use super::{list, Builder, Result};
-use crate::image_io::load_texture_image;
 use crate::light::{AreaLight, Light, PointLight};
 use crate::material::Material;
 use crate::math::Rgb;
 use crate::scene::desc::{ColorSpace, LightDesc, MaterialDesc, Num, TextureDesc, TextureKindDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
+use crate::texture_file::load_texture_image;
 
 /// The (Blinn-)Phong coefficients as a scene file or an MTL file gives them; what is absent
 /// takes the default material's value (k_a defaults to k_d).
@@ -47,17 +47,20 @@ impl Builder<'_> {
         srgb: bool,
         what: &str,
     ) -> Result<Arc<Image>> {
-        let key = (std::fs::canonicalize(&file).unwrap_or(file.clone()), srgb);
+        let key = (self.file.files().identity(&file), srgb);
         if let Some(img) = self.images.get(&key) {
             return Ok(img.clone());
         }
-        let img = load_texture_image(&file, srgb, self.budget.left()).map_err(|e| {
-            self.err(
-                ErrorKind::Asset(AssetKind::Image),
-                path,
-                format!("cannot load {what} \"{}\": {e}", file.display()),
-            )
-        })?;
+        let img = load_texture_image(self.file.files(), &file, srgb, self.budget.left()).map_err(
+            |e| {
+                self.err(
+                    ErrorKind::Asset(AssetKind::Image),
+                    path,
+                    format!("cannot load {what} \"{}\": {e}", file.display()),
+                )
+            },
+        )?;
+        self.read.insert(file);
         self.budget.texture_bytes +=
             img.width as u64 * img.height as u64 * super::budget::BYTES_PER_TEXEL;
         let img = Arc::new(img);

@@ -10,7 +10,7 @@ mod materials;
 mod objects;
 mod settings;
 
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -34,6 +34,8 @@ struct Builder<'a> {
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     /// OBJ files read once per scene.
     meshes: HashMap<PathBuf, objects::LoadedObj>,
+    /// Every file read (meshes, material libraries, images), as resolved.
+    read: BTreeSet<PathBuf>,
     world: WorldBuilder,
     /// What the lights emit together, the ambient light and the light model: the bounds an
     /// MTL material is checked against (see `bounds`).
@@ -58,6 +60,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         pool: thread_pool(threads).ok().map(|(pool, _)| pool),
         images: HashMap::new(),
         meshes: HashMap::new(),
+        read: BTreeSet::new(),
         world: WorldBuilder::new(),
         lighting: Lighting {
             emission: 0.0,
@@ -122,6 +125,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         settings,
         output: film.output,
         gamma: film.gamma,
+        files: b.read.into_iter().collect(),
     })
 }
 

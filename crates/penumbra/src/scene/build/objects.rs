@@ -101,18 +101,21 @@ impl Builder<'_> {
         with_mtl: bool,
     ) -> Result<(Rc<Mesh>, Option<Vec<u32>>)> {
         let obj_path = self.file.resolve(file);
-        let key = std::fs::canonicalize(&obj_path).unwrap_or_else(|_| obj_path.clone());
+        let key = self.file.files().identity(&obj_path);
         let loaded = match self.meshes.get(&key) {
             Some(loaded) => loaded,
             None => {
                 self.check_obj_size(path, &obj_path)?;
-                let model = load_obj(&obj_path, self.pool.as_ref()).map_err(|e| {
-                    self.err(
-                        ErrorKind::Asset(AssetKind::Mesh),
-                        path,
-                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
-                    )
-                })?;
+                let model =
+                    load_obj(self.file.files(), &obj_path, self.pool.as_ref()).map_err(|e| {
+                        self.err(
+                            ErrorKind::Asset(AssetKind::Mesh),
+                            path,
+                            format!("cannot load mesh \"{}\": {e}", obj_path.display()),
+                        )
+                    })?;
+                self.read.insert(obj_path.clone());
+                self.read.extend(model.mtl_files);
                 let loaded = LoadedObj {
                     mesh: Rc::new(model.mesh),
                     mtl: model.materials,

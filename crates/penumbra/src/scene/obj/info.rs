@@ -8,6 +8,7 @@ use crate::geometry::Mesh;
 use crate::math::Aabb;
 
 use super::load_obj;
+use crate::files::Files;
 
 /// A summary of an OBJ file, in its own (object) space.
 #[derive(Clone, Debug)]
@@ -32,7 +33,7 @@ pub struct ObjInfo {
 /// Reads the OBJ file at `path` (and its MTL libraries, not its textures) and summarizes it.
 /// The error says what is wrong, with the line.
 pub fn inspect_obj(path: &Path) -> Result<ObjInfo, String> {
-    let model = load_obj(path, None)?;
+    let model = load_obj(&Files::disk(), path, None)?;
     let mesh = &model.mesh;
     let bounds = mesh
         .indices

@@ -40,13 +40,13 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::files::read_bounded;
+use crate::files::Files;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
 pub use info::{inspect_obj, ObjInfo};
 use lines::decode;
-use mtl::{resolve, Library};
+use mtl::Library;
 
 /// A material from an MTL file.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +66,8 @@ pub(crate) struct ObjMaterial {
 pub(crate) struct ObjModel {
     pub mesh: Mesh,
     pub materials: Vec<ObjMaterial>,
+    /// The MTL files read for it.
+    pub mtl_files: Vec<PathBuf>,
 }
 
 /// Largest OBJ file read: 4 GiB of text is some 100 million triangles, about what memory holds.
@@ -132,11 +134,17 @@ impl ObjData {
 /// Loads `path`, parsing its chunks on the threads of `pool` when there is one. Errors are
 /// messages that do not repeat the OBJ file's path (the caller adds it) but do name any other
 /// file involved.
-pub(crate) fn load_obj(path: &Path, pool: Option<&rayon::ThreadPool>) -> Result<ObjModel, String> {
-    let bytes = read_bounded(path, MAX_FILE_BYTES).map_err(|e| e.to_string())?;
+pub(crate) fn load_obj(
+    files: &Files,
+    path: &Path,
+    pool: Option<&rayon::ThreadPool>,
+) -> Result<ObjModel, String> {
+    let bytes = files
+        .read(path, MAX_FILE_BYTES)
+        .map_err(|e| e.to_string())?;
     lines::check_text(&bytes, "an OBJ")?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let data = read(&bytes, dir, pool, CHUNK_BYTES)?;
+    let data = read(&bytes, dir, Library::new(files.clone()), pool, CHUNK_BYTES)?;
     if data.triangles == 0 {
         // Nothing to render: most likely not the file meant (any text without `f` lines
         // parses, since unknown statements are ignored).
@@ -145,11 +153,13 @@ pub(crate) fn load_obj(path: &Path, pool: Option<&rayon::ThreadPool>) -> Result<
     build_mesh(data)
 }
 
-/// Parses the OBJ file `bytes`, whose `mtllib` names are relative to `dir`, in chunks of
-/// about `chunk_bytes` bytes (in parallel on `pool` when there is one), and merges them.
+/// Parses the OBJ file `bytes`, whose `mtllib` names are relative to `dir` and read into
+/// `library`, in chunks of about `chunk_bytes` bytes (in parallel on `pool` when there is
+/// one), and merges them.
 fn read(
     bytes: &[u8],
     dir: &Path,
+    library: Library,
     pool: Option<&rayon::ThreadPool>,
     chunk_bytes: usize,
 ) -> Result<ObjData, String> {
@@ -177,15 +187,18 @@ fn read(
             ranges.iter().zip(starts).map(parse).collect()
         }
     };
-    merge(chunks, dir)
+    merge(chunks, dir, library)
 }
 
 /// Joins the chunks in file order: loads the `mtllib` files, resolves relative indices and
 /// materials against the chunks before, checks the mesh size, and returns the first error a
 /// serial reading meets.
-fn merge(chunks: Vec<Chunk>, dir: &Path) -> Result<ObjData, String> {
+fn merge(chunks: Vec<Chunk>, dir: &Path, library: Library) -> Result<ObjData, String> {
     let too_large = || "the mesh is too large (more than a billion triangles)".to_owned();
-    let mut data = ObjData::default();
+    let mut data = ObjData {
+        library,
+        ..ObjData::default()
+    };
     let total = |f: fn(&Chunk) -> usize| chunks.iter().map(f).sum::<usize>();
     data.positions.reserve(total(|c| c.positions.len()));
     data.uvs.reserve(total(|c| c.uvs.len()));
@@ -201,13 +214,13 @@ fn merge(chunks: Vec<Chunk>, dir: &Path) -> Result<ObjData, String> {
                         return Err(too_large());
                     }
                     // One file name with spaces, or several names separated by spaces.
-                    let files: Vec<&str> = if dir.join(&rest).is_file() {
+                    let files: Vec<&str> = if data.library.is_file(&dir.join(&rest)) {
                         vec![&rest]
                     } else {
                         rest.split_ascii_whitespace().collect()
                     };
                     for f in files {
-                        data.library.load(resolve(dir, f))?;
+                        data.library.load(data.library.resolve(dir, f))?;
                     }
                 }
                 Deferred::Relative {
@@ -387,5 +400,10 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
             mesh.material_slots.push(slot);
         }
     }
-    Ok(ObjModel { mesh, materials })
+    let mtl_files = data.library.files_read().cloned().collect();
+    Ok(ObjModel {
+        mesh,
+        materials,
+        mtl_files,
+    })
 }

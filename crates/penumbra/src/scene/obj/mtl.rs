@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::lines::{check_text, decode, for_each_line, numbers, rest_of_line};
 use super::{ObjMaterial, MAX_FILE_BYTES};
-use crate::files::read_bounded;
+use crate::files::Files;
 
 /// The materials of every `mtllib`, later definitions of a name replacing earlier ones.
 #[derive(Default)]
@@ -21,15 +21,40 @@ pub(super) struct Library {
     by_name: HashMap<String, usize>,
     /// MTL files already read, so that a library named twice is read once.
     loaded: HashSet<PathBuf>,
+    /// Where the MTL files (and the textures they name) are read from.
+    files: Files,
 }
 
 impl Library {
+    /// An empty library whose MTL files are read from `files`.
+    pub(super) fn new(files: Files) -> Library {
+        Library {
+            files,
+            ..Library::default()
+        }
+    }
+
     /// Reads the MTL file `path` into the library, unless it was read already.
     pub(super) fn load(&mut self, path: PathBuf) -> Result<(), String> {
         if self.loaded.insert(path.clone()) {
             load_mtl(&path, self)?;
         }
         Ok(())
+    }
+
+    /// The MTL files read, in no particular order.
+    pub(super) fn files_read(&self) -> impl Iterator<Item = &PathBuf> {
+        self.loaded.iter()
+    }
+
+    /// True when `path` is a file where the library reads its files.
+    pub(super) fn is_file(&self, path: &Path) -> bool {
+        self.files.is_file(path)
+    }
+
+    /// `name` relative to `dir`, as [`resolve`] finds it in the library's files.
+    pub(super) fn resolve(&self, dir: &Path, name: &str) -> PathBuf {
+        resolve(&self.files, dir, name)
     }
 
     /// How many materials have been defined; [`Library::find`] gives indices below this.
@@ -46,7 +71,9 @@ impl Library {
 
 /// Reads an MTL file into `library`. Errors name the MTL file.
 fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
-    let bytes = read_bounded(path, MAX_FILE_BYTES)
+    let bytes = library
+        .files
+        .read(path, MAX_FILE_BYTES)
         .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
     check_text(&bytes, "an MTL")
         .map_err(|e| format!("material library \"{}\": {e}", path.display()))?;
@@ -114,7 +141,7 @@ fn parse_mtl(text: &str, path: &Path, library: &mut Library) -> Result<(), Strin
             }
             "map_Kd" => {
                 if let Some(file) = texture_file_name(line, words) {
-                    m.diffuse_texture = Some(resolve(dir, file));
+                    m.diffuse_texture = Some(resolve(&library.files, dir, file));
                 }
             }
             _ => {}
@@ -159,12 +186,12 @@ fn texture_file_name<'a>(
 }
 
 /// `name` relative to `dir`. Names written with Windows separators are tried with `/` when
-/// the name as written does not exist.
-pub(super) fn resolve(dir: &Path, name: &str) -> PathBuf {
+/// the name as written is not a file of `files`.
+pub(super) fn resolve(files: &Files, dir: &Path, name: &str) -> PathBuf {
     let path = dir.join(name);
-    if name.contains('\\') && !path.exists() {
+    if name.contains('\\') && !files.is_file(&path) {
         let alt = dir.join(name.replace('\\', "/"));
-        if alt.exists() {
+        if files.is_file(&alt) {
             return alt;
         }
     }

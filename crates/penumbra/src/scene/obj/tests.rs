@@ -27,7 +27,13 @@ fn mtl_dir() -> &'static Path {
 /// Reads `bytes` in chunks of `chunk_bytes`, on the pool or not, into a model or an error.
 fn read_with(bytes: &[u8], chunk_bytes: usize, on_pool: bool) -> Result<ObjModel, String> {
     let pool = on_pool.then(pool);
-    build_mesh(read(bytes, mtl_dir(), pool, chunk_bytes)?)
+    build_mesh(read(
+        bytes,
+        mtl_dir(),
+        Library::default(),
+        pool,
+        chunk_bytes,
+    )?)
 }
 
 /// Every chunk size from one byte (a chunk per line) to the whole file, on the pool and off
