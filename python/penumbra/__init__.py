@@ -31,8 +31,9 @@ row 0 at the top: the numbers the command line writes to EXR and PFM files.
 from ._camera import Camera
 from ._core import MAX_THREADS, NO_ID, SceneError
 from ._image import to_srgb8, write_image
+from ._pack import PackedScene
 from ._raycast import INVALID_ID, RaycastingScene
-from ._scene import AOV_NAMES, Scene, load, load_dict, loads
+from ._scene import AOV_NAMES, Scene, load, load_dict, load_pack, loads
 
 __all__ = [
     "AOV_NAMES",
@@ -40,11 +41,13 @@ __all__ = [
     "INVALID_ID",
     "MAX_THREADS",
     "NO_ID",
+    "PackedScene",
     "RaycastingScene",
     "Scene",
     "SceneError",
     "load",
     "load_dict",
+    "load_pack",
     "loads",
     "to_srgb8",
     "write_image",

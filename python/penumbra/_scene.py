@@ -20,6 +20,7 @@ import numpy as np
 
 from . import _core
 from ._camera import Camera
+from ._pack import PackedScene
 from ._raycast import RaycastingScene
 
 #: The AOV names ``Scene.render(aovs=...)`` takes.
@@ -79,6 +80,23 @@ class Scene:
         ``cameras``, ``bvh_nodes``) and times (``load_seconds``, ``bvh_build_seconds``)."""
         return self._core.stats
 
+    @property
+    def files(self) -> List[str]:
+        """The files the build read besides the scene file (meshes, MTL libraries, images),
+        as the scene resolved their paths, sorted."""
+        return [os.fspath(p) for p in self._core.files]
+
+    def pack(self) -> PackedScene:
+        """The scene file's text with the bytes of every file in :attr:`files`, read again
+        now (they must not have changed since the scene was loaded): what
+        :func:`load_pack` builds the same scene from in another process or on another
+        machine, without those files. Raises ``OSError`` when a file cannot be read."""
+        return PackedScene(self._core.pack())
+
+    def __reduce__(self):
+        # A scene pickles as its pack and is built again when unpickled.
+        return (load_pack, (self.pack(),))
+
     def __repr__(self) -> str:
         s = self.stats
         return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
@@ -103,6 +121,7 @@ class Scene:
         threads: int = 0,
         progress: Progress = None,
         aovs: Union[str, Iterable[str]] = (),
+        stats: Optional[Dict[str, Any]] = None,
     ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
         """Render the scene and return a C-contiguous float32 array of shape
         (height, width, 3): linear RGB, row 0 at the top, the values the command line writes
@@ -126,6 +145,8 @@ class Scene:
         - ``aovs``: names from :data:`AOV_NAMES`. When given, the result is a tuple
           ``(image, {name: array})`` instead of the image alone; see the Python docs for what
           each AOV holds and how it is filtered.
+        - ``stats``: a dict the render fills with its counts and time: ``camera_rays``,
+          ``shadow_rays``, ``seconds``, ``rays_per_second`` and ``threads``.
 
         The GIL is released while rendering. Ctrl-C stops the render within about 0.1 s and
         raises ``KeyboardInterrupt``. Bad settings raise ``ValueError``.
@@ -169,6 +190,7 @@ class Scene:
                 threads,
                 callback,
                 names,
+                stats,
             )
         finally:
             if bar is not None:
@@ -220,6 +242,22 @@ def load_dict(
     """
     text = json.dumps(scene, indent=1, default=_to_json)
     return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
+
+
+def load_pack(pack: PackedScene, threads: int = 0) -> Scene:
+    """Build the scene of a :class:`PackedScene` (from :meth:`Scene.pack`), with ``threads``
+    workers (0: all cores). Its meshes and images come from the pack: nothing is read from
+    disk. Errors as in :func:`load`.
+
+    >>> import pickle
+    >>> scene = loads("[camera]\\nposition = [0, 0, 3]\\nlook_at = [0, 0, 0]\\nfov = 40")
+    >>> copy = pickle.loads(pickle.dumps(scene))
+    >>> copy.cameras == scene.cameras
+    True
+    """
+    if not isinstance(pack, PackedScene):
+        raise TypeError(f"load_pack takes a penumbra.PackedScene, not {type(pack).__name__}")
+    return Scene(_core.load_pack(pack._data, threads))
 
 
 def _to_json(value: Any) -> Any:

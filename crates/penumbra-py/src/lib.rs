@@ -10,6 +10,7 @@ mod camera;
 mod errors;
 mod image;
 mod interrupt;
+mod pack;
 mod raycast;
 mod render;
 mod scene;
@@ -26,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("INVALID_ID", penumbra::INVALID_ID)?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::loads, m)?)?;
+    m.add_function(wrap_pyfunction!(pack::load_pack, m)?)?;
     m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;

@@ -50,6 +50,8 @@ pub struct Request<'py> {
     pub threads: usize,
     pub progress: Option<Bound<'py, PyAny>>,
     pub aovs: Vec<String>,
+    /// A dict to fill with the render's counts and time, when given.
+    pub stats: Option<Bound<'py, PyDict>>,
 }
 
 /// The sampler of this name.
@@ -111,7 +113,7 @@ fn settings(
 }
 
 /// What the render thread hands back.
-type Rendered = Result<(Film, Option<AovFilm>), penumbra::RenderError>;
+type Rendered = Result<(Film, Option<AovFilm>, penumbra::RenderStats), penumbra::RenderError>;
 
 /// Renders `world` as the request says and returns the image, or `(image, aovs)` when AOVs
 /// were asked for.
@@ -154,9 +156,9 @@ pub fn render_scene<'py>(
         let (settings, options) = (&settings, &options);
         let worker = scope.spawn(move || {
             let out = if with_aovs {
-                render_with_aovs(world, settings, options).map(|(f, a, _)| (f, Some(a)))
+                render_with_aovs(world, settings, options).map(|(f, a, st)| (f, Some(a), st))
             } else {
-                render(world, settings, options).map(|(f, _)| (f, None))
+                render(world, settings, options).map(|(f, st)| (f, None, st))
             };
             // The receiver only goes away after this thread is joined.
             let _ = tx.send(out);
@@ -200,7 +202,14 @@ pub fn render_scene<'py>(
             .map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the render thread panicked"))?;
         outcome
     });
-    let (film, aovs) = result?.map_err(render_error)?;
+    let (film, aovs, stats) = result?.map_err(render_error)?;
+    if let Some(d) = &r.stats {
+        d.set_item("camera_rays", stats.camera_rays)?;
+        d.set_item("shadow_rays", stats.shadow_rays)?;
+        d.set_item("seconds", stats.time.as_secs_f64())?;
+        d.set_item("rays_per_second", stats.rays_per_second())?;
+        d.set_item("threads", stats.threads)?;
+    }
     let image = image_array(py, film)?;
     match aovs {
         None => Ok(image.into_any()),

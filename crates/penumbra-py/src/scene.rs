@@ -22,10 +22,13 @@ pub struct CoreScene {
     /// The file's `render.samples`, the sample count a sampler change falls back to.
     file_samples: Option<i64>,
     load_seconds: f64,
+    /// The parsed file and the files its build read: what a pack of the scene holds.
+    pub(crate) file: SceneFile,
+    pub(crate) files: Vec<PathBuf>,
 }
 
 /// Parses and builds with the GIL released.
-fn build(
+pub(crate) fn build(
     py: Python<'_>,
     threads: usize,
     parse: impl FnOnce() -> Result<SceneFile, penumbra::SceneError> + Send,
@@ -41,6 +44,8 @@ fn build(
         settings: scene.settings,
         file_samples: file.desc.render.samples,
         load_seconds: scene.load_time.as_secs_f64(),
+        file,
+        files: scene.files,
     })
 }
 
@@ -80,7 +85,7 @@ pub fn loads(
 #[pymethods]
 impl CoreScene {
     /// Renders with the file's settings changed by the given ones; see `penumbra.Scene.render`.
-    #[pyo3(signature = (camera_name, camera, spp, sampler, light_samples, seed, width, height, region, threads, progress, aovs))]
+    #[pyo3(signature = (camera_name, camera, spp, sampler, light_samples, seed, width, height, region, threads, progress, aovs, stats = None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -97,6 +102,7 @@ impl CoreScene {
         threads: usize,
         progress: Option<Bound<'py, PyAny>>,
         aovs: Vec<String>,
+        stats: Option<Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let request = Request {
             camera_name,
@@ -111,6 +117,7 @@ impl CoreScene {
             threads,
             progress,
             aovs,
+            stats,
         };
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
     }
@@ -118,6 +125,21 @@ impl CoreScene {
     /// A ray-casting scene of the world's triangles, geometry id = object index.
     fn raycasting_scene(&self, py: Python<'_>) -> CoreRaycastingScene {
         py.detach(|| CoreRaycastingScene::from_world(&self.world))
+    }
+
+    /// The files the build read besides the scene file (meshes, MTL libraries, images).
+    #[getter]
+    fn files(&self) -> Vec<PathBuf> {
+        self.files.clone()
+    }
+
+    /// The scene file's text and the bytes of every file its build read, as a dict of plain
+    /// Python values; see `penumbra._core.load_pack`.
+    fn pack<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let pack = py
+            .detach(|| self.file.pack(&self.files))
+            .map_err(|e| crate::errors::os_error(&e.source, &e.path))?;
+        crate::pack::to_dict(py, &pack)
     }
 
     /// The names of the scene's cameras, in file order (the first is the default).
