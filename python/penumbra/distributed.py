@@ -1,0 +1,326 @@
+"""Rendering on a Ray cluster: one big frame as tiles (:func:`render_frame`), or many views
+(:func:`render_views`), exact and restartable. Needs Ray (``pip install .[ray]``); the rest of
+the package does not import it.
+
+- **Exact.** A pixel depends only on the scene, the settings and its place in the full frame,
+  so the tiles stitch into the bytes ``scene.render(...)`` gives in one process, and a view
+  rendered on any node is the image rendered locally.
+- **The scene travels once.** It is packed (its text and every mesh, MTL and image file it
+  reads, :meth:`penumbra.Scene.pack`) and ``ray.put`` once per driver; workers need no shared
+  file system. Each worker process builds a scene's world once and keeps it for its next
+  tasks (a per-process cache keyed by the pack's digest; at most :data:`CACHED_WORLDS`).
+- **Threads.** A task renders with as many threads as CPUs Ray gave it (``num_cpus``, 1 by
+  default), never more, so workers do not oversubscribe their node.
+- **Faults.** A task whose worker dies is retried by Ray (up to :data:`MAX_RETRIES` times)
+  and gives the same bytes. Images are written by the driver, atomically; a view whose image
+  exists is skipped unless ``force``. Ctrl-C cancels the outstanding tasks.
+
+Call ``ray.init(...)`` first (or let :func:`connect` do it).
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from collections import OrderedDict
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import ray
+
+from ._image import write_image
+from ._pack import PackedScene
+from ._scene import Scene, load_pack
+from .views import RENDER_KEYS, aov_path, output_path, views as normalize_views
+
+#: Worlds a worker process keeps built, the most recently used first.
+CACHED_WORLDS = 2
+#: Times Ray retries a task whose worker process died.
+MAX_RETRIES = 3
+
+# One world per pack digest in each worker process, and how many were built here.
+_worlds: "OrderedDict[str, Scene]" = OrderedDict()
+_builds = 0
+
+
+def _world(digest: str, boxed_pack: List[Any], threads: int) -> Tuple[Scene, bool]:
+    """The built scene of the pack, from this process's cache or built now (True)."""
+    global _builds
+    scene = _worlds.get(digest)
+    if scene is not None:
+        _worlds.move_to_end(digest, last=False)
+        return scene, False
+    pack = boxed_pack[0]
+    if isinstance(pack, ray.ObjectRef):
+        pack = ray.get(pack)
+    scene = load_pack(pack, threads=threads)
+    _builds += 1
+    _worlds[digest] = scene
+    _worlds.move_to_end(digest, last=False)
+    while len(_worlds) > CACHED_WORLDS:
+        _worlds.popitem()
+    return scene, True
+
+
+def _task_threads() -> int:
+    """The CPUs Ray assigned to the running task (at least 1)."""
+    cpus = ray.get_runtime_context().get_assigned_resources().get("CPU", 1.0)
+    return max(1, int(cpus))
+
+
+@ray.remote(max_retries=MAX_RETRIES)
+def _render_task(
+    digest: str,
+    boxed_pack: List[Any],
+    camera: Any,
+    settings: Dict[str, Any],
+    region: Optional[Tuple[int, int, int, int]],
+    aovs: Tuple[str, ...],
+) -> Dict[str, Any]:
+    # The pack comes boxed in a list so that Ray does not fetch it for tasks whose process
+    # has the world already.
+    threads = _task_threads()
+    scene, built = _world(digest, boxed_pack, threads)
+    stats: Dict[str, Any] = {}
+    out = scene.render(
+        camera=camera, region=region, threads=threads, aovs=aovs, stats=stats, **settings
+    )
+    image, passes = out if aovs else (out, {})
+    return {
+        "image": image,
+        "aovs": passes,
+        "stats": stats,
+        "built": built,
+        "builds": _builds,
+        "pid": os.getpid(),
+        "node": ray.get_runtime_context().get_node_id(),
+    }
+
+
+# The driver's packs in the object store, by digest: a scene is shipped once per driver.
+_shipped: Dict[str, Tuple[PackedScene, "ray.ObjectRef"]] = {}
+
+
+def _ship(scene: Union[Scene, PackedScene]) -> Tuple[str, List[Any]]:
+    pack = scene.pack() if isinstance(scene, Scene) else scene
+    if not isinstance(pack, PackedScene):
+        raise TypeError(f"expected a penumbra.Scene or PackedScene, not {type(scene).__name__}")
+    digest = pack.digest
+    if digest not in _shipped:
+        _shipped[digest] = (pack, ray.put(pack))
+    return digest, [_shipped[digest][1]]
+
+
+def _gather(
+    refs: List["ray.ObjectRef"], on_result: Callable[[int, Dict[str, Any]], None], progress: Any, unit: str
+) -> None:
+    """Waits for every task, calling ``on_result(index, result)`` as each finishes; cancels
+    the rest on any error or Ctrl-C."""
+    index = {ref: i for i, ref in enumerate(refs)}
+    pending = list(refs)
+    bar = _bar(progress, len(refs), unit)
+    try:
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+            for ref in done:
+                on_result(index[ref], ray.get(ref))
+                if bar is not None:
+                    bar.update(1)
+                elif callable(progress):
+                    progress(len(refs) - len(pending), len(refs))
+    except BaseException:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _bar(progress: Any, total: int, unit: str) -> Any:
+    if progress is not True:
+        return None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, unit=unit, desc="penumbra", leave=False)
+
+
+def tile_regions(width: int, height: int, tiles: Union[int, Tuple[int, int]]) -> List[Tuple[int, int, int, int]]:
+    """The regions ``(x0, x1, y0, y1)`` of ``tiles``: an int n gives n horizontal bands of
+    (nearly) equal height, ``(columns, rows)`` a grid. Tiles are never empty: there are at
+    most as many bands as rows and columns as pixels."""
+    cols, rows = (1, tiles) if isinstance(tiles, int) else tiles
+    cols, rows = int(cols), int(rows)
+    if cols < 1 or rows < 1:
+        raise ValueError(f"tiles must be at least 1, not {tiles!r}")
+    cols, rows = min(cols, width), min(rows, height)
+    xs = [width * i // cols for i in range(cols + 1)]
+    ys = [height * j // rows for j in range(rows + 1)]
+    return [(xs[i], xs[i + 1], ys[j], ys[j + 1]) for j in range(rows) for i in range(cols)]
+
+
+def render_frame(
+    scene: Scene,
+    tiles: Union[None, int, Tuple[int, int]] = None,
+    camera: Any = None,
+    spp: Optional[int] = None,
+    sampler: Optional[str] = None,
+    light_samples: Optional[int] = None,
+    seed: Optional[int] = None,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    aovs: Union[str, Iterable[str]] = (),
+    num_cpus: float = 1,
+    progress: Any = None,
+) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
+    """Render one frame as tiles on the cluster and stitch them: the array (and AOVs) that
+    ``scene.render(camera=..., spp=..., ...)`` returns in one process, bit for bit.
+
+    ``tiles``: an int n for n horizontal bands, ``(columns, rows)`` for a grid, or None for
+    4 bands per task slot of the cluster (its CPUs / ``num_cpus``), which balances uneven
+    tiles. ``num_cpus``: CPUs (and threads) per task. ``progress``: True for a tqdm bar over
+    tiles on stderr, or a callable (tiles done, tiles in all). Other arguments as in
+    :meth:`penumbra.Scene.render`.
+    """
+    aovs = (aovs,) if isinstance(aovs, str) else tuple(aovs)
+    settings = _settings(locals())
+    w = int(width if width is not None else scene.settings["width"])
+    h = int(height if height is not None else scene.settings["height"])
+    if tiles is None:
+        slots = max(1, int(ray.cluster_resources().get("CPU", 1) // max(num_cpus, 1e-9)))
+        tiles = 4 * slots
+    regions = tile_regions(w, h, tiles)
+    digest, boxed = _ship(scene)
+    task = _render_task.options(num_cpus=num_cpus)
+    refs = [task.remote(digest, boxed, camera, settings, r, aovs) for r in regions]
+    image = np.empty((h, w, 3), np.float32)
+    passes: Dict[str, np.ndarray] = {}
+
+    def place(i: int, result: Dict[str, Any]) -> None:
+        x0, x1, y0, y1 = regions[i]
+        image[y0:y1, x0:x1] = result["image"]
+        for name, tile in result["aovs"].items():
+            if name not in passes:
+                passes[name] = np.empty((h, w) + tile.shape[2:], tile.dtype)
+            passes[name][y0:y1, x0:x1] = tile
+
+    _gather(refs, place, progress, "tile")
+    return (image, passes) if aovs else image
+
+
+def _settings(args: Mapping[str, Any]) -> Dict[str, Any]:
+    return {k: args[k] for k in RENDER_KEYS if args.get(k) is not None}
+
+
+def render_views(
+    scene: Scene,
+    views: Iterable[Any],
+    output: str = "out/{name}.png",
+    spp: Optional[int] = None,
+    sampler: Optional[str] = None,
+    light_samples: Optional[int] = None,
+    seed: Optional[int] = None,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    aovs: Union[str, Iterable[str]] = (),
+    num_cpus: float = 1,
+    force: bool = False,
+    progress: Any = None,
+) -> List[Dict[str, Any]]:
+    """Render every view (see :mod:`penumbra.views`: camera names, :class:`penumbra.Camera`
+    objects, view dicts, :func:`penumbra.views.orbit`) as one task each and write its image to
+    ``output`` formatted with the view's ``name`` and ``index`` (PNG, JPEG, EXR or PFM by
+    extension, written atomically by this process; AOVs beside it as ``.aovs.npz``). The
+    keyword settings are defaults for views that do not set their own.
+
+    A view whose image exists already is skipped (not rendered again) unless ``force``: an
+    interrupted batch, run again, does only what is missing. Returns one dict per view, in
+    order: ``name``, ``path``, ``skipped``, and for rendered views ``seconds`` (the render's),
+    ``rays_per_second``, ``node`` (Ray node id), ``pid`` and ``built`` (whether that task built
+    the world).
+    """
+    defaults = _settings(locals())
+    defaults["aovs"] = (aovs,) if isinstance(aovs, str) else tuple(aovs)
+    batch = normalize_views(views, **defaults)
+    paths = [output_path(output, v, i) for i, v in enumerate(batch)]
+    if len(set(paths)) != len(paths):
+        raise ValueError(f"output pattern {output!r} gives two views the same file")
+    summary: List[Dict[str, Any]] = [
+        {"name": v["name"], "path": p, "skipped": True} for v, p in zip(batch, paths)
+    ]
+    todo = [
+        i for i, (v, p) in enumerate(zip(batch, paths))
+        if force or not _complete(p, bool(v["aovs"]))
+    ]
+    if not todo:
+        return summary
+    digest, boxed = _ship(scene)
+    task = _render_task.options(num_cpus=num_cpus)
+    refs = []
+    for i in todo:
+        v = batch[i]
+        settings = {k: v[k] for k in RENDER_KEYS if v[k] is not None}
+        refs.append(task.remote(digest, boxed, v["camera"], settings, None, v["aovs"]))
+
+    def save(k: int, result: Dict[str, Any]) -> None:
+        i = todo[k]
+        path = paths[i]
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        if result["aovs"]:
+            _save_npz(aov_path(path), result["aovs"])
+        # The image last: its presence marks the view complete.
+        write_image(path, result["image"])
+        st = result["stats"]
+        summary[i].update(
+            skipped=False,
+            seconds=st["seconds"],
+            rays_per_second=st["rays_per_second"],
+            node=result["node"],
+            pid=result["pid"],
+            built=result["built"],
+        )
+
+    _gather(refs, save, progress, "view")
+    return summary
+
+
+def _complete(path: str, with_aovs: bool) -> bool:
+    return os.path.isfile(path) and (not with_aovs or os.path.isfile(aov_path(path)))
+
+
+def _save_npz(path: str, arrays: Mapping[str, np.ndarray]) -> None:
+    """Writes ``arrays`` to ``path`` atomically: a temporary file renamed into place."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    tmp = f"{path}.tmp-{os.getpid()}.npz"
+    try:
+        np.savez(tmp, **arrays)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def connect(address: str = "local", num_cpus: Optional[int] = None, timeout: float = 5.0) -> None:
+    """Start or join Ray: ``"local"`` starts a private instance on this machine (with
+    ``num_cpus`` CPUs, default all), ``"auto"`` joins the cluster this machine is part of, and
+    ``"HOST:PORT"`` the cluster whose head listens there. An address that does not answer
+    within ``timeout`` seconds raises ``ConnectionError`` at once, naming it."""
+    if ray.is_initialized():
+        return
+    if address == "local":
+        ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
+        return
+    if address != "auto":
+        host, sep, port = address.rpartition(":")
+        if not sep or not host or not port.isdigit():
+            raise ValueError(f"a Ray address is local, auto or HOST:PORT, not {address!r}")
+        try:
+            socket.create_connection((host, int(port)), timeout=timeout).close()
+        except OSError as e:
+            raise ConnectionError(f"no Ray cluster answers at {address}: {e}") from None
+    try:
+        ray.init(address=address, log_to_driver=False)
+    except ConnectionError as e:
+        raise ConnectionError(f"cannot join the Ray cluster at {address}: {e}") from None

@@ -1,0 +1,174 @@
+"""Views for batch rendering: what one image of a batch is (a camera, optional settings and
+AOVs, a name), and generators of many: an orbit around a point, a list of poses from JSON.
+
+A view is a dict with these keys, all optional except that a view needs a name (or gets
+``view0000``, ``view0001``, ... by its index):
+
+- ``name``: used in output file names (``output="out/{name}.png"``);
+- the camera: ``camera`` (a camera name of the scene, or a :class:`penumbra.Camera`), or
+  ``position``, ``look_at``, ``up`` (default ``[0, 1, 0]``) and ``fov`` (degrees, default 45)
+  of an explicit pinhole camera; neither means the scene's default camera;
+- ``spp``, ``sampler``, ``light_samples``, ``seed``, ``width``, ``height``: as in
+  :meth:`penumbra.Scene.render` (None keeps the scene file's setting);
+- ``aovs``: AOV names, written beside the image as ``{stem}.aovs.npz``.
+
+>>> views = orbit(center=(0, 1, 0), radius=4, frames=4, height=1.5, fov=40)
+>>> [v["name"] for v in views]
+['orbit0000', 'orbit0001', 'orbit0002', 'orbit0003']
+>>> [round(c, 6) for c in views[1]["camera"].position]
+[4.0, 2.5, 0.0]
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from typing import Any, Dict, Iterable, List, Mapping, Sequence, Union
+
+from ._camera import Camera
+
+#: Keys a view may have.
+VIEW_KEYS = (
+    "name",
+    "camera",
+    "position",
+    "look_at",
+    "up",
+    "fov",
+    "spp",
+    "sampler",
+    "light_samples",
+    "seed",
+    "width",
+    "height",
+    "aovs",
+)
+#: Keys passed on to :meth:`penumbra.Scene.render`.
+RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height")
+
+
+def view(spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults: Any) -> Dict[str, Any]:
+    """The normalized view of ``spec`` (a view dict, a camera name, or a
+    :class:`penumbra.Camera`) at position ``index`` of its batch, with ``defaults`` for the
+    keys it leaves out. The result has every key of :data:`VIEW_KEYS` but the pose keys: the
+    camera is a name, a :class:`Camera` or None. Raises ``ValueError`` naming the view and key
+    for a mistake."""
+    if isinstance(spec, (str, Camera)):
+        spec = {"camera": spec}
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"view {index}: a view is a dict, a camera name or a penumbra.Camera")
+    unknown = sorted(set(spec) - set(VIEW_KEYS))
+    if unknown:
+        raise ValueError(f"view {index}: unknown key {unknown[0]!r} (known: {', '.join(VIEW_KEYS)})")
+    merged = {**{k: v for k, v in defaults.items() if v is not None}, **spec}
+    name = str(merged.get("name") or f"view{index:04d}")
+    where = f"view {index} ({name!r})"
+    camera = merged.get("camera")
+    if "position" in merged or "look_at" in merged:
+        if camera is not None:
+            raise ValueError(f"{where}: give either camera or position/look_at, not both")
+        try:
+            camera = Camera(
+                position=merged["position"],
+                look_at=merged["look_at"],
+                up=merged.get("up", (0.0, 1.0, 0.0)),
+                fov=merged.get("fov", 45.0),
+            )
+        except KeyError as e:
+            raise ValueError(f"{where}: an explicit camera needs {e.args[0]!r}") from None
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from None
+    elif camera is not None and not isinstance(camera, (str, Camera)):
+        raise ValueError(f"{where}: camera must be a camera name or a penumbra.Camera")
+    aovs = merged.get("aovs") or ()
+    if isinstance(aovs, str):
+        aovs = (aovs,)
+    out: Dict[str, Any] = {"name": name, "camera": camera, "aovs": tuple(str(a) for a in aovs)}
+    for key in RENDER_KEYS:
+        out[key] = merged.get(key)
+    return out
+
+
+def views(specs: Iterable[Union[str, Camera, Mapping[str, Any]]], **defaults: Any) -> List[Dict[str, Any]]:
+    """Every view of ``specs`` normalized by :func:`view`; names must be unique."""
+    out = [view(s, i, **defaults) for i, s in enumerate(specs)]
+    seen: Dict[str, int] = {}
+    for i, v in enumerate(out):
+        if v["name"] in seen:
+            raise ValueError(f"views {seen[v['name']]} and {i} are both named {v['name']!r}")
+        seen[v["name"]] = i
+    return out
+
+
+def orbit(
+    center: Sequence[float],
+    radius: float,
+    frames: int,
+    height: float = 0.0,
+    fov: float = 45.0,
+    up: Sequence[float] = (0.0, 1.0, 0.0),
+    start_degrees: float = 0.0,
+    name: str = "orbit{index:04d}",
+    **settings: Any,
+) -> List[Dict[str, Any]]:
+    """A turntable: ``frames`` views on a circle of ``radius`` around ``center``, ``height``
+    above it along ``up`` (which must be an axis: x, y or z), all looking at ``center``; frame
+    k at ``start_degrees + 360·k/frames`` degrees. ``settings`` (spp, seed, width, ...) go into
+    every view; ``name`` is formatted with ``index``."""
+    frames = int(frames)
+    if frames < 1:
+        raise ValueError(f"an orbit needs at least one frame, not {frames}")
+    if not radius > 0:
+        raise ValueError(f"an orbit's radius must be positive, not {radius}")
+    axis = [i for i, c in enumerate(up) if c != 0]
+    if len(axis) != 1:
+        raise ValueError(f"an orbit's up must be an axis such as (0, 1, 0), not {tuple(up)}")
+    a = axis[0]
+    sign = 1.0 if up[a] > 0 else -1.0
+    # The circle's plane: the two other axes, in right-handed order.
+    u, v = (a + 2) % 3, (a + 1) % 3
+    out = []
+    for k in range(frames):
+        angle = math.radians(start_degrees + 360.0 * k / frames)
+        p = [float(c) for c in center]
+        p[u] += radius * math.cos(angle)
+        p[v] += radius * math.sin(angle)
+        p[a] += sign * height
+        out.append(
+            {
+                "name": name.format(index=k),
+                "camera": Camera(position=p, look_at=center, up=up, fov=fov),
+                **settings,
+            }
+        )
+    return out
+
+
+def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
+    """The views of a JSON file: a list of view objects (see the module's docs), such as
+    ``[{"name": "a", "position": [0, 1, 5], "look_at": [0, 1, 0], "fov": 40}, ...]``."""
+    with open(path, encoding="utf-8") as f:
+        try:
+            data = json.load(f)
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{os.fspath(path)}: line {e.lineno}, column {e.colno}: {e.msg}") from None
+    if not isinstance(data, list):
+        raise ValueError(f"{os.fspath(path)}: expected a list of views")
+    return [dict(v) if isinstance(v, dict) else v for v in data]
+
+
+def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
+    """``pattern`` formatted with the view's ``name`` and ``index``."""
+    try:
+        return pattern.format(name=v["name"], index=index)
+    except (KeyError, IndexError, ValueError) as e:
+        raise ValueError(
+            f"output pattern {pattern!r}: {e} (it may use {{name}} and {{index}})"
+        ) from None
+
+
+def aov_path(image_path: str) -> str:
+    """Where the AOVs of the image at ``image_path`` go: ``out/a.png`` → ``out/a.aovs.npz``."""
+    stem, _ = os.path.splitext(image_path)
+    return stem + ".aovs.npz"
