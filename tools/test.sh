@@ -6,7 +6,7 @@
 #   tools/test.sh -k aov       # extra arguments go to pytest
 #
 # Needs the Rust toolchain and Python 3.9+ with pip; the first run downloads maturin, numpy,
-# pytest and tqdm from PyPI into a virtual environment under target/ (kept between runs;
+# pytest, tqdm and Ray from PyPI into a virtual environment under target/ (kept between runs;
 # PENUMBRA_TEST_VENV picks another place). The extension is built with cargo's dev profile
 # (opt-level 2, as `cargo test` builds the library, so only the binding compiles anew);
 # PENUMBRA_PY_PROFILE=release builds it as a plain `pip install .` does.
@@ -28,14 +28,16 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 venv="$(cd "$venv" && pwd)"
 py="$venv/bin/python"
-"$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm
+"$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm "ray>=2.9" \
+    "tomli>=1.1; python_version < '3.11'"
 
 profile="${PENUMBRA_PY_PROFILE:-dev}"
 PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile $profile" \
     "$py" -m pip install --quiet --no-build-isolation --no-deps --force-reinstall .
 
 # python/ is not on sys.path: the tests import the installed package.
-PENUMBRA_CLI="$cli" "$py" -m pytest -q -p no:cacheprovider --rootdir "$PWD" \
+# The Ray tests start their own local clusters; without Ray they fail rather than skip.
+PENUMBRA_REQUIRE_RAY=1 PENUMBRA_CLI="$cli" "$py" -m pytest -q -p no:cacheprovider --rootdir "$PWD" \
     -c "$PWD/pyproject.toml" "$PWD/python/tests" "$PWD/docs/python.md" "$@"
 
 echo "tools/test.sh: all tests passed in $((SECONDS - start)) s"

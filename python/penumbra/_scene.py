@@ -250,7 +250,11 @@ def load_pack(pack: PackedScene, threads: int = 0) -> Scene:
     disk. Errors as in :func:`load`.
 
     >>> import pickle
-    >>> scene = loads("[camera]\\nposition = [0, 0, 3]\\nlook_at = [0, 0, 0]\\nfov = 40")
+    >>> scene = load_dict({
+    ...     "film": {"width": 4, "height": 4},
+    ...     "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40},
+    ...     "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
+    ... })
     >>> copy = pickle.loads(pickle.dumps(scene))
     >>> copy.cameras == scene.cameras
     True

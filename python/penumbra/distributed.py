@@ -9,6 +9,8 @@ the package does not import it.
   reads, :meth:`penumbra.Scene.pack`) and ``ray.put`` once per driver; workers need no shared
   file system. Each worker process builds a scene's world once and keeps it for its next
   tasks (a per-process cache keyed by the pack's digest; at most :data:`CACHED_WORLDS`).
+- **Spread.** Tasks are scheduled with Ray's ``SPREAD`` strategy: tiles and views go to
+  every node, not first to the node that holds the scene.
 - **Threads.** A task renders with as many threads as CPUs Ray gave it (``num_cpus``, 1 by
   default), never more, so workers do not oversubscribe their node.
 - **Faults.** A task whose worker dies is retried by Ray (up to :data:`MAX_RETRIES` times)
@@ -97,18 +99,24 @@ def _render_task(
     }
 
 
-# The driver's packs in the object store, by digest: a scene is shipped once per driver.
-_shipped: Dict[str, Tuple[PackedScene, "ray.ObjectRef"]] = {}
+# The driver's packs in the object store, by digest: a scene is shipped once per driver and
+# Ray session (a new session, after ray.shutdown() and ray.init(), ships again).
+_shipped: Dict[str, Any] = {"job": None, "refs": {}}
 
 
 def _ship(scene: Union[Scene, PackedScene]) -> Tuple[str, List[Any]]:
     pack = scene.pack() if isinstance(scene, Scene) else scene
     if not isinstance(pack, PackedScene):
         raise TypeError(f"expected a penumbra.Scene or PackedScene, not {type(scene).__name__}")
+    context = ray.get_runtime_context()
+    job = (context.gcs_address, context.get_job_id())
+    if _shipped["job"] != job:
+        _shipped.update(job=job, refs={})
+    refs = _shipped["refs"]
     digest = pack.digest
-    if digest not in _shipped:
-        _shipped[digest] = (pack, ray.put(pack))
-    return digest, [_shipped[digest][1]]
+    if digest not in refs:
+        refs[digest] = ray.put(pack)
+    return digest, [refs[digest]]
 
 
 def _gather(
@@ -193,7 +201,7 @@ def render_frame(
         tiles = 4 * slots
     regions = tile_regions(w, h, tiles)
     digest, boxed = _ship(scene)
-    task = _render_task.options(num_cpus=num_cpus)
+    task = _render_task.options(num_cpus=num_cpus, scheduling_strategy="SPREAD")
     refs = [task.remote(digest, boxed, camera, settings, r, aovs) for r in regions]
     image = np.empty((h, w, 3), np.float32)
     passes: Dict[str, np.ndarray] = {}
@@ -244,6 +252,12 @@ def render_views(
     defaults = _settings(locals())
     defaults["aovs"] = (aovs,) if isinstance(aovs, str) else tuple(aovs)
     batch = normalize_views(views, **defaults)
+    for i, v in enumerate(batch):
+        if isinstance(v["camera"], str) and v["camera"] not in scene.cameras:
+            raise ValueError(
+                f"view {i} ({v['name']!r}): unknown camera {v['camera']!r} "
+                f"(the scene's cameras: {', '.join(scene.cameras)})"
+            )
     paths = [output_path(output, v, i) for i, v in enumerate(batch)]
     if len(set(paths)) != len(paths):
         raise ValueError(f"output pattern {output!r} gives two views the same file")
@@ -257,7 +271,7 @@ def render_views(
     if not todo:
         return summary
     digest, boxed = _ship(scene)
-    task = _render_task.options(num_cpus=num_cpus)
+    task = _render_task.options(num_cpus=num_cpus, scheduling_strategy="SPREAD")
     refs = []
     for i in todo:
         v = batch[i]

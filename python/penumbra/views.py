@@ -114,7 +114,8 @@ def orbit(
 ) -> List[Dict[str, Any]]:
     """A turntable: ``frames`` views on a circle of ``radius`` around ``center``, ``height``
     above it along ``up`` (which must be an axis: x, y or z), all looking at ``center``; frame
-    k at ``start_degrees + 360·k/frames`` degrees. ``settings`` (spp, seed, width, ...) go into
+    k at ``start_degrees + 360·k/frames`` degrees, counted from the axis after up (z for y
+    up: frame 0 is in front, on +z) toward the next (x): counter-clockwise seen from above. ``settings`` (spp, seed, width, ...) go into
     every view; ``name`` is formatted with ``index``."""
     frames = int(frames)
     if frames < 1:
@@ -126,8 +127,9 @@ def orbit(
         raise ValueError(f"an orbit's up must be an axis such as (0, 1, 0), not {tuple(up)}")
     a = axis[0]
     sign = 1.0 if up[a] > 0 else -1.0
-    # The circle's plane: the two other axes, in right-handed order.
-    u, v = (a + 2) % 3, (a + 1) % 3
+    # The circle's plane: the two other axes, in right-handed order (for y up: z, then x),
+    # so that the frames turn the positive way about up (counter-clockwise seen from above).
+    u, v = (a + 1) % 3, (a + 2) % 3
     out = []
     for k in range(frames):
         angle = math.radians(start_degrees + 360.0 * k / frames)

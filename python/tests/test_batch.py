@@ -1,0 +1,117 @@
+"""`python -m penumbra.batch`, end to end in subprocesses that start their own local Ray
+instance: the example jobs file, a second run that skips, errors in the jobs file, an
+unreachable cluster and Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import ray_env  # noqa: F401  (sets Ray's environment; skips without Ray)
+
+import penumbra
+from penumbra import batch, views
+
+from conftest import SCENES
+
+
+def run_batch(*args: object, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "penumbra.batch", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=os.environ,
+    )
+
+
+def example_jobs(tmp_path: Path, **replace: str) -> Path:
+    """scenes/batch/orbit.toml moved to tmp_path: its scene by absolute path, its images under
+    tmp_path/out."""
+    text = (SCENES / "batch" / "orbit.toml").read_text()
+    text = text.replace('scene = "../cornell.toml"', f'scene = "{SCENES / "cornell.toml"}"')
+    text = text.replace('output = "../../out/batch/{name}.png"', 'output = "out/{name}.png"')
+    for old, new in replace.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "jobs.toml"
+    path.write_text(text)
+    return path
+
+
+def test_the_example_jobs_file_end_to_end(tmp_path):
+    jobs = example_jobs(tmp_path, **{"spp = 4": "spp = 1", "width = 256": "width = 64", "height = 256": "height = 48"})
+    out = run_batch(jobs, "--num-cpus", 2, "--json")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads(out.stdout)["views"]
+    spec = batch.read_jobs(str(jobs))
+    assert [r["name"] for r in summary] == [v["name"] for v in spec["views"]]
+    assert len(summary) == 3 + 8 and not any(r["skipped"] for r in summary)
+    scene = penumbra.load(SCENES / "cornell.toml")
+    for v, r in zip(spec["views"], summary):
+        assert r["path"] == str(tmp_path / "out" / f"{v['name']}.png")
+        local = scene.render(camera=v["camera"], **{k: v[k] for k in views.RENDER_KEYS if v[k] is not None})
+        penumbra.write_image(tmp_path / "expected.png", local)
+        assert Path(r["path"]).read_bytes() == (tmp_path / "expected.png").read_bytes(), r["name"]
+
+    again = run_batch(jobs, "--num-cpus", 2)
+    assert again.returncode == 0, again.stderr
+    lines = again.stdout.splitlines()
+    assert len(lines) == 11 and all("skipped" in line for line in lines), again.stdout
+    forced = run_batch(jobs, "--num-cpus", 2, "--json", "--force")
+    assert forced.returncode == 0, forced.stderr
+    assert not any(r["skipped"] for r in json.loads(forced.stdout)["views"])
+
+
+def test_mistakes_in_the_jobs_file_exit_2_naming_them(tmp_path):
+    jobs = example_jobs(tmp_path, **{'output = "out/{name}.png"\n': 'output = "out/{name}.png"\nspeed = 3\n'})
+    out = run_batch(jobs)
+    assert out.returncode == 2 and "unknown key 'speed'" in out.stderr and str(jobs) in out.stderr
+    jobs = example_jobs(tmp_path, **{"frames = 8": "frames = 0"})
+    out = run_batch(jobs)
+    assert out.returncode == 2 and "orbit" in out.stderr and "at least one frame" in out.stderr
+    jobs = example_jobs(tmp_path, **{'camera = "high"': 'camera = "nowhere"'})
+    out = run_batch(jobs, "--num-cpus", 1)
+    assert out.returncode == 2 and "view 1 ('high'): unknown camera 'nowhere'" in out.stderr, out.stderr
+    assert "Traceback" not in out.stderr
+    out = run_batch(tmp_path / "missing.toml")
+    assert out.returncode == 2 and "missing.toml" in out.stderr
+
+
+def test_an_unreachable_cluster_fails_fast_with_a_clear_message(tmp_path):
+    jobs = example_jobs(tmp_path)
+    start = time.monotonic()
+    out = run_batch(jobs, "--address", "127.0.0.1:9")
+    assert out.returncode == 1, out.stderr
+    assert "no Ray cluster answers at 127.0.0.1:9" in out.stderr
+    assert time.monotonic() - start < 30
+    assert not (tmp_path / "out").exists()
+
+
+def test_ctrl_c_exits_130_and_leaves_no_partial_image(tmp_path):
+    jobs = example_jobs(tmp_path, **{"spp = 4": "spp = 64", "frames = 8": "frames = 40"})
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "penumbra.batch", str(jobs), "--num-cpus", "2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=os.environ,
+    )
+    out_dir = tmp_path / "out"
+    deadline = time.monotonic() + 120
+    while not out_dir.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "interrupted" in stderr
+    written = sorted(p.name for p in out_dir.iterdir())
+    assert 0 < len(written) < 43 and all(n.endswith(".png") for n in written), written
+    for name in written:
+        assert (out_dir / name).read_bytes().endswith(b"IEND\xaeB`\x82"), name

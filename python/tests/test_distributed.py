@@ -1,0 +1,192 @@
+"""penumbra.distributed on a real local Ray instance (one node, 2 CPUs): frames over tiles and
+batches of views are the bytes one process renders; the world is built once per worker; a
+worker killed mid-batch changes nothing; a second run skips what is done."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ray_env
+
+ray = ray_env.ray
+
+import penumbra  # noqa: E402
+from penumbra import distributed, views  # noqa: E402
+
+from conftest import SCENES, same_bits  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    yield
+    ray.shutdown()
+
+
+@pytest.fixture(scope="module")
+def showcase():
+    """Meshes, an MTL and textures: everything a pack must carry."""
+    return penumbra.load(SCENES / "showcase.toml")
+
+
+def fresh_room(tag: str) -> penumbra.Scene:
+    """The seed's room with a comment that makes its pack (and digest) new, so that no worker
+    has its world yet."""
+    text = (SCENES / "cornell.toml").read_text()
+    return penumbra.loads(f"# {tag} {time.time_ns()}\n{text}", base_dir=SCENES)
+
+
+@pytest.mark.parametrize("tiles", [1, 5, (3, 2), (7, 9), 1000])
+def test_a_frame_over_tiles_is_the_single_process_render(cluster, showcase, tiles):
+    kw = dict(width=57, height=41, spp=4, seed=3, sampler="jittered", light_samples=2)
+    aovs = ("depth", "normal", "albedo", "position", "object_id", "primitive_id")
+    image, passes = distributed.render_frame(showcase, tiles=tiles, aovs=aovs, **kw)
+    ref, ref_passes = showcase.render(aovs=aovs, **kw)
+    assert same_bits(image, ref)
+    assert sorted(passes) == sorted(ref_passes)
+    for name in aovs:
+        assert passes[name].dtype == ref_passes[name].dtype, name
+        assert np.array_equal(passes[name].view(np.uint32), ref_passes[name].view(np.uint32)), name
+
+
+def test_tiles_cover_the_frame_once():
+    for w, h, tiles in [(57, 41, 5), (57, 41, (3, 2)), (4, 3, (9, 9)), (1, 1, 7)]:
+        cover = np.zeros((h, w), int)
+        for x0, x1, y0, y1 in distributed.tile_regions(w, h, tiles):
+            assert x0 < x1 and y0 < y1
+            cover[y0:y1, x0:x1] += 1
+        assert (cover == 1).all(), (w, h, tiles)
+    with pytest.raises(ValueError):
+        distributed.tile_regions(8, 8, 0)
+
+
+def test_views_are_their_one_by_one_renders_and_worlds_are_built_once_per_worker(
+    cluster, tmp_path
+):
+    scene = fresh_room("views")
+    batch = [
+        "front",
+        {"name": "high", "camera": "high", "spp": 1, "seed": 9},
+        {"name": "pose", "position": [2.5, 5, -0.5], "look_at": [-1, 1, -4], "fov": 60},
+        *views.orbit(center=(0, 1, -3), radius=2.6, height=4.2, frames=5, fov=75),
+    ]
+    summary = distributed.render_views(
+        scene, batch, output=str(tmp_path / "{index}-{name}.png"), width=40, height=30, spp=4
+    )
+    assert [r["name"] for r in summary] == ["view0000", "high", "pose"] + [
+        f"orbit{k:04d}" for k in range(5)
+    ]
+    for i, (spec, r) in enumerate(zip(batch, summary)):
+        v = views.view(spec, i, width=40, height=30, spp=4)
+        local = scene.render(
+            camera=v["camera"], **{k: v[k] for k in views.RENDER_KEYS if v[k] is not None}
+        )
+        expected = tmp_path / f"expected-{i}.png"
+        penumbra.write_image(expected, local)
+        assert Path(r["path"]).read_bytes() == expected.read_bytes(), r["name"]
+        assert r["path"] == str(tmp_path / f"{i}-{r['name']}.png")
+        assert not r["skipped"] and r["seconds"] > 0 and r["rays_per_second"] > 0
+    # Each worker process that rendered built the (new) world exactly once.
+    pids = {r["pid"] for r in summary}
+    assert sum(r["built"] for r in summary) == len(pids) <= 2
+    # A second batch of the same scene builds nothing.
+    again = distributed.render_views(
+        scene, batch[:3], output=str(tmp_path / "again-{name}.png"), width=8, height=6
+    )
+    assert not any(r["built"] for r in again)
+
+
+def test_a_second_run_skips_complete_views_and_force_renders_them(cluster, tmp_path):
+    scene = penumbra.load(SCENES / "cornell.toml")
+    out = str(tmp_path / "{name}.png")
+    batch = ["front", "left", {"name": "hi", "camera": "high", "aovs": ["depth", "object_id"]}]
+    first = distributed.render_views(scene, batch, output=out, width=16, height=12)
+    assert not any(r["skipped"] for r in first)
+    npz = np.load(tmp_path / "hi.aovs.npz")
+    assert sorted(npz.files) == ["depth", "object_id"] and npz["depth"].shape == (12, 16)
+    (tmp_path / "view0001.png").unlink()
+    stamp = (tmp_path / "view0000.png").stat().st_mtime_ns
+    second = distributed.render_views(scene, batch, output=out, width=16, height=12)
+    assert [r["skipped"] for r in second] == [True, False, True]
+    assert (tmp_path / "view0000.png").stat().st_mtime_ns == stamp
+    third = distributed.render_views(scene, batch, output=out, width=16, height=12, force=True)
+    assert not any(r["skipped"] for r in third)
+
+
+def running_task_pids(title: str) -> list:
+    """Processes whose title Ray set to ``ray::TITLE``: workers running that task now."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                cmdline = (entry / "cmdline").read_bytes()
+            except OSError:
+                continue
+            if cmdline.startswith(f"ray::{title}".encode()):
+                pids.append(int(entry.name))
+    return pids
+
+
+def kill_a_worker_running(title: str, killed: list) -> None:
+    """Kills (SIGKILL) the first worker seen running the task ``title``, within 20 s."""
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        for pid in running_task_pids(title):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                continue
+            killed.append(pid)
+            return
+        time.sleep(0.01)
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="finds Ray's workers through /proc")
+def test_a_worker_killed_mid_batch_changes_nothing(cluster, tmp_path):
+    scene = fresh_room("kill")
+    batch = views.orbit(center=(0, 1, -3), radius=2.6, height=4.2, frames=12, fov=75)
+    settings = dict(width=64, height=64, spp=16, light_samples=5)
+    killed: list = []
+    killer = threading.Thread(target=kill_a_worker_running, args=("_render_task", killed))
+    killer.start()
+    try:
+        summary = distributed.render_views(
+            scene, batch, output=str(tmp_path / "{name}.png"), **settings
+        )
+    finally:
+        killer.join()
+    assert killed, "no worker was seen running a render task"
+    with pytest.raises(ProcessLookupError):
+        os.kill(killed[0], 0)
+    for v, r in zip(batch, summary):
+        local = scene.render(camera=v["camera"], **settings)
+        expected = tmp_path / "expected.png"
+        penumbra.write_image(expected, local)
+        assert Path(r["path"]).read_bytes() == expected.read_bytes(), r["name"]
+    # Every image whole, and nothing else (no temporary file) in the folder.
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == sorted([f"{v['name']}.png" for v in batch] + ["expected.png"])
+
+
+def test_every_public_name_is_documented():
+    from test_docs import public_undocumented
+
+    assert distributed.__doc__ and public_undocumented(distributed) == []
+
+
+def test_a_scene_pickles_as_its_pack(showcase):
+    import pickle
+
+    pack = showcase.pack()
+    assert pack.files == showcase.files and len(pack.files) == 4
+    again = pickle.loads(pickle.dumps(showcase))
+    assert again.pack().digest == pack.digest
+    kw = dict(width=24, height=16, spp=1)
+    assert same_bits(again.render(**kw), showcase.render(**kw))

@@ -1,0 +1,52 @@
+"""penumbra.distributed on a two-node Ray cluster on this machine (ray.cluster_utils.Cluster,
+one CPU per node): tasks run on both nodes, which share nothing but the object store, and the
+results are still the single-process bytes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import ray_env
+
+ray = ray_env.ray
+
+import penumbra  # noqa: E402
+from penumbra import distributed, views  # noqa: E402
+
+from conftest import SCENES, same_bits  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def two_nodes():
+    from ray.cluster_utils import Cluster
+
+    cluster = Cluster(
+        initialize_head=True,
+        head_node_args={"num_cpus": 1, "include_dashboard": False},
+    )
+    cluster.add_node(num_cpus=1)
+    cluster.wait_for_nodes()
+    ray.init(address=cluster.address, log_to_driver=False)
+    yield cluster
+    ray.shutdown()
+    cluster.shutdown()
+
+
+def test_two_nodes_render_a_frame_and_views_exactly(two_nodes, tmp_path):
+    assert len([n for n in ray.nodes() if n["Alive"]]) == 2
+    scene = penumbra.load(SCENES / "showcase.toml")
+    kw = dict(width=48, height=36, spp=4)
+    image = distributed.render_frame(scene, tiles=8, **kw)
+    assert same_bits(image, scene.render(**kw))
+
+    batch = views.orbit(center=(0, 1, 0), radius=5, height=1, frames=8, fov=40)
+    summary = distributed.render_views(scene, batch, output=str(tmp_path / "{name}.png"), **kw)
+    assert len({r["node"] for r in summary}) == 2, "both nodes rendered views"
+    # One build per worker process, on whichever node it is.
+    assert sum(r["built"] for r in summary) <= len({r["pid"] for r in summary})
+    for v, r in zip(batch, summary):
+        expected = tmp_path / "expected.png"
+        penumbra.write_image(expected, scene.render(camera=v["camera"], **kw))
+        assert Path(r["path"]).read_bytes() == expected.read_bytes(), r["name"]
