@@ -212,15 +212,17 @@ fn large_soups_match_the_reference() {
 }
 
 /// The scene of the 1M-triangle mesh the build is benchmarked on, when it is on this machine
-/// (`PENUMBRA_BLOB_SCENE`, else the shared benchmark folder); skipped otherwise.
+/// (`PENUMBRA_BLOB_SCENE`, else the shared benchmark folder, whose setup generates the mesh
+/// beside the scene); skipped when either is missing.
 #[test]
 fn blob_mesh_matches_the_reference() {
     let path = std::env::var_os("PENUMBRA_BLOB_SCENE").map_or_else(
         || "/work/shared/embree-bench/scenes/cornell_blob1m.toml".into(),
         std::path::PathBuf::from,
     );
-    if !path.is_file() {
-        eprintln!("skipped: no {}", path.display());
+    let mesh = path.with_file_name("meshes/blob_1m.obj");
+    if !path.is_file() || !mesh.is_file() {
+        eprintln!("skipped: no {} or no {}", path.display(), mesh.display());
         return;
     }
     let scene = crate::SceneFile::load(&path).unwrap().build(2).unwrap();
