@@ -1,5 +1,7 @@
 //! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit, every hit and
-//! the closest point, with the watertight triangle test and a conservative box test.
+//! the closest point, with the watertight triangle test and a conservative box test. The ray
+//! queries walk the four-wide view of the tree (`wide`), the closest-point query the binary
+//! tree.
 //!
 //! The renderer's kernels (`accel::traverse`, `accel::packet`) are left as they are; this
 //! file reads the same nodes through crate-private accessors and keeps its own copy of the
@@ -15,11 +17,16 @@ use glam::{Vec3, Vec3A};
 
 use super::closest::closest_on_triangle;
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
+use super::wide::{collapse, WideNode, WIDTH};
 use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
 
-/// Entries of the traversal stacks: the build's depth limit keeps every stack below this.
+/// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
 const STACK_SIZE: usize = 64;
+
+/// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
+/// [`WIDTH`] children, once per level of the binary build's depth limit at most.
+const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
@@ -31,6 +38,8 @@ const EPS: f32 = f32::EPSILON * 0.5;
 #[derive(Debug, Default)]
 pub(crate) struct Accel {
     bvh: Bvh,
+    /// The four-wide view of `bvh` that the ray queries traverse.
+    wide: Vec<WideNode>,
     /// Corners of the triangle in each leaf slot.
     tris: Vec<SoaTriangle>,
     /// Geometry id and primitive id of the triangle in each leaf slot.
@@ -82,7 +91,13 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        Accel { bvh, tris, ids }
+        let wide = collapse(bvh.nodes());
+        Accel {
+            bvh,
+            wide,
+            tris,
+            ids,
+        }
     }
 
     /// The hit record of `crossing` on leaf slot `slot`.
@@ -107,92 +122,96 @@ impl Accel {
     }
 
     /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
-    pub fn closest(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<SlotHit> {
-        self.first_hit::<false>(ray, t_min, t_max)
+    pub fn closest(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        t_max: f32,
+        stack: &mut Stack,
+    ) -> Option<SlotHit> {
+        self.first_hit::<false>(ray, t_min, t_max, stack)
             .map(|(i, c)| self.slot_hit(i, c))
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
     /// inclusive; stops at the first.
-    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> bool {
-        self.first_hit::<true>(ray, t_min, t_max).is_some()
+    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32, stack: &mut Stack) -> bool {
+        self.first_hit::<true>(ray, t_min, t_max, stack).is_some()
     }
 
-    /// Nearer child first, the far one on a stack: the closest hit (shrinking `t_max` at each
-    /// hit) or, when `ANY`, the first hit found. Returns the leaf slot and the crossing.
+    /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
+    /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
+    /// first hit found. Returns the leaf slot and the crossing.
     #[inline(always)]
     fn first_hit<const ANY: bool>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
         mut t_max: f32,
+        stack: &mut Stack,
     ) -> Option<(usize, Crossing)> {
-        let nodes = self.bvh.nodes();
-        if nodes.is_empty() {
-            return None;
-        }
         let mut best: Option<(usize, Crossing)> = None;
-        let mut stack = [0u32; STACK_SIZE];
-        let mut sp = 0;
-        let mut node = &nodes[0];
-        enter(node, ray, t_min, t_max)?;
-        loop {
-            if node.count() > 0 {
-                let first = node.first() as usize;
-                for i in first..first + node.count() as usize {
-                    if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
-                        if ANY {
-                            return Some((i, c));
-                        }
+        let mut best_key = u64::MAX;
+        let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
+        stack.start(&self.wide);
+        while let Some((first, count, near)) = stack.pop() {
+            // A box entered past the closest hit so far cannot hold a closer hit (nor a tie:
+            // a tie is at `t_max`, where the box test admits it).
+            if near > t_max {
+                continue;
+            }
+            if count == 0 {
+                let node = &self.wide[first as usize];
+                let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
+                stack.push_children(node, mask, &near, !ANY);
+                continue;
+            }
+            let first = first as usize;
+            for i in first..first + count as usize {
+                if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
+                    if ANY {
+                        return Some((i, c));
+                    }
+                    let key = self.key(i);
+                    if c.t < t_max || key < best_key {
                         t_max = c.t;
+                        best_key = key;
                         best = Some((i, c));
                     }
                 }
-            } else {
-                let (l, r) = (node.first() as usize, node.first() as usize + 1);
-                let dl = enter(&nodes[l], ray, t_min, t_max);
-                let dr = enter(&nodes[r], ray, t_min, t_max);
-                match (dl, dr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        stack[sp] = far as u32;
-                        sp += 1;
-                        node = &nodes[near];
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = &nodes[l];
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = &nodes[r];
-                        continue;
-                    }
-                    (None, None) => {}
-                }
-            }
-            // Pop the next subtree that can still hold a (closer) hit.
-            loop {
-                if sp == 0 {
-                    return best;
-                }
-                sp -= 1;
-                let candidate = &nodes[stack[sp] as usize];
-                if ANY || enter(candidate, ray, t_min, t_max).is_some() {
-                    node = candidate;
-                    break;
-                }
             }
         }
+        best
+    }
+
+    /// The order of the closest-hit rule among hits at the same `t`: geometry id, then
+    /// primitive id, of leaf slot `slot`.
+    #[inline(always)]
+    fn key(&self, slot: usize) -> u64 {
+        let [geometry, primitive] = self.ids[slot];
+        ((geometry as u64) << 32) | primitive as u64
     }
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
     /// per crossing of the surface), in traversal order.
-    pub fn each_hit(&self, ray: &PreparedRay, t_min: f32, f: &mut impl FnMut(SlotHit)) {
-        self.visit(ray, t_min, f32::INFINITY, EdgeRule::Owned, &mut |h| {
-            f(h);
-            true
-        });
+    pub fn each_hit(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        self.visit(
+            ray,
+            t_min,
+            f32::INFINITY,
+            EdgeRule::Owned,
+            stack,
+            &mut |h| {
+                f(h);
+                true
+            },
+        );
     }
 
     /// Visits the hits with `t` in `[t_min, t_max]` under `rule` until `f` returns false.
@@ -202,34 +221,26 @@ impl Accel {
         t_min: f32,
         t_max: f32,
         rule: EdgeRule,
+        stack: &mut Stack,
         f: &mut impl FnMut(SlotHit) -> bool,
     ) {
-        let nodes = self.bvh.nodes();
-        if nodes.is_empty() {
-            return;
-        }
-        let mut stack = [0u32; STACK_SIZE];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let node = &nodes[stack[sp] as usize];
-            if enter(node, ray, t_min, t_max).is_none() {
+        let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
+        stack.start(&self.wide);
+        while let Some((first, count, _)) = stack.pop() {
+            if count == 0 {
+                let node = &self.wide[first as usize];
+                let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
+                stack.push_children(node, mask, &near, false);
                 continue;
             }
-            let first = node.first() as usize;
-            if node.count() > 0 {
-                for i in first..first + node.count() as usize {
-                    if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
-                        let hit = self.slot_hit(i, crossing);
-                        if !f(hit) {
-                            return;
-                        }
+            let first = first as usize;
+            for i in first..first + count as usize {
+                if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
+                    let hit = self.slot_hit(i, crossing);
+                    if !f(hit) {
+                        return;
                     }
                 }
-            } else {
-                stack[sp] = first as u32;
-                stack[sp + 1] = first as u32 + 1;
-                sp += 2;
             }
         }
     }
@@ -293,17 +304,61 @@ impl Accel {
     }
 }
 
-/// The entry distance of the ray into the node's box within `[t_min, t_max]`, or `None`;
-/// conservative (see the module docs).
-#[inline(always)]
-fn enter(node: &BvhNode, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<f32> {
-    let t0 = (Vec3A::from(node.min_corner()) - ray.origin) * ray.inv_dir;
-    let t1 = (Vec3A::from(node.max_corner()) - ray.origin) * ray.inv_dir;
-    let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element() * EXIT_SCALE;
-    let near = if near > t_min { near } else { t_min };
-    let far = if far < t_max { far } else { t_max };
-    (near <= far).then_some(near)
+/// A stack of the wide traversal, made once per batch and reused from ray to ray: children
+/// still to visit as `(index, count, entry distance)`, `count` 0 for the wide node at
+/// `index`, else the leaf slots `index .. index + count`.
+#[derive(Debug)]
+pub(crate) struct Stack {
+    entries: Box<[(u32, u32, f32); WIDE_STACK]>,
+    len: usize,
+}
+
+impl Default for Stack {
+    fn default() -> Stack {
+        Stack {
+            entries: Box::new([(0, 0, 0.0); WIDE_STACK]),
+            len: 0,
+        }
+    }
+}
+
+impl Stack {
+    /// Starts a traversal of `wide` at its root (nothing for an empty tree).
+    #[inline(always)]
+    fn start(&mut self, wide: &[WideNode]) {
+        self.entries[0] = (0, 0, f32::NEG_INFINITY);
+        self.len = usize::from(!wide.is_empty());
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, u32, f32)> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.entries[self.len])
+    }
+
+    /// Pushes the children of `node` in `mask` with their entry distances `near`; when
+    /// `sorted`, the nearest comes off the stack first.
+    #[inline(always)]
+    fn push_children(&mut self, node: &WideNode, mask: u32, near: &[f32; WIDTH], sorted: bool) {
+        let start = self.len;
+        let mut bits = mask;
+        while bits != 0 {
+            let lane = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (index, count) = node.child(lane);
+            let entry = (index, count, near[lane]);
+            let mut k = self.len;
+            if sorted {
+                // Insertion by decreasing distance among this node's children.
+                while k > start && self.entries[k - 1].2 < entry.2 {
+                    self.entries[k] = self.entries[k - 1];
+                    k -= 1;
+                }
+            }
+            self.entries[k] = entry;
+            self.len += 1;
+        }
+    }
 }
 
 /// Squared distance from `p` to the node's box (0 inside).

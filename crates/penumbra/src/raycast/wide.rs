@@ -1,0 +1,216 @@
+//! A four-wide view of the binary [`Bvh`](crate::accel::Bvh) for the ray-casting traversal:
+//! each wide node holds up to four children's boxes by coordinate, so that one slab test
+//! over four lanes replaces up to three levels of binary nodes.
+//!
+//! The wide tree is collapsed from the binary one (an interior child with the largest
+//! surface area is replaced by its two children until there are four, as in Wald et al.,
+//! "Getting Rid of Packets", 2008). The children's boxes are the binary nodes' padded boxes,
+//! bit for bit, and the leaves are the binary leaves (the same leaf-slot ranges), so the wide
+//! box test is exactly as conservative as the binary one (see `traverse`) and every query
+//! visits a superset of the triangles it must see.
+
+use glam::Vec4;
+
+use crate::accel::BvhNode;
+
+/// Children per wide node.
+pub(crate) const WIDTH: usize = 4;
+
+/// A wide node: up to [`WIDTH`] children, each an interior wide node, a leaf (a range of
+/// leaf slots) or unused. Unused lanes come last.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub(crate) struct WideNode {
+    /// Smallest corner of each child's box: `min[axis][child]`.
+    min: [[f32; WIDTH]; 3],
+    /// Largest corner of each child's box: `max[axis][child]`.
+    max: [[f32; WIDTH]; 3],
+    /// An interior child's wide-node index, or a leaf's first leaf slot.
+    child: [u32; WIDTH],
+    /// A leaf's number of triangles; 0 for an interior child and [`UNUSED`] for no child.
+    count: [u32; WIDTH],
+}
+
+/// The `count` of an unused lane.
+const UNUSED: u32 = u32::MAX;
+
+impl WideNode {
+    /// A node with no children.
+    const EMPTY: WideNode = WideNode {
+        min: [[0.0; WIDTH]; 3],
+        max: [[0.0; WIDTH]; 3],
+        child: [0; WIDTH],
+        count: [UNUSED; WIDTH],
+    };
+
+    /// Child `lane`: its index (wide node or first leaf slot) and its triangle count (0 for
+    /// an interior child).
+    #[inline(always)]
+    pub fn child(&self, lane: usize) -> (u32, u32) {
+        (self.child[lane], self.count[lane])
+    }
+
+    /// The children (bit `i` for child `i`) whose box the ray `origin + t/inv_dir` enters
+    /// with `t` in `[t_min, t_max]`, and each child's entry distance (at least `t_min`).
+    ///
+    /// Per lane this is the binary traversal's conservative slab test (Ize 2013): the exit
+    /// distance is scaled by `exit_scale` (`1 + 2γ₃`).
+    #[inline(always)]
+    pub fn enter(
+        &self,
+        origin: &[f32; 3],
+        inv_dir: &[f32; 3],
+        t_min: f32,
+        t_max: f32,
+        exit_scale: f32,
+    ) -> (u32, [f32; WIDTH]) {
+        // One lane per child; glam's `min`/`max` are the vector instructions (`a < b ? a : b`).
+        let slab = |a: usize| {
+            let (o, inv) = (Vec4::splat(origin[a]), Vec4::splat(inv_dir[a]));
+            let t0 = (Vec4::from(self.min[a]) - o) * inv;
+            let t1 = (Vec4::from(self.max[a]) - o) * inv;
+            (t0.min(t1), t0.max(t1))
+        };
+        let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
+        let near = x0.max(y0).max(z0).max(Vec4::splat(t_min));
+        let far = (x1.min(y1).min(z1) * exit_scale).min(Vec4::splat(t_max));
+        let mut used = 0;
+        for (i, &count) in self.count.iter().enumerate() {
+            used |= u32::from(count != UNUSED) << i;
+        }
+        (near.cmple(far).bitmask() & used, near.to_array())
+    }
+}
+
+/// Surface area (half of it: enough to compare) of a binary node's box.
+fn half_area(node: &BvhNode) -> f32 {
+    let (lo, hi) = (node.min_corner(), node.max_corner());
+    let d = [0, 1, 2].map(|a| hi[a] - lo[a]);
+    d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+}
+
+/// The wide tree of the binary tree `nodes` (root at 0 in both; empty for an empty tree).
+pub(crate) fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
+    let mut wide = Vec::new();
+    if nodes.is_empty() {
+        return wide;
+    }
+    wide.push(WideNode::EMPTY);
+    // Wide nodes to fill: (wide index, the binary node whose subtree it holds).
+    let mut todo = vec![(0usize, 0u32)];
+    while let Some((w, b)) = todo.pop() {
+        let mut kids = [b; WIDTH];
+        let mut len = 1;
+        while len < WIDTH {
+            let widest = (0..len)
+                .filter(|&k| nodes[kids[k] as usize].count() == 0)
+                .max_by(|&x, &y| {
+                    half_area(&nodes[kids[x] as usize])
+                        .total_cmp(&half_area(&nodes[kids[y] as usize]))
+                });
+            let Some(k) = widest else { break };
+            let first = nodes[kids[k] as usize].first();
+            kids[k] = first;
+            kids[len] = first + 1;
+            len += 1;
+        }
+        let mut node = WideNode::EMPTY;
+        for (lane, &k) in kids[..len].iter().enumerate() {
+            let n = &nodes[k as usize];
+            let (lo, hi) = (n.min_corner(), n.max_corner());
+            for a in 0..3 {
+                node.min[a][lane] = lo[a];
+                node.max[a][lane] = hi[a];
+            }
+            node.count[lane] = n.count();
+            node.child[lane] = if n.count() > 0 {
+                n.first()
+            } else {
+                wide.push(WideNode::EMPTY);
+                todo.push((wide.len() - 1, k));
+                (wide.len() - 1) as u32
+            };
+        }
+        wide[w] = node;
+    }
+    wide
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::Bvh;
+    use crate::geometry::{Geometry, Triangle};
+    use glam::Vec3;
+
+    /// A strip of `n` small triangles along x.
+    fn strip(n: usize) -> Geometry {
+        let mut g = Geometry::default();
+        for i in 0..n {
+            let x = i as f32;
+            let base = g.positions.len() as u32;
+            g.positions.extend([
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 0.5, 0.0, 0.0),
+                Vec3::new(x, 0.5, (i % 7) as f32),
+            ]);
+            g.triangles.push(Triangle {
+                vertices: [base, base + 1, base + 2],
+                material: 0,
+                object: 0,
+                smooth: false,
+            });
+        }
+        g
+    }
+
+    #[test]
+    fn a_wide_node_is_two_cache_lines() {
+        assert_eq!(std::mem::size_of::<WideNode>(), 128);
+        assert_eq!(std::mem::align_of::<WideNode>(), 64);
+    }
+
+    #[test]
+    fn the_wide_tree_holds_every_leaf_once_in_its_binary_box() {
+        for n in [1, 2, 3, 9, 100, 1000] {
+            let bvh = Bvh::build(&strip(n));
+            let wide = collapse(bvh.nodes());
+            let leaves: Vec<&BvhNode> = bvh.nodes().iter().filter(|n| n.count() > 0).collect();
+            let mut seen = Vec::new();
+            let mut reached = vec![false; wide.len()];
+            reached[0] = true;
+            for node in &wide {
+                for lane in 0..WIDTH {
+                    let (child, count) = node.child(lane);
+                    if count == UNUSED {
+                        continue;
+                    }
+                    if count == 0 {
+                        assert!(!reached[child as usize], "a wide node has one parent");
+                        reached[child as usize] = true;
+                        continue;
+                    }
+                    // A leaf: a binary leaf with the same range and box.
+                    let leaf = leaves
+                        .iter()
+                        .find(|l| l.first() == child && l.count() == count)
+                        .expect("the leaf is a binary leaf");
+                    let (lo, hi) = (leaf.min_corner(), leaf.max_corner());
+                    for a in 0..3 {
+                        assert_eq!((node.min[a][lane], node.max[a][lane]), (lo[a], hi[a]));
+                    }
+                    seen.push(child);
+                }
+                // Unused lanes come last.
+                let used = node.count.iter().take_while(|&&c| c != UNUSED).count();
+                assert!(node.count[used..].iter().all(|&c| c == UNUSED));
+                assert!(used >= 1);
+            }
+            assert!(reached.iter().all(|&r| r), "every wide node is reachable");
+            seen.sort_unstable();
+            assert_eq!(seen.len(), leaves.len(), "{n} triangles");
+            seen.dedup();
+            assert_eq!(seen.len(), leaves.len(), "each leaf once");
+        }
+    }
+}
