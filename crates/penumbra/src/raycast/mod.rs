@@ -42,6 +42,7 @@
 //! right. See `watertight` for the rule.
 
 mod closest;
+mod group;
 mod pinhole;
 mod queries;
 mod run;

@@ -116,14 +116,14 @@ impl RaycastingScene {
             let mut stack = Stack::default();
             for (i, ray) in rays.iter().enumerate() {
                 let Some(r) = prepare(ray) else { continue };
-                let Some(hit) = accel.closest(&r, 0.0, f32::INFINITY, &mut stack) else {
+                let Some((hit, n)) = accel.closest(&r, 0.0, f32::INFINITY, &mut stack) else {
                     continue;
                 };
                 let c = hit.crossing;
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);
                 uv[i] = [c.b1, c.b2];
-                normal[i] = accel.normal(hit.slot).to_array();
+                normal[i] = n.to_array();
             }
         })?;
         Ok(out)

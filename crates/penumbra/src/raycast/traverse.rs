@@ -16,10 +16,12 @@
 use glam::{Vec3, Vec3A};
 
 use super::closest::closest_on_triangle;
+use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use super::wide::{collapse, WideNode, WIDTH};
 use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
+use crate::simd::prefetch;
 
 /// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
 const STACK_SIZE: usize = 64;
@@ -38,8 +40,11 @@ const EPS: f32 = f32::EPSILON * 0.5;
 #[derive(Debug, Default)]
 pub(crate) struct Accel {
     bvh: Bvh,
-    /// The four-wide view of `bvh` that the ray queries traverse.
+    /// The four-wide view of `bvh` that the ray queries traverse; a leaf child's index is
+    /// its first group in `groups` and its count its number of triangles.
     wide: Vec<WideNode>,
+    /// The triangles of each leaf in groups of four.
+    groups: Vec<TriangleGroup>,
     /// Corners of the triangle in each leaf slot.
     tris: Vec<SoaTriangle>,
     /// Geometry id and primitive id of the triangle in each leaf slot.
@@ -83,7 +88,7 @@ impl Accel {
             None => Bvh::build(geometry),
         };
         let slots = bvh.prim_ids();
-        let tris = slots
+        let tris: Vec<SoaTriangle> = slots
             .iter()
             .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
             .collect();
@@ -91,10 +96,20 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        let wide = collapse(bvh.nodes());
+        // Each leaf's triangles as groups of four, the leaf child's index its first group.
+        let mut groups = Vec::new();
+        let wide = collapse(bvh.nodes(), GROUP as u32, &mut |first, count| {
+            let index = groups.len() as u32;
+            for start in (first..first + count).step_by(GROUP) {
+                let n = (first + count - start).min(GROUP as u32);
+                groups.push(TriangleGroup::new(&tris, start as usize, n as usize));
+            }
+            index
+        });
         Accel {
             bvh,
             wide,
+            groups,
             tris,
             ids,
         }
@@ -121,16 +136,20 @@ impl Accel {
         &self.tris[slot]
     }
 
-    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
+    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive, and the
+    /// unit normal of its triangle (as [`Accel::normal`] gives it).
     pub fn closest(
         &self,
         ray: &PreparedRay,
         t_min: f32,
         t_max: f32,
         stack: &mut Stack,
-    ) -> Option<SlotHit> {
+    ) -> Option<(SlotHit, Vec3)> {
         self.first_hit::<false>(ray, t_min, t_max, stack)
-            .map(|(i, c)| self.slot_hit(i, c))
+            .map(|(i, group, c)| {
+                let normal = unit_normal(&group.corners(i - group.first as usize));
+                (self.slot_hit(i, c), normal)
+            })
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
@@ -141,7 +160,7 @@ impl Accel {
 
     /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
     /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
-    /// first hit found. Returns the leaf slot and the crossing.
+    /// first hit found. Returns the leaf slot, its group and the crossing.
     #[inline(always)]
     fn first_hit<const ANY: bool>(
         &self,
@@ -149,9 +168,8 @@ impl Accel {
         t_min: f32,
         mut t_max: f32,
         stack: &mut Stack,
-    ) -> Option<(usize, Crossing)> {
-        let mut best: Option<(usize, Crossing)> = None;
-        let mut best_key = u64::MAX;
+    ) -> Option<(usize, &TriangleGroup, Crossing)> {
+        let mut best: Option<(usize, &TriangleGroup, Crossing)> = None;
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
         while let Some((first, count, near)) = stack.pop() {
@@ -163,25 +181,51 @@ impl Accel {
             if count == 0 {
                 let node = &self.wide[first as usize];
                 let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
-                stack.push_children(node, mask, &near, !ANY);
+                stack.push_children(self, node, mask, &near, !ANY);
                 continue;
             }
-            let first = first as usize;
-            for i in first..first + count as usize {
-                if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
+            for (group, valid) in self.leaf(first, count) {
+                let rule = EdgeRule::Inclusive;
+                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let mut mask = hits.mask;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (i, c) = (group.first as usize + lane, hits.crossing(lane));
                     if ANY {
-                        return Some((i, c));
+                        return Some((i, group, c));
                     }
-                    let key = self.key(i);
-                    if c.t < t_max || key < best_key {
+                    // Lanes of one group are tested against the same `t_max`: a later lane
+                    // may be farther than an earlier one's hit. Ids are read only for a tie.
+                    let closer = match best {
+                        None => true,
+                        Some((b, _, _)) => {
+                            c.t < t_max || (c.t == t_max && self.key(i) < self.key(b))
+                        }
+                    };
+                    if closer {
                         t_max = c.t;
-                        best_key = key;
-                        best = Some((i, c));
+                        best = Some((i, group, c));
                     }
                 }
             }
         }
         best
+    }
+
+    /// The groups of the leaf whose first group is `first` and which holds `count`
+    /// triangles, each with its mask of valid lanes.
+    #[inline(always)]
+    fn leaf(&self, first: u32, count: u32) -> impl Iterator<Item = (&TriangleGroup, u32)> {
+        let groups = count.div_ceil(GROUP as u32) as usize;
+        let first = first as usize;
+        self.groups[first..first + groups]
+            .iter()
+            .enumerate()
+            .map(move |(k, group)| {
+                let lanes = (count as usize - k * GROUP).min(GROUP);
+                (group, (1u32 << lanes) - 1)
+            })
     }
 
     /// The order of the closest-hit rule among hits at the same `t`: geometry id, then
@@ -230,13 +274,16 @@ impl Accel {
             if count == 0 {
                 let node = &self.wide[first as usize];
                 let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
-                stack.push_children(node, mask, &near, false);
+                stack.push_children(self, node, mask, &near, false);
                 continue;
             }
-            let first = first as usize;
-            for i in first..first + count as usize {
-                if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
-                    let hit = self.slot_hit(i, crossing);
+            for (group, valid) in self.leaf(first, count) {
+                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let mut mask = hits.mask;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let hit = self.slot_hit(group.first as usize + lane, hits.crossing(lane));
                     if !f(hit) {
                         return;
                     }
@@ -339,13 +386,29 @@ impl Stack {
     /// Pushes the children of `node` in `mask` with their entry distances `near`; when
     /// `sorted`, the nearest comes off the stack first.
     #[inline(always)]
-    fn push_children(&mut self, node: &WideNode, mask: u32, near: &[f32; WIDTH], sorted: bool) {
+    fn push_children(
+        &mut self,
+        tree: &Accel,
+        node: &WideNode,
+        mask: u32,
+        near: &[f32; WIDTH],
+        sorted: bool,
+    ) {
         let start = self.len;
         let mut bits = mask;
         while bits != 0 {
             let lane = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let (index, count) = node.child(lane);
+            // Every child pushed by an any-hit or every-hit visit is visited; a closest-hit
+            // visit skips many, so it does not fetch them ahead.
+            if !sorted {
+                if count == 0 {
+                    prefetch(&tree.wide[index as usize]);
+                } else {
+                    prefetch(&tree.groups[index as usize]);
+                }
+            }
             let entry = (index, count, near[lane]);
             let mut k = self.len;
             if sorted {

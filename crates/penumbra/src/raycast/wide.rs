@@ -25,7 +25,7 @@ pub(crate) struct WideNode {
     min: [[f32; WIDTH]; 3],
     /// Largest corner of each child's box: `max[axis][child]`.
     max: [[f32; WIDTH]; 3],
-    /// An interior child's wide-node index, or a leaf's first leaf slot.
+    /// An interior child's wide-node index, or a leaf's index given by `collapse`'s caller.
     child: [u32; WIDTH],
     /// A leaf's number of triangles; 0 for an interior child and [`UNUSED`] for no child.
     count: [u32; WIDTH],
@@ -89,12 +89,40 @@ fn half_area(node: &BvhNode) -> f32 {
     d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
 }
 
+/// For each binary node, the leaf slots of its subtree as `(first, count)`: a subtree's
+/// slots are contiguous, the left child's before the right child's.
+fn subtree_slots(nodes: &[BvhNode]) -> Vec<(u32, u32)> {
+    let mut slots = vec![(0, 0); nodes.len()];
+    // Children come after their parent in the array, so a backward pass sees them first.
+    for (i, n) in nodes.iter().enumerate().rev() {
+        slots[i] = if n.count() > 0 {
+            (n.first(), n.count())
+        } else {
+            let c = n.first() as usize;
+            assert!(c > i, "children follow their parent");
+            let ((l0, ln), (r0, rn)) = (slots[c], slots[c + 1]);
+            assert_eq!(l0 + ln, r0, "a subtree's slots are contiguous");
+            (l0, ln + rn)
+        };
+    }
+    slots
+}
+
 /// The wide tree of the binary tree `nodes` (root at 0 in both; empty for an empty tree).
-pub(crate) fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
+/// Every binary subtree of at most `leaf_max` triangles becomes one leaf (its box is the
+/// subtree root's); a leaf child's index is what `leaf(first, count)` returns for the leaf
+/// slots `first .. first + count` it holds.
+pub(crate) fn collapse(
+    nodes: &[BvhNode],
+    leaf_max: u32,
+    leaf: &mut impl FnMut(u32, u32) -> u32,
+) -> Vec<WideNode> {
     let mut wide = Vec::new();
     if nodes.is_empty() {
         return wide;
     }
+    let slots = subtree_slots(nodes);
+    let splits = |k: u32| nodes[k as usize].count() == 0 && slots[k as usize].1 > leaf_max;
     wide.push(WideNode::EMPTY);
     // Wide nodes to fill: (wide index, the binary node whose subtree it holds).
     let mut todo = vec![(0usize, 0u32)];
@@ -102,12 +130,9 @@ pub(crate) fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
         let mut kids = [b; WIDTH];
         let mut len = 1;
         while len < WIDTH {
-            let widest = (0..len)
-                .filter(|&k| nodes[kids[k] as usize].count() == 0)
-                .max_by(|&x, &y| {
-                    half_area(&nodes[kids[x] as usize])
-                        .total_cmp(&half_area(&nodes[kids[y] as usize]))
-                });
+            let widest = (0..len).filter(|&k| splits(kids[k])).max_by(|&x, &y| {
+                half_area(&nodes[kids[x] as usize]).total_cmp(&half_area(&nodes[kids[y] as usize]))
+            });
             let Some(k) = widest else { break };
             let first = nodes[kids[k] as usize].first();
             kids[k] = first;
@@ -122,14 +147,16 @@ pub(crate) fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
                 node.min[a][lane] = lo[a];
                 node.max[a][lane] = hi[a];
             }
-            node.count[lane] = n.count();
-            node.child[lane] = if n.count() > 0 {
-                n.first()
-            } else {
+            if splits(k) {
                 wide.push(WideNode::EMPTY);
                 todo.push((wide.len() - 1, k));
-                (wide.len() - 1) as u32
-            };
+                node.child[lane] = (wide.len() - 1) as u32;
+                node.count[lane] = 0;
+            } else {
+                let (first, count) = slots[k as usize];
+                node.child[lane] = leaf(first, count);
+                node.count[lane] = count;
+            }
         }
         wide[w] = node;
     }
@@ -171,12 +198,12 @@ mod tests {
     }
 
     #[test]
-    fn the_wide_tree_holds_every_leaf_once_in_its_binary_box() {
+    fn the_wide_tree_holds_every_slot_once_in_a_binary_subtree_box() {
         for n in [1, 2, 3, 9, 100, 1000] {
             let bvh = Bvh::build(&strip(n));
-            let wide = collapse(bvh.nodes());
-            let leaves: Vec<&BvhNode> = bvh.nodes().iter().filter(|n| n.count() > 0).collect();
-            let mut seen = Vec::new();
+            let slots = subtree_slots(bvh.nodes());
+            let wide = collapse(bvh.nodes(), 4, &mut |first, _| first);
+            let mut seen = vec![0; n];
             let mut reached = vec![false; wide.len()];
             reached[0] = true;
             for node in &wide {
@@ -190,16 +217,24 @@ mod tests {
                         reached[child as usize] = true;
                         continue;
                     }
-                    // A leaf: a binary leaf with the same range and box.
-                    let leaf = leaves
-                        .iter()
-                        .find(|l| l.first() == child && l.count() == count)
-                        .expect("the leaf is a binary leaf");
-                    let (lo, hi) = (leaf.min_corner(), leaf.max_corner());
-                    for a in 0..3 {
-                        assert_eq!((node.min[a][lane], node.max[a][lane]), (lo[a], hi[a]));
+                    // A leaf: the slots of a binary subtree, in that subtree's box.
+                    let (lo, hi) = (
+                        [0, 1, 2].map(|a| node.min[a][lane]),
+                        [0, 1, 2].map(|a| node.max[a][lane]),
+                    );
+                    assert!(bvh.nodes().iter().zip(&slots).any(|(b, &s)| {
+                        s == (child, count) && b.min_corner() == lo && b.max_corner() == hi
+                    }));
+                    assert!(
+                        count <= 4
+                            || bvh
+                                .nodes()
+                                .iter()
+                                .any(|b| b.first() == child && b.count() == count)
+                    );
+                    for s in child..child + count {
+                        seen[s as usize] += 1;
                     }
-                    seen.push(child);
                 }
                 // Unused lanes come last.
                 let used = node.count.iter().take_while(|&&c| c != UNUSED).count();
@@ -207,10 +242,10 @@ mod tests {
                 assert!(used >= 1);
             }
             assert!(reached.iter().all(|&r| r), "every wide node is reachable");
-            seen.sort_unstable();
-            assert_eq!(seen.len(), leaves.len(), "{n} triangles");
-            seen.dedup();
-            assert_eq!(seen.len(), leaves.len(), "each leaf once");
+            assert!(
+                seen.iter().all(|&k| k == 1),
+                "each slot once, {n} triangles"
+            );
         }
     }
 }
