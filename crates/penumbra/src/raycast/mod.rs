@@ -43,6 +43,7 @@
 
 mod closest;
 mod group;
+mod packet;
 mod pinhole;
 mod queries;
 mod run;
@@ -56,6 +57,8 @@ mod tests;
 mod tests_edges;
 #[cfg(test)]
 mod tests_meshes;
+#[cfg(test)]
+mod tests_packets;
 
 use std::sync::OnceLock;
 

@@ -4,10 +4,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::packet::CastPackets;
 use super::run::{run, QueryOptions, CHUNK};
 use super::traverse::{Accel, SlotHit, Stack};
 use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
+use crate::simd::{dispatch, simd_path};
 
 /// The closest hit of each ray ([`RaycastingScene::cast_rays`]); entry `i` of every array
 /// belongs to ray `i`.
@@ -113,12 +115,16 @@ impl RaycastingScene {
         )
             .into_par_iter();
         run(&pool, options, items, |(rays, t, g, p, uv, normal)| {
-            let mut stack = Stack::default();
-            for (i, ray) in rays.iter().enumerate() {
-                let Some(r) = prepare(ray) else { continue };
-                let Some((hit, n)) = accel.closest(&r, 0.0, f32::INFINITY, &mut stack) else {
-                    continue;
-                };
+            let prepared: Vec<Option<PreparedRay>> = rays.iter().map(prepare).collect();
+            let mut hits = vec![None; rays.len()];
+            let kernel = CastPackets {
+                accel,
+                rays: &prepared,
+                hits: &mut hits,
+            };
+            dispatch(simd_path(), kernel);
+            for (i, hit) in hits.into_iter().enumerate() {
+                let Some((hit, n)) = hit else { continue };
                 let c = hit.crossing;
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);

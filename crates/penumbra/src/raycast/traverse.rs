@@ -23,6 +23,19 @@ use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
 use crate::simd::prefetch;
 
+/// `1 + 2⁻¹⁶`: see [`tie_bound`].
+const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
+
+/// The distance past which a box cannot hold a hit at `t_max` or closer. The computed entry
+/// distance of a box and the computed `t` of a triangle in it may disagree by a few ulps (the
+/// boxes are padded by 2⁻²⁰ of their coordinates, but by almost nothing at a coordinate 0), so
+/// boxes are pruned only past `t_max·(1 + 2⁻¹⁶)`: a triangle hit at exactly the closest `t`
+/// is then tested whatever the order of the visit, and the rule for ties holds.
+#[inline(always)]
+pub(super) fn tie_bound(t_max: f32) -> f32 {
+    t_max * TIE_SCALE
+}
+
 /// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
 const STACK_SIZE: usize = 64;
 
@@ -32,7 +45,7 @@ const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
-const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
+pub(super) const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
 const EPS: f32 = f32::EPSILON * 0.5;
 
 /// The BVH over every triangle of a scene with the triangles' exact corners and ids in the
@@ -116,7 +129,7 @@ impl Accel {
     }
 
     /// The hit record of `crossing` on leaf slot `slot`.
-    fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
+    pub(super) fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
         let [geometry, primitive] = self.ids[slot];
         SlotHit {
             crossing,
@@ -132,7 +145,7 @@ impl Accel {
     }
 
     /// The corners of scene triangle slot `slot` (leaf order).
-    fn slot(&self, slot: usize) -> &SoaTriangle {
+    pub(super) fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
     }
 
@@ -173,14 +186,14 @@ impl Accel {
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
         while let Some((first, count, near)) = stack.pop() {
-            // A box entered past the closest hit so far cannot hold a closer hit (nor a tie:
-            // a tie is at `t_max`, where the box test admits it).
-            if near > t_max {
+            // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
+            let bound = if ANY { t_max } else { tie_bound(t_max) };
+            if near > bound {
                 continue;
             }
             if count == 0 {
                 let node = &self.wide[first as usize];
-                let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
+                let (mask, near) = node.enter(&o, &inv, t_min, bound, EXIT_SCALE);
                 stack.push_children(self, node, mask, &near, !ANY);
                 continue;
             }
@@ -213,6 +226,26 @@ impl Accel {
         best
     }
 
+    /// The wide tree.
+    pub(super) fn wide(&self) -> &[WideNode] {
+        &self.wide
+    }
+
+    /// [`Accel::leaf`] with each group's index.
+    #[inline(always)]
+    pub(super) fn leaf_groups(
+        &self,
+        first: u32,
+        count: u32,
+    ) -> impl Iterator<Item = (u32, (&TriangleGroup, u32))> {
+        (first..).zip(self.leaf(first, count))
+    }
+
+    /// The unit normal of the triangle in lane `lane` of group `group`.
+    pub(super) fn group_normal(&self, group: u32, lane: usize) -> Vec3 {
+        unit_normal(&self.groups[group as usize].corners(lane))
+    }
+
     /// The groups of the leaf whose first group is `first` and which holds `count`
     /// triangles, each with its mask of valid lanes.
     #[inline(always)]
@@ -231,7 +264,7 @@ impl Accel {
     /// The order of the closest-hit rule among hits at the same `t`: geometry id, then
     /// primitive id, of leaf slot `slot`.
     #[inline(always)]
-    fn key(&self, slot: usize) -> u64 {
+    pub(super) fn key(&self, slot: usize) -> u64 {
         let [geometry, primitive] = self.ids[slot];
         ((geometry as u64) << 32) | primitive as u64
     }

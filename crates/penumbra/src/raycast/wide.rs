@@ -50,6 +50,21 @@ impl WideNode {
         (self.child[lane], self.count[lane])
     }
 
+    /// Whether lane `lane` holds a child.
+    #[inline(always)]
+    pub fn used(&self, lane: usize) -> bool {
+        self.count[lane] != UNUSED
+    }
+
+    /// The box of child `lane` as its smallest and largest corners.
+    #[inline(always)]
+    pub fn bounds(&self, lane: usize) -> ([f32; 3], [f32; 3]) {
+        (
+            [0, 1, 2].map(|a| self.min[a][lane]),
+            [0, 1, 2].map(|a| self.max[a][lane]),
+        )
+    }
+
     /// The children (bit `i` for child `i`) whose box the ray `origin + t/inv_dir` enters
     /// with `t` in `[t_min, t_max]`, and each child's entry distance (at least `t_min`).
     ///
