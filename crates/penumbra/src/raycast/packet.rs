@@ -157,7 +157,10 @@ fn trace<const N: usize, I: Isa>(
             }
             let kids = &mut kids[..n];
             kids.sort_unstable_by(|a, b| b.3.total_cmp(&a.3));
-            stack.extend(kids.iter().map(|&(i, c, m, _)| (i, c, m)));
+            for &(i, c, m, _) in kids.iter() {
+                accel.prefetch_child(i, c);
+                stack.push((i, c, m));
+            }
             continue;
         }
         for (g, (group, valid)) in accel.leaf_groups(index, count) {

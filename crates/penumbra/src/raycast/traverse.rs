@@ -226,6 +226,17 @@ impl Accel {
         best
     }
 
+    /// Starts loading the child `(index, count)` of a wide node (a wide node when `count` is
+    /// 0, else a leaf's first group) into the caches: its visit comes a little later.
+    #[inline(always)]
+    pub(super) fn prefetch_child(&self, index: u32, count: u32) {
+        if count == 0 {
+            prefetch(&self.wide[index as usize]);
+        } else {
+            prefetch(&self.groups[index as usize]);
+        }
+    }
+
     /// The wide tree.
     pub(super) fn wide(&self) -> &[WideNode] {
         &self.wide
@@ -433,15 +444,7 @@ impl Stack {
             let lane = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let (index, count) = node.child(lane);
-            // Every child pushed by an any-hit or every-hit visit is visited; a closest-hit
-            // visit skips many, so it does not fetch them ahead.
-            if !sorted {
-                if count == 0 {
-                    prefetch(&tree.wide[index as usize]);
-                } else {
-                    prefetch(&tree.groups[index as usize]);
-                }
-            }
+            tree.prefetch_child(index, count);
             let entry = (index, count, near[lane]);
             let mut k = self.len;
             if sorted {
