@@ -26,11 +26,12 @@ use crate::simd::prefetch;
 /// `1 + 2⁻¹⁶`: see [`tie_bound`].
 const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 
-/// The distance past which a box cannot hold a hit at `t_max` or closer. The computed entry
-/// distance of a box and the computed `t` of a triangle in it may disagree by a few ulps (the
-/// boxes are padded by 2⁻²⁰ of their coordinates, but by almost nothing at a coordinate 0), so
-/// boxes are pruned only past `t_max·(1 + 2⁻¹⁶)`: a triangle hit at exactly the closest `t`
-/// is then tested whatever the order of the visit, and the rule for ties holds.
+/// The distance past which the closest-hit visits prune a box, for a closest hit so far at
+/// `t_max`. The computed entry distance of a box and the computed `t` of a triangle in it may
+/// disagree by a few ulps (the boxes are padded by 2⁻²⁰ of their coordinates, but by almost
+/// nothing at a coordinate 0), so boxes are pruned only past `t_max·(1 + 2⁻¹⁶)`, a margin far
+/// above that: a triangle hit at exactly the closest `t` is then tested whatever the order of
+/// the visit, and the rule for ties does not depend on that order.
 #[inline(always)]
 pub(super) fn tie_bound(t_max: f32) -> f32 {
     t_max * TIE_SCALE

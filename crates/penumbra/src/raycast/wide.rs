@@ -68,7 +68,7 @@ impl WideNode {
     /// The children (bit `i` for child `i`) whose box the ray `origin + t/inv_dir` enters
     /// with `t` in `[t_min, t_max]`, and each child's entry distance (at least `t_min`).
     ///
-    /// Per lane this is the binary traversal's conservative slab test (Ize 2013): the exit
+    /// Per lane this is the conservative slab test of Ize (2013), on padded boxes: the exit
     /// distance is scaled by `exit_scale` (`1 + 2γ₃`).
     #[inline(always)]
     pub fn enter(
