@@ -30,7 +30,9 @@
 //! ```
 //!
 //! Edges and vertices: the closest-hit and occlusion queries count a ray on a boundary as a
-//! hit of every triangle there (the closest-hit query reports one of them). The counting
+//! hit of every triangle there. Among triangles hit at exactly the same distance, the
+//! closest-hit query reports the one with the smallest geometry id, then primitive id, so that
+//! no answer depends on the order in which the hierarchy is visited. The counting
 //! queries ([`RaycastingScene::count_intersections`],
 //! [`RaycastingScene::list_intersections`], and through them occupancy and the sign of the
 //! signed distance) count each crossing of the surface once: a ray through an edge shared by
@@ -40,11 +42,14 @@
 //! right. See `watertight` for the rule.
 
 mod closest;
+mod group;
+mod packet;
 mod pinhole;
 mod queries;
 mod run;
 mod traverse;
 mod watertight;
+mod wide;
 
 #[cfg(test)]
 mod tests;
@@ -52,6 +57,8 @@ mod tests;
 mod tests_edges;
 #[cfg(test)]
 mod tests_meshes;
+#[cfg(test)]
+mod tests_packets;
 
 use std::sync::OnceLock;
 

@@ -4,10 +4,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::packet::CastPackets;
 use super::run::{run, QueryOptions, CHUNK};
-use super::traverse::{Accel, SlotHit};
+use super::traverse::{Accel, SlotHit, Stack};
 use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
+use crate::simd::{dispatch, simd_path};
 
 /// The closest hit of each ray ([`RaycastingScene::cast_rays`]); entry `i` of every array
 /// belongs to ray `i`.
@@ -72,10 +74,10 @@ fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
 }
 
 /// The hits of one ray from `t = 0` on, one per crossing, sorted by `t` then ids.
-fn hits_of(accel: &Accel, ray: &[f32; 6], out: &mut Vec<SlotHit>) {
+fn hits_of(accel: &Accel, ray: &[f32; 6], stack: &mut Stack, out: &mut Vec<SlotHit>) {
     out.clear();
     if let Some(r) = prepare(ray) {
-        accel.each_hit(&r, 0.0, &mut |h| out.push(h));
+        accel.each_hit(&r, 0.0, stack, &mut |h| out.push(h));
     }
     out.sort_by(|a, b| {
         a.crossing
@@ -113,16 +115,21 @@ impl RaycastingScene {
         )
             .into_par_iter();
         run(&pool, options, items, |(rays, t, g, p, uv, normal)| {
-            for (i, ray) in rays.iter().enumerate() {
-                let Some(r) = prepare(ray) else { continue };
-                let Some(hit) = accel.closest(&r, 0.0, f32::INFINITY) else {
-                    continue;
-                };
+            let prepared: Vec<Option<PreparedRay>> = rays.iter().map(prepare).collect();
+            let mut hits = vec![None; rays.len()];
+            let kernel = CastPackets {
+                accel,
+                rays: &prepared,
+                hits: &mut hits,
+            };
+            dispatch(simd_path(), kernel);
+            for (i, hit) in hits.into_iter().enumerate() {
+                let Some((hit, n)) = hit else { continue };
                 let c = hit.crossing;
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);
                 uv[i] = [c.b1, c.b2];
-                normal[i] = accel.normal(hit.slot).to_array();
+                normal[i] = n.to_array();
             }
         })?;
         Ok(out)
@@ -141,8 +148,9 @@ impl RaycastingScene {
         let mut out = vec![false; rays.len()];
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
         run(&pool, options, items, |(rays, occluded)| {
+            let mut stack = Stack::default();
             for (ray, o) in rays.iter().zip(occluded) {
-                *o = prepare(ray).is_some_and(|r| accel.occluded(&r, tnear, tfar));
+                *o = prepare(ray).is_some_and(|r| accel.occluded(&r, tnear, tfar, &mut stack));
             }
         })?;
         Ok(out)
@@ -160,10 +168,11 @@ impl RaycastingScene {
         let mut out = vec![0i32; rays.len()];
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
         run(&pool, options, items, |(rays, counts)| {
+            let mut stack = Stack::default();
             for (ray, count) in rays.iter().zip(counts) {
                 if let Some(r) = prepare(ray) {
                     let mut n = 0i32;
-                    accel.each_hit(&r, 0.0, &mut |_| n = n.saturating_add(1));
+                    accel.each_hit(&r, 0.0, &mut stack, &mut |_| n = n.saturating_add(1));
                     *count = n;
                 }
             }
@@ -188,8 +197,9 @@ impl RaycastingScene {
                         return None;
                     }
                     let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
+                    let mut stack = Stack::default();
                     for ray in rays {
-                        hits_of(accel, ray, &mut one);
+                        hits_of(accel, ray, &mut stack, &mut one);
                         counts.push(one.len() as u32);
                         all.extend_from_slice(&one);
                     }

@@ -1,5 +1,7 @@
 //! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit, every hit and
-//! the closest point, with the watertight triangle test and a conservative box test.
+//! the closest point, with the watertight triangle test and a conservative box test. The ray
+//! queries walk the four-wide view of the tree (`wide`), the closest-point query the binary
+//! tree.
 //!
 //! The renderer's kernels (`accel::traverse`, `accel::packet`) are left as they are; this
 //! file reads the same nodes through crate-private accessors and keeps its own copy of the
@@ -14,16 +16,37 @@
 use glam::{Vec3, Vec3A};
 
 use super::closest::closest_on_triangle;
+use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
+use super::wide::{collapse, WideNode, WIDTH};
 use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
+use crate::simd::prefetch;
 
-/// Entries of the traversal stacks: the build's depth limit keeps every stack below this.
+/// `1 + 2⁻¹⁶`: see [`tie_bound`].
+const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
+
+/// The distance past which the closest-hit visits prune a box, for a closest hit so far at
+/// `t_max`. The computed entry distance of a box and the computed `t` of a triangle in it may
+/// disagree by a few ulps (the boxes are padded by 2⁻²⁰ of their coordinates, but by almost
+/// nothing at a coordinate 0), so boxes are pruned only past `t_max·(1 + 2⁻¹⁶)`, a margin far
+/// above that: a triangle hit at exactly the closest `t` is then tested whatever the order of
+/// the visit, and the rule for ties does not depend on that order.
+#[inline(always)]
+pub(super) fn tie_bound(t_max: f32) -> f32 {
+    t_max * TIE_SCALE
+}
+
+/// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
 const STACK_SIZE: usize = 64;
+
+/// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
+/// [`WIDTH`] children, once per level of the binary build's depth limit at most.
+const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
-const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
+pub(super) const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
 const EPS: f32 = f32::EPSILON * 0.5;
 
 /// The BVH over every triangle of a scene with the triangles' exact corners and ids in the
@@ -31,6 +54,11 @@ const EPS: f32 = f32::EPSILON * 0.5;
 #[derive(Debug, Default)]
 pub(crate) struct Accel {
     bvh: Bvh,
+    /// The four-wide view of `bvh` that the ray queries traverse; a leaf child's index is
+    /// its first group in `groups` and its count its number of triangles.
+    wide: Vec<WideNode>,
+    /// The triangles of each leaf in groups of four.
+    groups: Vec<TriangleGroup>,
     /// Corners of the triangle in each leaf slot.
     tris: Vec<SoaTriangle>,
     /// Geometry id and primitive id of the triangle in each leaf slot.
@@ -74,7 +102,7 @@ impl Accel {
             None => Bvh::build(geometry),
         };
         let slots = bvh.prim_ids();
-        let tris = slots
+        let tris: Vec<SoaTriangle> = slots
             .iter()
             .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
             .collect();
@@ -82,11 +110,27 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        Accel { bvh, tris, ids }
+        // Each leaf's triangles as groups of four, the leaf child's index its first group.
+        let mut groups = Vec::new();
+        let wide = collapse(bvh.nodes(), GROUP as u32, &mut |first, count| {
+            let index = groups.len() as u32;
+            for start in (first..first + count).step_by(GROUP) {
+                let n = (first + count - start).min(GROUP as u32);
+                groups.push(TriangleGroup::new(&tris, start as usize, n as usize));
+            }
+            index
+        });
+        Accel {
+            bvh,
+            wide,
+            groups,
+            tris,
+            ids,
+        }
     }
 
     /// The hit record of `crossing` on leaf slot `slot`.
-    fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
+    pub(super) fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
         let [geometry, primitive] = self.ids[slot];
         SlotHit {
             crossing,
@@ -102,97 +146,161 @@ impl Accel {
     }
 
     /// The corners of scene triangle slot `slot` (leaf order).
-    fn slot(&self, slot: usize) -> &SoaTriangle {
+    pub(super) fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
     }
 
-    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
-    pub fn closest(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<SlotHit> {
-        self.first_hit::<false>(ray, t_min, t_max)
-            .map(|(i, c)| self.slot_hit(i, c))
+    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive, and the
+    /// unit normal of its triangle (as [`Accel::normal`] gives it).
+    pub fn closest(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        t_max: f32,
+        stack: &mut Stack,
+    ) -> Option<(SlotHit, Vec3)> {
+        self.first_hit::<false>(ray, t_min, t_max, stack)
+            .map(|(i, group, c)| {
+                let normal = unit_normal(&group.corners(i - group.first as usize));
+                (self.slot_hit(i, c), normal)
+            })
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
     /// inclusive; stops at the first.
-    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32) -> bool {
-        self.first_hit::<true>(ray, t_min, t_max).is_some()
+    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32, stack: &mut Stack) -> bool {
+        self.first_hit::<true>(ray, t_min, t_max, stack).is_some()
     }
 
-    /// Nearer child first, the far one on a stack: the closest hit (shrinking `t_max` at each
-    /// hit) or, when `ANY`, the first hit found. Returns the leaf slot and the crossing.
+    /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
+    /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
+    /// first hit found. Returns the leaf slot, its group and the crossing.
     #[inline(always)]
     fn first_hit<const ANY: bool>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
         mut t_max: f32,
-    ) -> Option<(usize, Crossing)> {
-        let nodes = self.bvh.nodes();
-        if nodes.is_empty() {
-            return None;
-        }
-        let mut best: Option<(usize, Crossing)> = None;
-        let mut stack = [0u32; STACK_SIZE];
-        let mut sp = 0;
-        let mut node = &nodes[0];
-        enter(node, ray, t_min, t_max)?;
-        loop {
-            if node.count() > 0 {
-                let first = node.first() as usize;
-                for i in first..first + node.count() as usize {
-                    if let Some(c) = ray.hit(self.slot(i), t_min, t_max, EdgeRule::Inclusive) {
-                        if ANY {
-                            return Some((i, c));
+        stack: &mut Stack,
+    ) -> Option<(usize, &TriangleGroup, Crossing)> {
+        let mut best: Option<(usize, &TriangleGroup, Crossing)> = None;
+        let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
+        stack.start(&self.wide);
+        while let Some((first, count, near)) = stack.pop() {
+            // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
+            let bound = if ANY { t_max } else { tie_bound(t_max) };
+            if near > bound {
+                continue;
+            }
+            if count == 0 {
+                let node = &self.wide[first as usize];
+                let (mask, near) = node.enter(&o, &inv, t_min, bound, EXIT_SCALE);
+                stack.push_children(self, node, mask, &near, !ANY);
+                continue;
+            }
+            for (group, valid) in self.leaf(first, count) {
+                let rule = EdgeRule::Inclusive;
+                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let mut mask = hits.mask;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (i, c) = (group.first as usize + lane, hits.crossing(lane));
+                    if ANY {
+                        return Some((i, group, c));
+                    }
+                    // Lanes of one group are tested against the same `t_max`: a later lane
+                    // may be farther than an earlier one's hit. Ids are read only for a tie.
+                    let closer = match best {
+                        None => true,
+                        Some((b, _, _)) => {
+                            c.t < t_max || (c.t == t_max && self.key(i) < self.key(b))
                         }
+                    };
+                    if closer {
                         t_max = c.t;
-                        best = Some((i, c));
+                        best = Some((i, group, c));
                     }
-                }
-            } else {
-                let (l, r) = (node.first() as usize, node.first() as usize + 1);
-                let dl = enter(&nodes[l], ray, t_min, t_max);
-                let dr = enter(&nodes[r], ray, t_min, t_max);
-                match (dl, dr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        stack[sp] = far as u32;
-                        sp += 1;
-                        node = &nodes[near];
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = &nodes[l];
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = &nodes[r];
-                        continue;
-                    }
-                    (None, None) => {}
-                }
-            }
-            // Pop the next subtree that can still hold a (closer) hit.
-            loop {
-                if sp == 0 {
-                    return best;
-                }
-                sp -= 1;
-                let candidate = &nodes[stack[sp] as usize];
-                if ANY || enter(candidate, ray, t_min, t_max).is_some() {
-                    node = candidate;
-                    break;
                 }
             }
         }
+        best
+    }
+
+    /// Starts loading the child `(index, count)` of a wide node (a wide node when `count` is
+    /// 0, else a leaf's first group) into the caches: its visit comes a little later.
+    #[inline(always)]
+    pub(super) fn prefetch_child(&self, index: u32, count: u32) {
+        if count == 0 {
+            prefetch(&self.wide[index as usize]);
+        } else {
+            prefetch(&self.groups[index as usize]);
+        }
+    }
+
+    /// The wide tree.
+    pub(super) fn wide(&self) -> &[WideNode] {
+        &self.wide
+    }
+
+    /// [`Accel::leaf`] with each group's index.
+    #[inline(always)]
+    pub(super) fn leaf_groups(
+        &self,
+        first: u32,
+        count: u32,
+    ) -> impl Iterator<Item = (u32, (&TriangleGroup, u32))> {
+        (first..).zip(self.leaf(first, count))
+    }
+
+    /// The unit normal of the triangle in lane `lane` of group `group`.
+    pub(super) fn group_normal(&self, group: u32, lane: usize) -> Vec3 {
+        unit_normal(&self.groups[group as usize].corners(lane))
+    }
+
+    /// The groups of the leaf whose first group is `first` and which holds `count`
+    /// triangles, each with its mask of valid lanes.
+    #[inline(always)]
+    fn leaf(&self, first: u32, count: u32) -> impl Iterator<Item = (&TriangleGroup, u32)> {
+        let groups = count.div_ceil(GROUP as u32) as usize;
+        let first = first as usize;
+        self.groups[first..first + groups]
+            .iter()
+            .enumerate()
+            .map(move |(k, group)| {
+                let lanes = (count as usize - k * GROUP).min(GROUP);
+                (group, (1u32 << lanes) - 1)
+            })
+    }
+
+    /// The order of the closest-hit rule among hits at the same `t`: geometry id, then
+    /// primitive id, of leaf slot `slot`.
+    #[inline(always)]
+    pub(super) fn key(&self, slot: usize) -> u64 {
+        let [geometry, primitive] = self.ids[slot];
+        ((geometry as u64) << 32) | primitive as u64
     }
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
     /// per crossing of the surface), in traversal order.
-    pub fn each_hit(&self, ray: &PreparedRay, t_min: f32, f: &mut impl FnMut(SlotHit)) {
-        self.visit(ray, t_min, f32::INFINITY, EdgeRule::Owned, &mut |h| {
-            f(h);
-            true
-        });
+    pub fn each_hit(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        self.visit(
+            ray,
+            t_min,
+            f32::INFINITY,
+            EdgeRule::Owned,
+            stack,
+            &mut |h| {
+                f(h);
+                true
+            },
+        );
     }
 
     /// Visits the hits with `t` in `[t_min, t_max]` under `rule` until `f` returns false.
@@ -202,34 +310,29 @@ impl Accel {
         t_min: f32,
         t_max: f32,
         rule: EdgeRule,
+        stack: &mut Stack,
         f: &mut impl FnMut(SlotHit) -> bool,
     ) {
-        let nodes = self.bvh.nodes();
-        if nodes.is_empty() {
-            return;
-        }
-        let mut stack = [0u32; STACK_SIZE];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let node = &nodes[stack[sp] as usize];
-            if enter(node, ray, t_min, t_max).is_none() {
+        let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
+        stack.start(&self.wide);
+        while let Some((first, count, _)) = stack.pop() {
+            if count == 0 {
+                let node = &self.wide[first as usize];
+                let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
+                stack.push_children(self, node, mask, &near, false);
                 continue;
             }
-            let first = node.first() as usize;
-            if node.count() > 0 {
-                for i in first..first + node.count() as usize {
-                    if let Some(crossing) = ray.hit(self.slot(i), t_min, t_max, rule) {
-                        let hit = self.slot_hit(i, crossing);
-                        if !f(hit) {
-                            return;
-                        }
+            for (group, valid) in self.leaf(first, count) {
+                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let mut mask = hits.mask;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let hit = self.slot_hit(group.first as usize + lane, hits.crossing(lane));
+                    if !f(hit) {
+                        return;
                     }
                 }
-            } else {
-                stack[sp] = first as u32;
-                stack[sp + 1] = first as u32 + 1;
-                sp += 2;
             }
         }
     }
@@ -293,17 +396,69 @@ impl Accel {
     }
 }
 
-/// The entry distance of the ray into the node's box within `[t_min, t_max]`, or `None`;
-/// conservative (see the module docs).
-#[inline(always)]
-fn enter(node: &BvhNode, ray: &PreparedRay, t_min: f32, t_max: f32) -> Option<f32> {
-    let t0 = (Vec3A::from(node.min_corner()) - ray.origin) * ray.inv_dir;
-    let t1 = (Vec3A::from(node.max_corner()) - ray.origin) * ray.inv_dir;
-    let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element() * EXIT_SCALE;
-    let near = if near > t_min { near } else { t_min };
-    let far = if far < t_max { far } else { t_max };
-    (near <= far).then_some(near)
+/// A stack of the wide traversal, made once per batch and reused from ray to ray: children
+/// still to visit as `(index, count, entry distance)`, `count` 0 for the wide node at
+/// `index`, else the leaf slots `index .. index + count`.
+#[derive(Debug)]
+pub(crate) struct Stack {
+    entries: Box<[(u32, u32, f32); WIDE_STACK]>,
+    len: usize,
+}
+
+impl Default for Stack {
+    fn default() -> Stack {
+        Stack {
+            entries: Box::new([(0, 0, 0.0); WIDE_STACK]),
+            len: 0,
+        }
+    }
+}
+
+impl Stack {
+    /// Starts a traversal of `wide` at its root (nothing for an empty tree).
+    #[inline(always)]
+    fn start(&mut self, wide: &[WideNode]) {
+        self.entries[0] = (0, 0, f32::NEG_INFINITY);
+        self.len = usize::from(!wide.is_empty());
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, u32, f32)> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.entries[self.len])
+    }
+
+    /// Pushes the children of `node` in `mask` with their entry distances `near`; when
+    /// `sorted`, the nearest comes off the stack first.
+    #[inline(always)]
+    fn push_children(
+        &mut self,
+        tree: &Accel,
+        node: &WideNode,
+        mask: u32,
+        near: &[f32; WIDTH],
+        sorted: bool,
+    ) {
+        let start = self.len;
+        let mut bits = mask;
+        while bits != 0 {
+            let lane = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (index, count) = node.child(lane);
+            tree.prefetch_child(index, count);
+            let entry = (index, count, near[lane]);
+            let mut k = self.len;
+            if sorted {
+                // Insertion by decreasing distance among this node's children.
+                while k > start && self.entries[k - 1].2 < entry.2 {
+                    self.entries[k] = self.entries[k - 1];
+                    k -= 1;
+                }
+            }
+            self.entries[k] = entry;
+            self.len += 1;
+        }
+    }
 }
 
 /// Squared distance from `p` to the node's box (0 inside).

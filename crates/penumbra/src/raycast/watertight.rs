@@ -110,6 +110,24 @@ impl PreparedRay {
         })
     }
 
+    /// The axis permutation `[kx, ky, kz]` of the sheared frame.
+    #[inline(always)]
+    pub(super) fn axes(&self) -> [usize; 3] {
+        self.k
+    }
+
+    /// The shear `(−d_x/d_z, −d_y/d_z)` in the permuted axes.
+    #[inline(always)]
+    pub(super) fn shear(&self) -> [f32; 2] {
+        self.shear
+    }
+
+    /// `1/d_z` in the permuted axes.
+    #[inline(always)]
+    pub(super) fn inv_dz(&self) -> f32 {
+        self.inv_dz
+    }
+
     /// Intersects the triangle `tri` for `t` in `[t_min, t_max]` under `rule`. Two-sided;
     /// degenerate triangles and triangles seen exactly edge-on are missed.
     #[inline(always)]

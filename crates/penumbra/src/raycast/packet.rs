@@ -1,0 +1,324 @@
+//! Closest-hit packets for `cast_rays`: `N` neighbouring rays (the pixels of a pinhole image
+//! come in row order) traced together through the wide tree, one lane each, compiled per
+//! instruction set by `crate::simd` (8 lanes for AVX2 and the baseline, 16 for AVX-512).
+//!
+//! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
+//! and share the watertight test's axis permutation (then every lane runs the same
+//! operations), else one ray at a time. Each wide node is fetched once per packet and its
+//! four boxes tested for all lanes, each lane bounded by its own closest hit so far.
+//!
+//! Exactness: per lane the box test is the single-ray test (conservative, so it only
+//! prunes), the triangle test is `PreparedRay::hit` operation for operation (a lane whose
+//! edge function rounds to zero goes to `hit` itself, for its `f64` re-test), and the rule for
+//! the closest hit is the same total order (the smallest `t`, then the smallest geometry and
+//! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
+//! visit.
+
+use glam::Vec3;
+
+use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
+use super::watertight::{EdgeRule, PreparedRay};
+use super::wide::WIDTH;
+use crate::simd::{Isa, Kernel};
+
+/// The closest hit of a ray and the unit normal of its triangle.
+pub(crate) type ClosestHit = Option<(SlotHit, Vec3)>;
+
+/// [`Accel::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that hits
+/// nothing), written to `hits`, as a [`Kernel`].
+pub(crate) struct CastPackets<'a> {
+    pub accel: &'a Accel,
+    pub rays: &'a [Option<PreparedRay>],
+    pub hits: &'a mut [ClosestHit],
+}
+
+impl Kernel for CastPackets<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let CastPackets { accel, rays, hits } = self;
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        let mut stack = Stack::default();
+        let mut packet_stack = Vec::new();
+        for (rays, hits) in rays.chunks(N).zip(hits.chunks_mut(N)) {
+            match lanes::<N>(rays) {
+                Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
+                None => {
+                    for (ray, hit) in rays.iter().zip(hits) {
+                        *hit = ray.and_then(|r| accel.closest(&r, 0.0, f32::INFINITY, &mut stack));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `N` rays by lane, in the watertight test's permuted axes (shared by all lanes).
+struct Lanes<const N: usize> {
+    rays: [PreparedRay; N],
+    /// The axis permutation `[kx, ky, kz]`.
+    k: [usize; 3],
+    /// Origin and `1/direction` by world axis.
+    origin: [[f32; N]; 3],
+    inv_dir: [[f32; N]; 3],
+    /// Origin by permuted axis, shear and `1/d_z`.
+    permuted: [[f32; N]; 3],
+    shear: [[f32; N]; 2],
+    inv_dz: [f32; N],
+}
+
+/// The packet of `rays` when there are `N`, all valid, with one axis permutation.
+#[inline(always)]
+fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<N>> {
+    if rays.len() != N {
+        return None;
+    }
+    let first = rays[0]?;
+    let k = first.axes();
+    let mut lanes = Lanes {
+        rays: [first; N],
+        k,
+        origin: [[0.0; N]; 3],
+        inv_dir: [[0.0; N]; 3],
+        permuted: [[0.0; N]; 3],
+        shear: [[0.0; N]; 2],
+        inv_dz: [0.0; N],
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let r = (*ray)?;
+        if r.axes() != k {
+            return None;
+        }
+        let (o, inv) = (r.origin.to_array(), r.inv_dir.to_array());
+        for a in 0..3 {
+            lanes.origin[a][i] = o[a];
+            lanes.inv_dir[a][i] = inv[a];
+            lanes.permuted[a][i] = o[k[a]];
+        }
+        let shear = r.shear();
+        (lanes.shear[0][i], lanes.shear[1][i]) = (shear[0], shear[1]);
+        lanes.inv_dz[i] = r.inv_dz();
+        lanes.rays[i] = r;
+    }
+    Some(lanes)
+}
+
+/// The closest hits so far, by lane: `slot` is the leaf slot (valid where `hit`), `tri` the
+/// group index and lane of the triangle.
+struct Best<const N: usize> {
+    t: [f32; N],
+    b1: [f32; N],
+    b2: [f32; N],
+    slot: [u32; N],
+    tri: [(u32, u32); N],
+    hit: u32,
+}
+
+/// Traces the packet and writes each lane's closest hit to `hits`.
+#[inline(always)]
+fn trace<const N: usize, I: Isa>(
+    accel: &Accel,
+    lanes: &Lanes<N>,
+    stack: &mut Vec<(u32, u32, u32)>,
+    hits: &mut [ClosestHit],
+) {
+    let mut best = Best {
+        t: [f32::INFINITY; N],
+        b1: [0.0; N],
+        b2: [0.0; N],
+        slot: [0; N],
+        tri: [(0, 0); N],
+        hit: 0,
+    };
+    let all = if N == 32 { u32::MAX } else { (1 << N) - 1 };
+    stack.clear();
+    if !accel.wide().is_empty() {
+        stack.push((0, 0, all));
+    }
+    while let Some((index, count, mask)) = stack.pop() {
+        if count == 0 {
+            let node = &accel.wide()[index as usize];
+            let bound = best.t.map(tie_bound);
+            // Children the packet enters, the one its first lane enters first on top.
+            let mut kids = [(0u32, 0u32, 0u32, 0.0f32); WIDTH];
+            let mut n = 0;
+            for c in 0..WIDTH {
+                let (child, child_count) = node.child(c);
+                if !node.used(c) {
+                    break;
+                }
+                let (m, near) = slab::<N, I>(node.bounds(c), lanes, &bound);
+                let m = m & mask;
+                if m != 0 {
+                    kids[n] = (child, child_count, m, near[mask.trailing_zeros() as usize]);
+                    n += 1;
+                }
+            }
+            let kids = &mut kids[..n];
+            kids.sort_unstable_by(|a, b| b.3.total_cmp(&a.3));
+            for &(i, c, m, _) in kids.iter() {
+                accel.prefetch_child(i, c);
+                stack.push((i, c, m));
+            }
+            continue;
+        }
+        for (g, (group, valid)) in accel.leaf_groups(index, count) {
+            let mut tris = valid;
+            while tris != 0 {
+                let lane = tris.trailing_zeros() as usize;
+                tris &= tris - 1;
+                let corners = group.corners(lane);
+                let slot = group.first + lane as u32;
+                triangle::<N, I>(
+                    accel,
+                    lanes,
+                    &corners,
+                    slot,
+                    (g, lane as u32),
+                    mask,
+                    &mut best,
+                );
+            }
+        }
+    }
+    for (i, hit) in hits.iter_mut().enumerate() {
+        *hit = (best.hit >> i & 1 == 1).then(|| {
+            let (g, lane) = best.tri[i];
+            let crossing = super::watertight::Crossing {
+                t: best.t[i],
+                b1: best.b1[i],
+                b2: best.b2[i],
+            };
+            let normal = accel.group_normal(g, lane as usize);
+            (accel.slot_hit(best.slot[i] as usize, crossing), normal)
+        });
+    }
+}
+
+/// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
+/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance: the single-ray test of `wide`, per lane.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn slab<const N: usize, I: Isa>(
+    (lo, hi): ([f32; 3], [f32; 3]),
+    lanes: &Lanes<N>,
+    t_max: &[f32; N],
+) -> (u32, [f32; N]) {
+    let mut inside = [0i32; N];
+    let mut entry = [0.0; N];
+    let (o, inv) = (&lanes.origin, &lanes.inv_dir);
+    for i in 0..N {
+        let t0 = [0, 1, 2].map(|a| (lo[a] - o[a][i]) * inv[a][i]);
+        let t1 = [0, 1, 2].map(|a| (hi[a] - o[a][i]) * inv[a][i]);
+        let near = [0, 1, 2].map(|a| min(t0[a], t1[a]));
+        let far = [0, 1, 2].map(|a| max(t0[a], t1[a]));
+        let near = max(max(max(near[0], near[1]), near[2]), 0.0);
+        let far = min(min(min(far[0], far[1]), far[2]) * EXIT_SCALE, t_max[i]);
+        inside[i] = -i32::from(near <= far);
+        entry[i] = near;
+    }
+    (I::mask(&inside), entry)
+}
+
+/// Tests the triangle `corners` (leaf slot `slot`, group and lane `tri`) on the lanes of
+/// `mask` and keeps it where it is closer than the lane's best hit.
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+#[inline(always)]
+fn triangle<const N: usize, I: Isa>(
+    accel: &Accel,
+    lanes: &Lanes<N>,
+    corners: &super::watertight::Corners,
+    slot: u32,
+    tri: (u32, u32),
+    mask: u32,
+    best: &mut Best<N>,
+) {
+    let [kx, ky, kz] = lanes.k;
+    let v = corners.map(|c| [c[kx], c[ky], c[kz]]);
+    let (mut hit, mut zero) = ([0i32; N], [0i32; N]);
+    let (mut t, mut b1, mut b2) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        // As `PreparedRay::hit`, lane by lane: each corner in the sheared frame.
+        let o = [
+            lanes.permuted[0][i],
+            lanes.permuted[1][i],
+            lanes.permuted[2][i],
+        ];
+        let (sx, sy, inv_dz) = (lanes.shear[0][i], lanes.shear[1][i], lanes.inv_dz[i]);
+        let f = v.map(|c| {
+            let fz = c[2] - o[2];
+            ((c[0] - o[0]) + sx * fz, (c[1] - o[1]) + sy * fz, fz)
+        });
+        let u = f[2].0 * f[1].1 - f[2].1 * f[1].0;
+        let v_ = f[0].0 * f[2].1 - f[0].1 * f[2].0;
+        let w = f[1].0 * f[0].1 - f[1].1 * f[0].0;
+        zero[i] = -i32::from((u == 0.0) | (v_ == 0.0) | (w == 0.0));
+        let negative = (u < 0.0) | (v_ < 0.0) | (w < 0.0);
+        let positive = (u > 0.0) | (v_ > 0.0) | (w > 0.0);
+        let det = (u + v_) + (w + 0.0);
+        let scaled_t =
+            (u * (f[0].2 * inv_dz) + v_ * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
+        let inv_det = 1.0 / det;
+        t[i] = scaled_t * inv_det;
+        b1[i] = v_ * inv_det;
+        b2[i] = w * inv_det;
+        #[allow(clippy::eq_op)]
+        let inside = !(negative & positive) & (det != 0.0) & (det == det);
+        hit[i] = -i32::from(inside & (t[i] >= 0.0) & (t[i] <= best.t[i]));
+    }
+    let exact = I::mask(&zero) & mask;
+    let mut hits = I::mask(&hit) & mask & !exact;
+    // Lanes on an edge function's zero: the one-triangle test itself.
+    let mut rest = exact;
+    while rest != 0 {
+        let i = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        let ray = &lanes.rays[i];
+        if let Some(c) = ray.hit(
+            accel.slot(slot as usize),
+            0.0,
+            best.t[i],
+            EdgeRule::Inclusive,
+        ) {
+            (t[i], b1[i], b2[i]) = (c.t, c.b1, c.b2);
+            hits |= 1 << i;
+        }
+    }
+    // Keep the hits closer than each lane's best; ids decide exact ties.
+    while hits != 0 {
+        let i = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        let closer = best.hit >> i & 1 == 0
+            || t[i] < best.t[i]
+            || (t[i] == best.t[i] && accel.key(slot as usize) < accel.key(best.slot[i] as usize));
+        if closer {
+            best.t[i] = t[i];
+            best.b1[i] = b1[i];
+            best.b2[i] = b2[i];
+            best.slot[i] = slot;
+            best.tri[i] = tri;
+            best.hit |= 1 << i;
+        }
+    }
+}
+
+/// `a < b ? a : b`, the vector instruction's semantics (as glam's `min` in `wide`).
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `a > b ? a : b`, the vector instruction's semantics (as glam's `max` in `wide`).
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
