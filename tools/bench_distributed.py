@@ -74,35 +74,79 @@ def main() -> None:
         )
         print(f"warm-up (world builds): {time.perf_counter() - start:.2f} s", file=sys.stderr)
 
-        rows = {"frame, one process": [], "frame, Ray tiles": [], "frame, Ray node tasks": [],
-                "views, one thread": [], "views, Ray": [], "views, Ray node tasks": [],
-                "1x1 views, Ray": []}
+        rows = {
+            "frame, one process": [],
+            "frame, Ray tiles": [],
+            "frame, Ray node tasks": [],
+            "views, one thread": [],
+            "views, Ray": [],
+            "views, Ray node tasks": [],
+            "1x1 views, Ray": [],
+        }
         for r in range(args.repeat):
             print(f"round {r + 1}/{args.repeat}", file=sys.stderr)
-            rows["frame, one process"].append(timed(lambda: scene.render(threads=args.cpus, **frame)))
+            rows["frame, one process"].append(
+                timed(lambda: scene.render(threads=args.cpus, **frame))
+            )
             rows["frame, Ray tiles"].append(timed(lambda: distributed.render_frame(scene, **frame)))
-            rows["frame, Ray node tasks"].append(timed(lambda: distributed.render_frame(
-                scene, num_cpus=args.cpus, **frame)))
+            rows["frame, Ray node tasks"].append(
+                timed(lambda: distributed.render_frame(scene, num_cpus=args.cpus, **frame))
+            )
             rows["views, one thread"].append(
                 timed(lambda: [scene.render(camera=v["camera"], threads=1, **size) for v in orbit])
             )
-            rows["views, Ray"].append(timed(lambda: distributed.render_views(
-                scene, orbit, output=f"{tmp}/{{name}}.exr", force=True, **size)))
-            rows["views, Ray node tasks"].append(timed(lambda: distributed.render_views(
-                scene, orbit, output=f"{tmp}/{{name}}.exr", force=True, num_cpus=args.cpus, **size)))
-            rows["1x1 views, Ray"].append(timed(lambda: distributed.render_views(
-                scene, orbit, output=f"{tmp}/tiny-{{name}}.pfm", force=True, width=1, height=1)))
+            rows["views, Ray"].append(
+                timed(
+                    lambda: distributed.render_views(
+                        scene, orbit, output=f"{tmp}/{{name}}.exr", force=True, **size
+                    )
+                )
+            )
+            rows["views, Ray node tasks"].append(
+                timed(
+                    lambda: distributed.render_views(
+                        scene,
+                        orbit,
+                        output=f"{tmp}/{{name}}.exr",
+                        force=True,
+                        num_cpus=args.cpus,
+                        **size,
+                    )
+                )
+            )
+            rows["1x1 views, Ray"].append(
+                timed(
+                    lambda: distributed.render_views(
+                        scene,
+                        orbit,
+                        output=f"{tmp}/tiny-{{name}}.pfm",
+                        force=True,
+                        width=1,
+                        height=1,
+                    )
+                )
+            )
     ray.shutdown()
 
     med = {k: statistics.median(v) for k, v in rows.items()}
     print(f"{'workload':<22} {'median s':>9}  runs")
     for k, v in rows.items():
         print(f"{k:<22} {med[k]:9.3f}  {' '.join(f'{x:.3f}' for x in v)}")
-    print(f"frame: Ray / one process = {med['frame, Ray tiles'] / med['frame, one process']:.3f}x (target <= 1.15)")
-    print(f"frame: Ray, node tasks / one process = {med['frame, Ray node tasks'] / med['frame, one process']:.3f}x")
-    print(f"views: throughput Ray / one thread = {med['views, one thread'] / med['views, Ray']:.2f}x (target >= 1.8)")
-    print(f"views: throughput Ray, node tasks / one thread = {med['views, one thread'] / med['views, Ray node tasks']:.2f}x")
-    print(f"task overhead: {1000 * med['1x1 views, Ray'] / len(orbit):.1f} ms per view (1x1 pixel, image written)")
+    print(
+        f"frame: Ray / one process = {med['frame, Ray tiles'] / med['frame, one process']:.3f}x (target <= 1.15)"
+    )
+    print(
+        f"frame: Ray, node tasks / one process = {med['frame, Ray node tasks'] / med['frame, one process']:.3f}x"
+    )
+    print(
+        f"views: throughput Ray / one thread = {med['views, one thread'] / med['views, Ray']:.2f}x (target >= 1.8)"
+    )
+    print(
+        f"views: throughput Ray, node tasks / one thread = {med['views, one thread'] / med['views, Ray node tasks']:.2f}x"
+    )
+    print(
+        f"task overhead: {1000 * med['1x1 views, Ray'] / len(orbit):.1f} ms per view (1x1 pixel, image written)"
+    )
 
 
 if __name__ == "__main__":

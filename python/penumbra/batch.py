@@ -165,7 +165,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print()
     else:
         for r in summary:
-            how = "skipped (exists)" if r["skipped"] else f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
+            how = (
+                "skipped (exists)"
+                if r["skipped"]
+                else f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
+            )
             print(f"{r['name']}\t{r['path']}\t{how}")
     return 0
 

@@ -120,7 +120,10 @@ def _ship(scene: Union[Scene, PackedScene]) -> Tuple[str, List[Any]]:
 
 
 def _gather(
-    refs: List["ray.ObjectRef"], on_result: Callable[[int, Dict[str, Any]], None], progress: Any, unit: str
+    refs: List["ray.ObjectRef"],
+    on_result: Callable[[int, Dict[str, Any]], None],
+    progress: Any,
+    unit: str,
 ) -> None:
     """Waits for every task, calling ``on_result(index, result)`` as each finishes; cancels
     the rest on any error or Ctrl-C."""
@@ -155,7 +158,9 @@ def _bar(progress: Any, total: int, unit: str) -> Any:
     return tqdm(total=total, unit=unit, desc="penumbra", leave=False)
 
 
-def tile_regions(width: int, height: int, tiles: Union[int, Tuple[int, int]]) -> List[Tuple[int, int, int, int]]:
+def tile_regions(
+    width: int, height: int, tiles: Union[int, Tuple[int, int]]
+) -> List[Tuple[int, int, int, int]]:
     """The regions ``(x0, x1, y0, y1)`` of ``tiles``: an int n gives n horizontal bands of
     (nearly) equal height, ``(columns, rows)`` a grid. Tiles are never empty: there are at
     most as many bands as rows and columns as pixels."""
@@ -265,7 +270,8 @@ def render_views(
         {"name": v["name"], "path": p, "skipped": True} for v, p in zip(batch, paths)
     ]
     todo = [
-        i for i, (v, p) in enumerate(zip(batch, paths))
+        i
+        for i, (v, p) in enumerate(zip(batch, paths))
         if force or not _complete(p, bool(v["aovs"]))
     ]
     if not todo:

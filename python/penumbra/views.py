@@ -48,7 +48,9 @@ VIEW_KEYS = (
 RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height")
 
 
-def view(spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults: Any) -> Dict[str, Any]:
+def view(
+    spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults: Any
+) -> Dict[str, Any]:
     """The normalized view of ``spec`` (a view dict, a camera name, or a
     :class:`penumbra.Camera`) at position ``index`` of its batch, with ``defaults`` for the
     keys it leaves out. The result has every key of :data:`VIEW_KEYS` but the pose keys: the
@@ -60,7 +62,9 @@ def view(spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults
         raise ValueError(f"view {index}: a view is a dict, a camera name or a penumbra.Camera")
     unknown = sorted(set(spec) - set(VIEW_KEYS))
     if unknown:
-        raise ValueError(f"view {index}: unknown key {unknown[0]!r} (known: {', '.join(VIEW_KEYS)})")
+        raise ValueError(
+            f"view {index}: unknown key {unknown[0]!r} (known: {', '.join(VIEW_KEYS)})"
+        )
     merged = {**{k: v for k, v in defaults.items() if v is not None}, **spec}
     name = str(merged.get("name") or f"view{index:04d}")
     where = f"view {index} ({name!r})"
@@ -90,7 +94,9 @@ def view(spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults
     return out
 
 
-def views(specs: Iterable[Union[str, Camera, Mapping[str, Any]]], **defaults: Any) -> List[Dict[str, Any]]:
+def views(
+    specs: Iterable[Union[str, Camera, Mapping[str, Any]]], **defaults: Any
+) -> List[Dict[str, Any]]:
     """Every view of ``specs`` normalized by :func:`view`; names must be unique."""
     out = [view(s, i, **defaults) for i, s in enumerate(specs)]
     seen: Dict[str, int] = {}
@@ -115,8 +121,9 @@ def orbit(
     """A turntable: ``frames`` views on a circle of ``radius`` around ``center``, ``height``
     above it along ``up`` (which must be an axis: x, y or z), all looking at ``center``; frame
     k at ``start_degrees + 360·k/frames`` degrees, counted from the axis after up (z for y
-    up: frame 0 is in front, on +z) toward the next (x): counter-clockwise seen from above. ``settings`` (spp, seed, width, ...) go into
-    every view; ``name`` is formatted with ``index``."""
+    up: frame 0 is in front, on +z) toward the next (x): counter-clockwise seen from above.
+    ``settings`` (spp, seed, width, ...) go into every view; ``name`` is formatted with
+    ``index``."""
     frames = int(frames)
     if frames < 1:
         raise ValueError(f"an orbit needs at least one frame, not {frames}")
@@ -154,7 +161,9 @@ def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
         try:
             data = json.load(f)
         except json.JSONDecodeError as e:
-            raise ValueError(f"{os.fspath(path)}: line {e.lineno}, column {e.colno}: {e.msg}") from None
+            raise ValueError(
+                f"{os.fspath(path)}: line {e.lineno}, column {e.colno}: {e.msg}"
+            ) from None
     if not isinstance(data, list):
         raise ValueError(f"{os.fspath(path)}: expected a list of views")
     return [dict(v) if isinstance(v, dict) else v for v in data]

@@ -45,7 +45,10 @@ def example_jobs(tmp_path: Path, **replace: str) -> Path:
 
 
 def test_the_example_jobs_file_end_to_end(tmp_path):
-    jobs = example_jobs(tmp_path, **{"spp = 4": "spp = 1", "width = 256": "width = 64", "height = 256": "height = 48"})
+    jobs = example_jobs(
+        tmp_path,
+        **{"spp = 4": "spp = 1", "width = 256": "width = 64", "height = 256": "height = 48"},
+    )
     out = run_batch(jobs, "--num-cpus", 2, "--json")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)["views"]
@@ -55,7 +58,9 @@ def test_the_example_jobs_file_end_to_end(tmp_path):
     scene = penumbra.load(SCENES / "cornell.toml")
     for v, r in zip(spec["views"], summary):
         assert r["path"] == str(tmp_path / "out" / f"{v['name']}.png")
-        local = scene.render(camera=v["camera"], **{k: v[k] for k in views.RENDER_KEYS if v[k] is not None})
+        local = scene.render(
+            camera=v["camera"], **{k: v[k] for k in views.RENDER_KEYS if v[k] is not None}
+        )
         penumbra.write_image(tmp_path / "expected.png", local)
         assert Path(r["path"]).read_bytes() == (tmp_path / "expected.png").read_bytes(), r["name"]
 
@@ -69,7 +74,9 @@ def test_the_example_jobs_file_end_to_end(tmp_path):
 
 
 def test_mistakes_in_the_jobs_file_exit_2_naming_them(tmp_path):
-    jobs = example_jobs(tmp_path, **{'output = "out/{name}.png"\n': 'output = "out/{name}.png"\nspeed = 3\n'})
+    jobs = example_jobs(
+        tmp_path, **{'output = "out/{name}.png"\n': 'output = "out/{name}.png"\nspeed = 3\n'}
+    )
     out = run_batch(jobs)
     assert out.returncode == 2 and "unknown key 'speed'" in out.stderr and str(jobs) in out.stderr
     jobs = example_jobs(tmp_path, **{"frames = 8": "frames = 0"})
@@ -77,7 +84,9 @@ def test_mistakes_in_the_jobs_file_exit_2_naming_them(tmp_path):
     assert out.returncode == 2 and "orbit" in out.stderr and "at least one frame" in out.stderr
     jobs = example_jobs(tmp_path, **{'camera = "high"': 'camera = "nowhere"'})
     out = run_batch(jobs, "--num-cpus", 1)
-    assert out.returncode == 2 and "view 1 ('high'): unknown camera 'nowhere'" in out.stderr, out.stderr
+    assert (
+        out.returncode == 2 and "view 1 ('high'): unknown camera 'nowhere'" in out.stderr
+    ), out.stderr
     assert "Traceback" not in out.stderr
     out = run_batch(tmp_path / "missing.toml")
     assert out.returncode == 2 and "missing.toml" in out.stderr

@@ -67,9 +67,7 @@ def test_tiles_cover_the_frame_once():
         distributed.tile_regions(8, 8, 0)
 
 
-def test_views_are_their_one_by_one_renders_and_worlds_are_built_once_per_worker(
-    cluster, tmp_path
-):
+def test_views_are_their_one_by_one_renders_and_worlds_are_built_once_per_worker(cluster, tmp_path):
     scene = fresh_room("views")
     batch = [
         "front",
