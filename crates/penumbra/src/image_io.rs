@@ -309,9 +309,10 @@ pub const MAX_TEXELS: u64 = 1 << 26;
 /// 16-bit RGBA), its float copy (12) and the texels kept (12).
 pub const DECODE_BYTES_PER_TEXEL: u64 = 32;
 
-/// Decodes a PNG or JPEG (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to linear RGB,
-/// through the sRGB curve when `srgb` is true, else as value/max. With `max_bytes`, an image
-/// whose decoding would take more memory than that is refused before it is decoded.
+/// Decodes the PNG or JPEG file `path` (8 or 16 bits, grey, RGB or RGBA; alpha ignored) to
+/// linear RGB, through the sRGB curve when `srgb` is true, else as value/max. With
+/// `max_bytes`, an image whose decoding would take more memory than that is refused before it
+/// is decoded.
 pub fn load_texture_image(
     path: &Path,
     srgb: bool,
@@ -320,12 +321,35 @@ pub fn load_texture_image(
     // A compressed image over 1 GiB is not a texture; a folder, device or pipe is refused
     // before it is opened.
     crate::files::check_regular(path, 1 << 30).map_err(|e| e.to_string())?;
-    let reader = || {
-        image::ImageReader::open(path)
-            .map_err(|e| e.to_string())?
-            .with_guessed_format()
-            .map_err(|e| e.to_string())
-    };
+    decode_texture(
+        || image::ImageReader::open(path).map_err(|e| e.to_string()),
+        srgb,
+        max_bytes,
+    )
+}
+
+/// [`load_texture_image`] for an image already in memory: the same checks of the size the
+/// header claims, the same decoding.
+pub fn decode_texture_image(
+    bytes: &[u8],
+    srgb: bool,
+    max_bytes: Option<u64>,
+) -> Result<Image, String> {
+    decode_texture(
+        || Ok(image::ImageReader::new(Cursor::new(bytes))),
+        srgb,
+        max_bytes,
+    )
+}
+
+/// Decodes the image that `open` gives a fresh reader of (it is read twice: header, then
+/// texels).
+fn decode_texture<R: std::io::BufRead + Seek>(
+    open: impl Fn() -> Result<image::ImageReader<R>, String>,
+    srgb: bool,
+    max_bytes: Option<u64>,
+) -> Result<Image, String> {
+    let reader = || open()?.with_guessed_format().map_err(|e| e.to_string());
     // Read the size from the header first: a small file can claim a huge image.
     let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
     if w as u64 * h as u64 > MAX_TEXELS {
@@ -416,6 +440,8 @@ mod tests {
             img.save(&path).unwrap();
             let srgb = load_texture_image(&path, true, None).unwrap();
             let linear = load_texture_image(&path, false, None).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            assert_eq!(decode_texture_image(&bytes, true, None).unwrap(), srgb);
             assert_eq!((srgb.width, srgb.height), (1, 1));
             for c in srgb.texels[0].to_array() {
                 assert!((c - srgb_to_linear(encoded)).abs() < 1e-6, "{name}: {c}");
@@ -427,6 +453,7 @@ mod tests {
         let corrupt = dir.join("corrupt.png");
         std::fs::write(&corrupt, b"not a png").unwrap();
         assert!(load_texture_image(&corrupt, true, None).is_err());
+        assert!(decode_texture_image(b"not a png", true, None).is_err());
         assert!(load_texture_image(&dir.join("missing.png"), true, None).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

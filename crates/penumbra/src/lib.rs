@@ -77,7 +77,10 @@ pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
-pub use image_io::{encode_image, write_image, write_image_unless, ImageError, OutputFormat};
+pub use image_io::{
+    decode_texture_image, encode_image, load_texture_image, write_image, write_image_unless,
+    ImageError, OutputFormat, MAX_TEXELS,
+};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
@@ -94,8 +97,9 @@ pub use render::{
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{
-    desc, escape_controls, inspect_obj, AssetKind, ErrorKind, Location, ObjInfo, Override,
-    OverrideError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, MAX_SCENE_BYTES,
+    desc, escape_controls, inspect_mtl, inspect_obj, inspect_obj_bytes, AssetKind, ErrorKind,
+    Location, ObjInfo, Override, OverrideError, Scene, SceneDesc, SceneError, SceneFile,
+    SceneFormat, MAX_SCENE_BYTES,
 };
 pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
