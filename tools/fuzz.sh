@@ -65,6 +65,8 @@ root=$PWD
 scratch="$root/fuzz/target/corpus/$target"
 mkdir -p "$scratch"
 echo "tools/fuzz.sh: fuzzing $target for $seconds s" >&2
-# Release code with debug assertions, overflow checks and AddressSanitizer; one process.
+# Release code with debug assertions, overflow checks and AddressSanitizer; one process. The
+# dictionary holds the words of the format (keys, statements, chunk names) for mutations to use.
 cargo +nightly fuzz run -O --debug-assertions "$target" "$scratch" "$root/fuzz/corpus/$target" -- \
-    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "$@"
+    -dict="$root/fuzz/dicts/$target.dict" -max_total_time="$seconds" -timeout=10 \
+    -rss_limit_mb=2048 -print_final_stats=1 "$@"
