@@ -1,7 +1,8 @@
 //! The bodies of penumbra's fuzz targets: each takes the bytes of one input, feeds them to the
 //! library's public entry points as a user's file would be, and panics only when the library
-//! breaks a promise: a panic of its own, or a result that succeeds with non-finite geometry,
-//! an invalid BVH or a NaN/Inf pixel. Errors are the expected answer to most inputs.
+//! breaks a promise: a panic of its own, a result that succeeds with non-finite geometry, an
+//! invalid BVH or a NaN/Inf pixel, or a scene error whose message is not one clean line.
+//! Errors are the expected answer to most inputs.
 //!
 //! The same functions run under cargo-fuzz (the `fuzz/` crate, nightly) and in the stable
 //! regression test (`tests/corpus.rs`), which replays the committed corpus and every crash
@@ -17,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use penumbra::{
     decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, RenderOptions,
-    RenderSettings, SceneFile, SceneFormat, World,
+    RenderSettings, SceneError, SceneFile, SceneFormat, World,
 };
 
 /// A fuzz target: its name (the folder of its corpus) and its body.
@@ -84,11 +85,13 @@ fn scene(data: &[u8], format: SceneFormat) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let Ok(file) = SceneFile::from_str(text, format, "fuzz", assets_dir()) else {
-        return;
+    let file = match SceneFile::from_str(text, format, "fuzz", assets_dir()) {
+        Ok(file) => file,
+        Err(e) => return check_message(&e),
     };
-    let Ok(scene) = file.build(1) else {
-        return;
+    let scene = match file.build(1) {
+        Ok(scene) => scene,
+        Err(e) => return check_message(&e),
     };
     check_world(&scene.world);
     let settings = RenderSettings {
@@ -108,6 +111,16 @@ fn scene(data: &[u8], format: SceneFormat) {
             assert!(p.is_finite(), "pixel {i} is {p}");
         }
     }
+}
+
+/// An error's promise: one line a terminal can show as it is, whatever bytes the file holds
+/// (no newline, ESC, BEL or other control character).
+fn check_message(e: &SceneError) {
+    let message = e.to_string();
+    assert!(
+        !message.chars().any(char::is_control),
+        "a control character in the message {message:?}"
+    );
 }
 
 /// A built world's promises: finite vertices, normals, uvs and bounds, a valid BVH, finite
