@@ -18,8 +18,8 @@
 use std::path::{Path, PathBuf};
 
 use penumbra::{
-    decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, RenderOptions,
-    RenderSettings, SceneError, SceneFile, SceneFormat, World,
+    decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, Override,
+    RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, World,
 };
 
 /// A fuzz target: its name (the folder of its corpus) and its body.
@@ -31,7 +31,7 @@ pub struct Target {
 }
 
 /// Every target.
-pub const TARGETS: [Target; 5] = [
+pub const TARGETS: [Target; 6] = [
     Target {
         name: "scene_toml",
         run: scene_toml,
@@ -39,6 +39,10 @@ pub const TARGETS: [Target; 5] = [
     Target {
         name: "scene_json",
         run: scene_json,
+    },
+    Target {
+        name: "scene_override",
+        run: scene_override,
     },
     Target {
         name: "obj",
@@ -81,12 +85,28 @@ pub fn scene_json(data: &[u8]) {
     scene(data, SceneFormat::Json);
 }
 
-fn scene(data: &[u8], format: SceneFormat) {
-    // Scene files are UTF-8; `SceneFile::load` refuses other bytes before parsing.
+/// A TOML scene file with an override (`penumbra render --set KEY.PATH=VALUE`) on its first
+/// line: parsed, the override applied, built, rendered small.
+pub fn scene_override(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let file = match SceneFile::from_str(text, format, "fuzz", assets_dir()) {
+    let (first, rest) = text.split_once('\n').unwrap_or((text, ""));
+    // A malformed override is the command line's error, echoed as given (clap does too).
+    if let Ok(o) = Override::parse(first) {
+        scene_with(rest, SceneFormat::Toml, &[o]);
+    }
+}
+
+fn scene(data: &[u8], format: SceneFormat) {
+    // Scene files are UTF-8; `SceneFile::load` refuses other bytes before parsing.
+    if let Ok(text) = std::str::from_utf8(data) {
+        scene_with(text, format, &[]);
+    }
+}
+
+fn scene_with(text: &str, format: SceneFormat, overrides: &[Override]) {
+    let file = match SceneFile::from_str_with(text, format, "fuzz", assets_dir(), overrides) {
         Ok(file) => file,
         Err(e) => return check_message(&e),
     };

@@ -5,7 +5,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use penumbra::{SceneFile, SceneFormat};
+use penumbra::{Override, SceneFile, SceneFormat};
 use penumbra_fuzz_targets::{assets_dir, repo_dir, TARGETS};
 
 /// The files of `dir`, sorted; none when it does not exist.
@@ -63,6 +63,17 @@ fn every_seed_scene_builds() {
             if let Err(e) = file.build(1) {
                 panic!("{}: {e}", path.display());
             }
+        }
+    }
+    // And with the override on their first line applied.
+    for path in files(&repo_dir().join("fuzz/corpus/scene_override")) {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let (first, rest) = text.split_once('\n').unwrap();
+        let o = Override::parse(first).unwrap();
+        let built = SceneFile::from_str_with(rest, SceneFormat::Toml, &path, assets_dir(), &[o])
+            .and_then(|file| file.build(1));
+        if let Err(e) = built {
+            panic!("{}: {e}", path.display());
         }
     }
 }
