@@ -1,6 +1,7 @@
-"""penumbra.distributed on a two-node Ray cluster on this machine (ray.cluster_utils.Cluster,
-one CPU per node): tasks run on both nodes, which share nothing but the object store, and the
-results are still the single-process bytes."""
+"""penumbra.distributed on a Ray cluster of several nodes on this machine
+(ray.cluster_utils.Cluster): a head node without CPUs, where this driver runs, and two worker
+nodes of one CPU each. Every task runs on a node other than the driver's, which shares nothing
+with it but Ray's object store, and the results are still the single-process bytes."""
 
 from __future__ import annotations
 
@@ -19,13 +20,14 @@ from conftest import SCENES, same_bits  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def two_nodes():
+def nodes():
     from ray.cluster_utils import Cluster
 
     cluster = Cluster(
         initialize_head=True,
-        head_node_args={"num_cpus": 1, "include_dashboard": False},
+        head_node_args={"num_cpus": 0, "include_dashboard": False},
     )
+    cluster.add_node(num_cpus=1)
     cluster.add_node(num_cpus=1)
     cluster.wait_for_nodes()
     ray.init(address=cluster.address, log_to_driver=False)
@@ -34,8 +36,9 @@ def two_nodes():
     cluster.shutdown()
 
 
-def test_two_nodes_render_a_frame_and_views_exactly(two_nodes, tmp_path):
-    assert len([n for n in ray.nodes() if n["Alive"]]) == 2
+def test_worker_nodes_render_a_frame_and_views_exactly(nodes, tmp_path):
+    assert len([n for n in ray.nodes() if n["Alive"]]) == 3
+    head = ray.get_runtime_context().get_node_id()
     scene = penumbra.load(SCENES / "showcase.toml")
     kw = dict(width=48, height=36, spp=4)
     image = distributed.render_frame(scene, tiles=8, **kw)
@@ -43,7 +46,8 @@ def test_two_nodes_render_a_frame_and_views_exactly(two_nodes, tmp_path):
 
     batch = views.orbit(center=(0, 1, 0), radius=5, height=1, frames=8, fov=40)
     summary = distributed.render_views(scene, batch, output=str(tmp_path / "{name}.png"), **kw)
-    assert len({r["node"] for r in summary}) == 2, "both nodes rendered views"
+    # Which worker node takes a task is the scheduler's choice; never the driver's node.
+    assert head not in {r["node"] for r in summary}
     # One build per worker process, on whichever node it is.
     assert sum(r["built"] for r in summary) <= len({r["pid"] for r in summary})
     for v, r in zip(batch, summary):

@@ -96,9 +96,9 @@ pub use render::{
 };
 pub use sampling::{Rng, Sampler};
 pub use scene::{
-    desc, escape_controls, inspect_obj, AssetKind, ErrorKind, Location, ObjInfo, Override,
-    OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat, ScenePack,
-    MAX_SCENE_BYTES,
+    desc, escape_controls, inspect_mtl, inspect_obj, inspect_obj_bytes, AssetKind, ErrorKind,
+    Location, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile,
+    SceneFormat, ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{simd_path, supported_paths, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};

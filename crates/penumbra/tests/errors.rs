@@ -276,6 +276,11 @@ fn table() -> Vec<Case> {
             .build_error(BadValue, at("scale"), Some("objects[1].scale"), &["scale", "zero"]),
         toml("zero scale along one axis", edit(BASE, "size = 1\n", "size = 1\nscale = [1, 0, 1]\n"))
             .build_error(BadValue, at("scale"), Some("objects[1].scale"), &["scale", "zero"]),
+        // Not zero, but its inverse overflows (1e30) or its determinant underflows (1e-20).
+        toml("huge scale", edit(BASE, "size = 1\n", "size = 1\nscale = 1e30\n"))
+            .build_error(BadValue, at("scale"), Some("objects[1].scale"), &["scale", "32-bit", "1e38"]),
+        toml("tiny scale", edit(BASE, "size = 1\n", "size = 1\nscale = 1e-20\n"))
+            .build_error(BadValue, at("scale"), Some("objects[1].scale"), &["scale", "32-bit", "1e-38"]),
         toml("negative size", edit(BASE, "size = 1", "size = -1"))
             .build_error(BadValue, at("size"), Some("objects[1].size"), &["size", "negative"]),
         toml("negative size along one axis", edit(BASE, "size = 1", "size = [1, -1, 1]"))

@@ -32,7 +32,16 @@ impl Builder<'_> {
             o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
         );
         if world.is_singular() {
-            return Err(self.bad(&path.key("scale"), "scale must not be zero"));
+            // The rotation is orthonormal: a zero factor, or factors so large or small that
+            // the inverse (which the normals need) leaves the range of f32.
+            let zero = o.scale.is_some_and(|s| s.rgb().cmpeq(Vec3::ZERO).any());
+            let message = if zero {
+                "scale must not be zero"
+            } else {
+                "this scale cannot be inverted in 32-bit floats (which the normals need): its \
+                 factors, or their products, are beyond about 1e-38..1e38"
+            };
+            return Err(self.bad(&path.key("scale"), message));
         }
         let mut materials = vec![match &o.material {
             Some(name) => self.material_index(&path.key("material"), name)?,

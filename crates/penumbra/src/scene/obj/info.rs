@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use crate::geometry::Mesh;
 use crate::math::Aabb;
 
-use super::load_obj;
+use super::{load_obj, mtl, parse_obj, Library, ObjModel};
 use crate::files::Files;
 
 /// A summary of an OBJ file, in its own (object) space.
@@ -33,14 +33,33 @@ pub struct ObjInfo {
 /// Reads the OBJ file at `path` (and its MTL libraries, not its textures) and summarizes it.
 /// The error says what is wrong, with the line.
 pub fn inspect_obj(path: &Path) -> Result<ObjInfo, String> {
-    let model = load_obj(&Files::disk(), path, None)?;
+    Ok(summarize(&load_obj(&Files::disk(), path, None)?))
+}
+
+/// [`inspect_obj`] for the bytes of an OBJ file, whose `mtllib` names are relative to `dir`.
+pub fn inspect_obj_bytes(bytes: &[u8], dir: &Path) -> Result<ObjInfo, String> {
+    Ok(summarize(&parse_obj(bytes, dir, Library::default(), None)?))
+}
+
+/// The materials the bytes of an MTL file define, in order, each with its `map_Kd` texture
+/// resolved against the folder of `path` (which names the file in messages). The textures are
+/// not read.
+pub fn inspect_mtl(bytes: &[u8], path: &Path) -> Result<Vec<(String, Option<PathBuf>)>, String> {
+    Ok(mtl::parse_bytes(bytes, path)?
+        .materials()
+        .iter()
+        .map(|m| (m.name.clone(), m.diffuse_texture.clone()))
+        .collect())
+}
+
+fn summarize(model: &ObjModel) -> ObjInfo {
     let mesh = &model.mesh;
     let bounds = mesh
         .indices
         .iter()
         .flatten()
         .fold(Aabb::EMPTY, |b, &i| b.grow(mesh.positions[i as usize]));
-    Ok(ObjInfo {
+    ObjInfo {
         triangles: mesh.indices.len(),
         vertices: mesh.positions.len(),
         bounds,
@@ -52,7 +71,7 @@ pub fn inspect_obj(path: &Path) -> Result<ObjInfo, String> {
             .map(|m| (m.name.clone(), m.diffuse_texture.clone()))
             .collect(),
         closed: is_closed(mesh),
-    })
+    }
 }
 
 /// Every edge shared by exactly two triangles, vertices compared by position (an OBJ splits a
@@ -103,5 +122,30 @@ mod tests {
         split.push([0.0, 0.0, 0.0]);
         let tetra = mesh(&split, &[[4, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
         assert!(is_closed(&tetra));
+    }
+
+    #[test]
+    fn obj_and_mtl_bytes_are_read_as_their_files_are() {
+        let obj =
+            b"mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 2\nvt 0 0\nf 1 3 2\nf 1/1 2 4\n";
+        let e = inspect_obj_bytes(obj, Path::new("/nonexistent")).unwrap_err();
+        assert!(e.contains("missing.mtl"), "{e}");
+        let info = inspect_obj_bytes(&obj[19..], Path::new("")).unwrap();
+        assert_eq!((info.triangles, info.uvs, info.normals), (2, true, false));
+        assert_eq!(info.bounds.max, Vec3::new(1.0, 1.0, 2.0));
+        let e = inspect_obj_bytes(b"v 0 0 0\n", Path::new("")).unwrap_err();
+        assert!(e.contains("no faces"), "{e}");
+
+        let mtl = b"newmtl a\nKd 1 0 0\nnewmtl b\nmap_Kd -s 2 2 1 t.png\n";
+        let materials = inspect_mtl(mtl, Path::new("lib/x.mtl")).unwrap();
+        assert_eq!(
+            materials,
+            [
+                ("a".to_owned(), None),
+                ("b".to_owned(), Some(PathBuf::from("lib/t.png")))
+            ]
+        );
+        let e = inspect_mtl(b"newmtl a\nKd red\n", Path::new("x.mtl")).unwrap_err();
+        assert!(e.contains("x.mtl") && e.contains("line 2"), "{e}");
     }
 }

@@ -44,7 +44,7 @@ use crate::files::Files;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
-pub use info::{inspect_obj, ObjInfo};
+pub use info::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 use lines::decode;
 use mtl::Library;
 
@@ -142,9 +142,20 @@ pub(crate) fn load_obj(
     let bytes = files
         .read(path, MAX_FILE_BYTES)
         .map_err(|e| e.to_string())?;
-    lines::check_text(&bytes, "an OBJ")?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let data = read(&bytes, dir, Library::new(files.clone()), pool, CHUNK_BYTES)?;
+    parse_obj(&bytes, dir, Library::new(files.clone()), pool)
+}
+
+/// [`load_obj`] for the bytes of an OBJ file whose `mtllib` names are relative to `dir` and
+/// read into `library`.
+fn parse_obj(
+    bytes: &[u8],
+    dir: &Path,
+    library: Library,
+    pool: Option<&rayon::ThreadPool>,
+) -> Result<ObjModel, String> {
+    lines::check_text(bytes, "an OBJ")?;
+    let data = read(bytes, dir, library, pool, CHUNK_BYTES)?;
     if data.triangles == 0 {
         // Nothing to render: most likely not the file meant (any text without `f` lines
         // parses, since unknown statements are ignored).

@@ -62,6 +62,11 @@ impl Library {
         self.materials.len()
     }
 
+    /// Every material defined, in order (a name defined twice appears twice).
+    pub(super) fn materials(&self) -> &[ObjMaterial] {
+        &self.materials
+    }
+
     /// The latest definition of the material `name` and its index.
     pub(super) fn find(&self, name: &str) -> Option<(usize, &ObjMaterial)> {
         let &index = self.by_name.get(name)?;
@@ -75,9 +80,20 @@ fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
         .files
         .read(path, MAX_FILE_BYTES)
         .map_err(|e| format!("cannot load material library \"{}\": {e}", path.display()))?;
-    check_text(&bytes, "an MTL")
+    read_mtl(&bytes, path, library)
+}
+
+/// The library of the one MTL file whose bytes are `bytes`; `path` names it in messages.
+pub(super) fn parse_bytes(bytes: &[u8], path: &Path) -> Result<Library, String> {
+    let mut library = Library::default();
+    read_mtl(bytes, path, &mut library)?;
+    Ok(library)
+}
+
+fn read_mtl(bytes: &[u8], path: &Path, library: &mut Library) -> Result<(), String> {
+    check_text(bytes, "an MTL")
         .map_err(|e| format!("material library \"{}\": {e}", path.display()))?;
-    parse_mtl(&decode(&bytes), path, library)
+    parse_mtl(&decode(bytes), path, library)
 }
 
 /// Reads the text of the MTL file `path` into `library`; `path` names the file in messages

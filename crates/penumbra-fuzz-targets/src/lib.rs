@@ -1,0 +1,217 @@
+//! The bodies of penumbra's fuzz targets: each takes the bytes of one input, feeds them to the
+//! library's public entry points as a user's file would be, and panics only when the library
+//! breaks a promise: a panic of its own, a result that succeeds with non-finite geometry, an
+//! invalid BVH or a NaN/Inf pixel, a scene that builds but does not render, or a scene error
+//! whose message is not one clean line.
+//! Errors are the expected answer to most inputs.
+//!
+//! The same functions run under cargo-fuzz (the `fuzz/` crate, nightly) and in the stable
+//! regression test (`tests/corpus.rs`), which replays the committed corpus and every crash
+//! found so far.
+//!
+//! Every target bounds its work per input: scenes are built and rendered at 4×4 pixels, one
+//! sample per pixel and one light sample, whatever the file asks for.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+use std::path::{Path, PathBuf};
+
+use penumbra::{
+    decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, Override,
+    RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, World,
+};
+
+/// A fuzz target: its name (the folder of its corpus) and its body.
+pub struct Target {
+    /// The name cargo-fuzz knows it by.
+    pub name: &'static str,
+    /// Runs one input; panics when the library misbehaves.
+    pub run: fn(&[u8]),
+}
+
+/// Every target.
+pub const TARGETS: [Target; 6] = [
+    Target {
+        name: "scene_toml",
+        run: scene_toml,
+    },
+    Target {
+        name: "scene_json",
+        run: scene_json,
+    },
+    Target {
+        name: "scene_override",
+        run: scene_override,
+    },
+    Target {
+        name: "obj",
+        run: obj,
+    },
+    Target {
+        name: "mtl",
+        run: mtl,
+    },
+    Target {
+        name: "texture",
+        run: texture,
+    },
+];
+
+/// The repository's folder.
+pub fn repo_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Folder scene text is resolved against: `fuzz/assets/`, small stand-ins for the meshes and
+/// textures of `scenes/` that the seed scenes name, so that an input's work stays small.
+pub fn assets_dir() -> PathBuf {
+    repo_dir().join("fuzz/assets")
+}
+
+/// Folder OBJ text is resolved against: the Cornell box's, so `mtllib CornellBox-Original.mtl`
+/// is found.
+fn obj_dir() -> PathBuf {
+    assets_dir().join("cornell_box")
+}
+
+/// A TOML scene file: parsed, built, rendered small.
+pub fn scene_toml(data: &[u8]) {
+    scene(data, SceneFormat::Toml);
+}
+
+/// A JSON scene file: parsed, built, rendered small.
+pub fn scene_json(data: &[u8]) {
+    scene(data, SceneFormat::Json);
+}
+
+/// A TOML scene file with an override (`penumbra render --set KEY.PATH=VALUE`) on its first
+/// line: parsed, the override applied, built, rendered small.
+pub fn scene_override(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let (first, rest) = text.split_once('\n').unwrap_or((text, ""));
+    // A malformed override is the command line's error, echoed as given (clap does too).
+    if let Ok(o) = Override::parse(first) {
+        scene_with(rest, SceneFormat::Toml, &[o]);
+    }
+}
+
+fn scene(data: &[u8], format: SceneFormat) {
+    // Scene files are UTF-8; `SceneFile::load` refuses other bytes before parsing.
+    if let Ok(text) = std::str::from_utf8(data) {
+        scene_with(text, format, &[]);
+    }
+}
+
+fn scene_with(text: &str, format: SceneFormat, overrides: &[Override]) {
+    let file = match SceneFile::from_str_with(text, format, "fuzz", assets_dir(), overrides) {
+        Ok(file) => file,
+        Err(e) => return check_message(&e),
+    };
+    let scene = match file.build(1) {
+        Ok(scene) => scene,
+        Err(e) => return check_message(&e),
+    };
+    check_world(&scene.world);
+    let settings = RenderSettings {
+        width: 4,
+        height: 4,
+        spp: 1,
+        light_samples: Some(1),
+        ..scene.settings.clone()
+    };
+    let options = RenderOptions {
+        threads: 1,
+        ..RenderOptions::default()
+    };
+    // What the build accepts renders: its checks are the renderer's.
+    let (film, _) = match render(&scene.world, &settings, &options) {
+        Ok(rendered) => rendered,
+        Err(e) => panic!("the scene builds but does not render: {e}"),
+    };
+    for (i, p) in film.pixels.iter().enumerate() {
+        assert!(p.is_finite(), "pixel {i} is {p}");
+    }
+}
+
+/// An error's promise: one line a terminal can show as it is, whatever bytes the file holds
+/// (no newline, ESC, BEL or other control character).
+fn check_message(e: &SceneError) {
+    let message = e.to_string();
+    assert!(
+        !message.chars().any(char::is_control),
+        "a control character in the message {message:?}"
+    );
+}
+
+/// A built world's promises: finite vertices, normals, uvs and bounds, a valid BVH, finite
+/// lights.
+pub fn check_world(world: &World) {
+    let g = world.geometry();
+    assert!(
+        g.positions.iter().all(|p| p.is_finite()),
+        "a vertex is not finite"
+    );
+    assert!(
+        g.normals.iter().all(|n| n.is_finite()),
+        "a normal is not finite"
+    );
+    assert!(g.uvs.iter().all(|uv| uv.is_finite()), "a uv is not finite");
+    check_bounds(&world.bounds(), g.triangles.is_empty());
+    if let Err(e) = world.accel().validate(g) {
+        panic!("invalid BVH: {e}");
+    }
+    for light in world.lights() {
+        let finite = match light {
+            Light::Area(a) => [a.center, a.u, a.v, a.radiance]
+                .iter()
+                .all(|v| v.is_finite()),
+            Light::Point(p) => p.position.is_finite() && p.intensity.is_finite(),
+        };
+        assert!(finite, "{light:?}");
+    }
+}
+
+fn check_bounds(bounds: &Aabb, empty: bool) {
+    if !empty {
+        assert!(
+            bounds.min.is_finite() && bounds.max.is_finite() && bounds.min.cmple(bounds.max).all(),
+            "bounds {bounds:?}"
+        );
+    }
+}
+
+/// An OBJ file (its `mtllib` names resolved in the Cornell box's folder).
+pub fn obj(data: &[u8]) {
+    let Ok(info) = inspect_obj_bytes(data, &obj_dir()) else {
+        return;
+    };
+    // A mesh without faces is an error, so the bounds hold at least one vertex.
+    assert!(info.triangles > 0, "an OBJ without faces was accepted");
+    check_bounds(&info.bounds, false);
+}
+
+/// An MTL file.
+pub fn mtl(data: &[u8]) {
+    let _ = inspect_mtl(data, &obj_dir().join("fuzz.mtl"));
+}
+
+/// A PNG or JPEG texture, decoded with a bound on its memory (as a scene's build does) in
+/// both color spaces.
+pub fn texture(data: &[u8]) {
+    // 64 MiB: a few million texels, decoded in well under a second.
+    const MAX_BYTES: u64 = 64 << 20;
+    for srgb in [true, false] {
+        let Ok(image) = decode_texture_image(data, srgb, Some(MAX_BYTES)) else {
+            return;
+        };
+        assert!(image.width > 0 && image.height > 0);
+        assert_eq!(
+            image.texels.len(),
+            image.width as usize * image.height as usize
+        );
+        assert!(image.texels.iter().all(|t| t.is_finite()));
+    }
+}
