@@ -9,8 +9,8 @@ against one process, alternately in the same run, on the seed's room (scenes/cor
     ``distributed.render_frame(scene)`` with 4 tiles per CPU, each task on 1 CPU, and with
     ``num_cpus=CPUS`` (a whole node per task) (the workers' worlds built beforehand: cluster
     start-up excluded).
-(b) Views: VIEWS orbit views rendered one after another by ``scene.render(threads=1)``
-    against ``distributed.render_views`` (one task per view, 1 CPU each, and a whole node
+(b) Views: VIEWS orbit views rendered (and written) one after another by
+    ``scene.render(threads=1)`` and by ``scene.render(threads=CPUS)``, against ``distributed.render_views`` (one task per view, 1 CPU each, and a whole node
     each): throughput ratio.
 (c) Task overhead: VIEWS views of 1×1 pixel through ``render_views``, per view.
 Prints medians of --repeat runs and their ratios on stdout; progress on stderr. Needs Ray
@@ -49,6 +49,13 @@ def timed(f):
     return time.perf_counter() - start
 
 
+def one_process(scene, orbit, pattern, threads, size) -> None:
+    """The batch in this process, one view after another, each written as render_views does."""
+    for v in orbit:
+        image = scene.render(camera=v["camera"], threads=threads, **size)
+        penumbra.write_image(pattern.format(name=v["name"]), image)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cpus", type=int, default=2)
@@ -74,11 +81,12 @@ def main() -> None:
         )
         print(f"warm-up (world builds): {time.perf_counter() - start:.2f} s", file=sys.stderr)
 
-        rows = {
+        rows: dict = {
             "frame, one process": [],
             "frame, Ray tiles": [],
             "frame, Ray node tasks": [],
             "views, one thread": [],
+            "views, one process": [],
             "views, Ray": [],
             "views, Ray node tasks": [],
             "1x1 views, Ray": [],
@@ -92,8 +100,12 @@ def main() -> None:
             rows["frame, Ray node tasks"].append(
                 timed(lambda: distributed.render_frame(scene, num_cpus=args.cpus, **frame))
             )
+            # The single-process batch writes its images too, as render_views does.
             rows["views, one thread"].append(
-                timed(lambda: [scene.render(camera=v["camera"], threads=1, **size) for v in orbit])
+                timed(lambda: one_process(scene, orbit, f"{tmp}/one-{{name}}.exr", 1, size))
+            )
+            rows["views, one process"].append(
+                timed(lambda: one_process(scene, orbit, f"{tmp}/one-{{name}}.exr", args.cpus, size))
             )
             rows["views, Ray"].append(
                 timed(
@@ -140,6 +152,13 @@ def main() -> None:
     )
     print(
         f"views: throughput Ray / one thread = {med['views, one thread'] / med['views, Ray']:.2f}x (target >= 1.8)"
+    )
+    one = med["views, one process"]
+    print(
+        f"views: one process, {args.cpus} threads / one thread = {med['views, one thread'] / one:.2f}x"
+    )
+    print(
+        f"views: throughput Ray / one process of {args.cpus} threads = {one / med['views, Ray']:.2f}x"
     )
     print(
         f"views: throughput Ray, node tasks / one thread = {med['views, one thread'] / med['views, Ray node tasks']:.2f}x"
