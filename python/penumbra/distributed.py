@@ -31,7 +31,6 @@ import numpy as np
 import ray
 
 from ._image import write_image
-from ._pack import PackedScene
 from ._scene import Scene, load_pack
 from .views import RENDER_KEYS, aov_path, output_path, views as normalize_views
 
@@ -99,24 +98,28 @@ def _render_task(
     }
 
 
-# The driver's packs in the object store, by digest: a scene is shipped once per driver and
-# Ray session (a new session, after ray.shutdown() and ray.init(), ships again).
-_shipped: Dict[str, Any] = {"job": None, "refs": {}}
+# What the driver has shipped in the current Ray session: each scene's pack digest (the pack is
+# made, reading every file, once per scene) and each digest's pack in the object store (put
+# once). A new session (ray.shutdown() then ray.init()) ships again.
+_shipped: Dict[str, Any] = {"session": None, "digests": {}, "refs": {}}
 
 
-def _ship(scene: Union[Scene, PackedScene]) -> Tuple[str, List[Any]]:
-    pack = scene.pack() if isinstance(scene, Scene) else scene
-    if not isinstance(pack, PackedScene):
-        raise TypeError(f"expected a penumbra.Scene or PackedScene, not {type(scene).__name__}")
+def _ship(scene: Scene) -> Tuple[str, List[Any]]:
+    if not isinstance(scene, Scene):
+        raise TypeError(f"expected a penumbra.Scene, not {type(scene).__name__}")
     context = ray.get_runtime_context()
-    job = (context.gcs_address, context.get_job_id())
-    if _shipped["job"] != job:
-        _shipped.update(job=job, refs={})
-    refs = _shipped["refs"]
-    digest = pack.digest
-    if digest not in refs:
-        refs[digest] = ray.put(pack)
-    return digest, [refs[digest]]
+    session = (context.gcs_address, context.get_job_id())
+    if _shipped["session"] != session:
+        _shipped.update(session=session, digests={}, refs={})
+    # Keyed by id, with the scene kept alive beside its digest so the id is not reused.
+    known = _shipped["digests"].get(id(scene))
+    if known is None:
+        pack = scene.pack()
+        if pack.digest not in _shipped["refs"]:
+            _shipped["refs"][pack.digest] = ray.put(pack)
+        known = _shipped["digests"][id(scene)] = (scene, pack.digest)
+    digest = known[1]
+    return digest, [_shipped["refs"][digest]]
 
 
 def _gather(
