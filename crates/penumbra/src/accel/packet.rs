@@ -1,10 +1,11 @@
 //! Shadow-ray packets: segments that share their origin (a shading point and the N×N samples
-//! of its lights) traced together through the BVH, `N` lanes at a time.
+//! of its lights) traced together, `N` lanes at a time, and the lane kernels that the packets
+//! (here, in `wide_packet` and in `closest`) share: the slab test and Möller–Trumbore.
 //!
-//! Each node is fetched once per packet and its slab test runs for all lanes in one loop, which
-//! the compiler turns into vector instructions (`crate::simd` compiles this file's code once
-//! per instruction set and picks one at run time). A lane leaves the packet at its first occluder;
-//! the packet stops when no lane is left.
+//! A lane loop runs for all lanes of a packet at once, which the compiler turns into vector
+//! instructions (`crate::simd` compiles this file's code once per instruction set and picks one
+//! at run time). A lane leaves the packet at its first occluder; the packet stops when no lane
+//! is left.
 //!
 //! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
 //! operation for operation (the same products, sums and comparisons in the same order, no
@@ -14,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::{traverse, Bvh, BvhNode, STACK_SIZE};
+use super::{traverse, wide_packet, Bvh, BvhNode};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
 
@@ -56,107 +57,9 @@ impl Kernel for Occlude<'_> {
                     }
                 }
             } else {
-                occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
+                wide_packet::occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
             }
         }
-    }
-}
-
-/// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
-/// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
-#[inline(always)]
-pub(super) fn occlude_packet<const N: usize, I: Isa>(
-    bvh: &Bvh,
-    origin: Vec3,
-    ends: &[Vec3],
-    t_max: f32,
-    blocked: &mut [bool],
-) {
-    debug_assert!(N <= 32 && !ends.is_empty() && ends.len() <= N && ends.len() == blocked.len());
-    let count = ends.len();
-    // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
-    let mut dir = [[0.0f32; N]; 3];
-    // Lane i is bit i.
-    let mut active: u32 = 0;
-    for i in 0..N {
-        let d = ends[i.min(count - 1)] - origin;
-        for a in 0..3 {
-            dir[a][i] = d[a];
-        }
-        active |= ((i < count && !blocked[i]) as u32) << i;
-    }
-    let mut inv = [[0.0f32; N]; 3];
-    for a in 0..3 {
-        for i in 0..N {
-            inv[a][i] = 1.0 / dir[a][i];
-        }
-    }
-    let o = origin.to_array();
-    let far = [t_max; N];
-
-    // Children are tested at their parent and the one the first live lane enters first is
-    // visited first, so that occluders near the shading point end the packet early; the other
-    // waits on the stack with the lanes that entered it.
-    let mut stack = [(0u32, 0u32); STACK_SIZE];
-    let mut sp = 0;
-    let root = &bvh.nodes[0];
-    let mut node = root;
-    if slab::<N, I>(root, &o, &inv, 0.0, &far).0 & active == 0 {
-        return;
-    }
-    'nodes: loop {
-        if node.is_leaf() {
-            let first = node.first as usize;
-            for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !triangle::<N, I>(tri, origin, &dir, t_max);
-                if active == 0 {
-                    break 'nodes;
-                }
-            }
-        } else {
-            let (l, r) = (
-                &bvh.nodes[node.first as usize],
-                &bvh.nodes[node.first as usize + 1],
-            );
-            let ((ml, nl), (mr, nr)) = (
-                slab::<N, I>(l, &o, &inv, 0.0, &far),
-                slab::<N, I>(r, &o, &inv, 0.0, &far),
-            );
-            let (ml, mr) = (ml & active, mr & active);
-            if ml != 0 && mr != 0 {
-                let lane = active.trailing_zeros() as usize;
-                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
-                    (l, node.first + 1, mr)
-                } else {
-                    (r, node.first, ml)
-                };
-                stack[sp] = (far, far_mask);
-                sp += 1;
-                node = near;
-                continue;
-            } else if ml != 0 {
-                node = l;
-                continue;
-            } else if mr != 0 {
-                node = r;
-                continue;
-            }
-        }
-        // The next waiting subtree that a lane still live entered.
-        loop {
-            if sp == 0 {
-                break 'nodes;
-            }
-            sp -= 1;
-            let (index, mask) = stack[sp];
-            if mask & active != 0 {
-                node = &bvh.nodes[index as usize];
-                break;
-            }
-        }
-    }
-    for (i, b) in blocked.iter_mut().enumerate() {
-        *b |= active & (1 << i) == 0;
     }
 }
 
@@ -191,9 +94,23 @@ pub(super) fn slab<const N: usize, I: Isa>(
     t_min: f32,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
+    slab_box::<N, I>(&node.min, &node.max, o, inv, t_min, t_max)
+}
+
+/// [`slab`] for the box with corners `lower` and `upper`.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(super) fn slab_box<const N: usize, I: Isa>(
+    lower: &[f32; 3],
+    upper: &[f32; 3],
+    o: &[f32; 3],
+    inv: &[[f32; N]; 3],
+    t_min: f32,
+    t_max: &[f32; N],
+) -> (u32, [f32; N]) {
     // The box relative to the shared origin, once for all lanes.
-    let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
-    let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
+    let lo = [lower[0] - o[0], lower[1] - o[1], lower[2] - o[2]];
+    let hi = [upper[0] - o[0], upper[1] - o[1], upper[2] - o[2]];
     let mut inside = [0i32; N];
     let mut entry = [0.0; N];
     for i in 0..N {
@@ -211,7 +128,7 @@ pub(super) fn slab<const N: usize, I: Isa>(
 /// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn triangle<const N: usize, I: Isa>(
+pub(super) fn triangle<const N: usize, I: Isa>(
     tri: &super::TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],

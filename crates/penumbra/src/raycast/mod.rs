@@ -49,7 +49,6 @@ mod queries;
 mod run;
 mod traverse;
 mod watertight;
-mod wide;
 
 #[cfg(test)]
 mod tests;

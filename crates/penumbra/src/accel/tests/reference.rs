@@ -5,7 +5,7 @@
 //! order.
 
 use super::*;
-use crate::accel::build::node;
+use crate::accel::build::{assemble, node};
 use crate::math::Aabb;
 
 #[derive(Clone, Copy)]
@@ -40,11 +40,7 @@ pub(super) fn reference_build(geometry: &Geometry) -> Bvh {
         .iter()
         .map(|&i| accel(geometry.corners(i as usize)))
         .collect();
-    Bvh {
-        nodes,
-        tris,
-        prim_ids,
-    }
+    assemble(nodes, tris, prim_ids)
 }
 
 fn bounds_of(prims: &[RefPrim]) -> (Aabb, Aabb) {

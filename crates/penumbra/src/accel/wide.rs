@@ -11,7 +11,7 @@
 
 use glam::Vec4;
 
-use crate::accel::BvhNode;
+use super::BvhNode;
 
 /// Children per wide node.
 pub(crate) const WIDTH: usize = 4;
@@ -56,6 +56,32 @@ impl WideNode {
         self.count[lane] != UNUSED
     }
 
+    /// The children's smallest and largest corners by coordinate: `min[axis][child]`,
+    /// `max[axis][child]` (zeros for unused lanes).
+    #[inline(always)]
+    pub fn corners(&self) -> (&[[f32; WIDTH]; 3], &[[f32; WIDTH]; 3]) {
+        (&self.min, &self.max)
+    }
+
+    /// The used children, bit `i` for child `i`.
+    #[inline(always)]
+    pub fn used_mask(&self) -> u32 {
+        let mut used = 0;
+        for (i, &count) in self.count.iter().enumerate() {
+            used |= u32::from(count != UNUSED) << i;
+        }
+        used
+    }
+
+    /// Replaces child `lane`'s box, to break trees in tests.
+    #[cfg(test)]
+    pub fn set_bounds(&mut self, lane: usize, lo: [f32; 3], hi: [f32; 3]) {
+        for a in 0..3 {
+            self.min[a][lane] = lo[a];
+            self.max[a][lane] = hi[a];
+        }
+    }
+
     /// The box of child `lane` as its smallest and largest corners.
     #[inline(always)]
     pub fn bounds(&self, lane: usize) -> ([f32; 3], [f32; 3]) {
@@ -89,11 +115,10 @@ impl WideNode {
         let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
         let near = x0.max(y0).max(z0).max(Vec4::splat(t_min));
         let far = (x1.min(y1).min(z1) * exit_scale).min(Vec4::splat(t_max));
-        let mut used = 0;
-        for (i, &count) in self.count.iter().enumerate() {
-            used |= u32::from(count != UNUSED) << i;
-        }
-        (near.cmple(far).bitmask() & used, near.to_array())
+        (
+            near.cmple(far).bitmask() & self.used_mask(),
+            near.to_array(),
+        )
     }
 }
 
