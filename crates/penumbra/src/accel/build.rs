@@ -77,6 +77,8 @@ fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
             prims.iter().map(tri).collect(),
         )
     };
+    // The build's copy of every primitive is not needed past this point.
+    drop(prims);
     assemble(nodes, tris, prim_ids)
 }
 

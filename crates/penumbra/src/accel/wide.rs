@@ -157,12 +157,19 @@ pub(crate) fn collapse(
     leaf_max: u32,
     leaf: &mut impl FnMut(u32, u32) -> u32,
 ) -> Vec<WideNode> {
-    let mut wide = Vec::new();
     if nodes.is_empty() {
-        return wide;
+        return Vec::new();
     }
     let slots = subtree_slots(nodes);
     let splits = |k: u32| nodes[k as usize].count() == 0 && slots[k as usize].1 > leaf_max;
+    // Each wide node holds at least one binary node that splits: reserving that many never
+    // grows the vector (a copy of it all) and costs only address space, as untouched pages
+    // are never made resident; the excess is returned at the end.
+    let bound = (0..nodes.len() as u32)
+        .filter(|&k| splits(k))
+        .count()
+        .max(1);
+    let mut wide = Vec::with_capacity(bound);
     wide.push(WideNode::EMPTY);
     // Wide nodes to fill: (wide index, the binary node whose subtree it holds).
     let mut todo = vec![(0usize, 0u32)];
@@ -200,6 +207,7 @@ pub(crate) fn collapse(
         }
         wide[w] = node;
     }
+    wide.shrink_to_fit();
     wide
 }
 
