@@ -6,10 +6,11 @@
 //! surface area is replaced by its two children until there are four, as in Wald et al.,
 //! "Getting Rid of Packets", 2008), except that children of at most two leaves' worth of
 //! triangles are opened first: left alone, each would become a wide node of two leaves, a
-//! node load for little culling (3 % less time on incoherent rays on the bunny). The children's boxes are the binary nodes' padded boxes,
-//! bit for bit, and the leaves are the binary leaves (the same leaf-slot ranges), so the wide
-//! box test is exactly as conservative as the binary one (see `traverse`) and every query
-//! visits a superset of the triangles it must see.
+//! node load for little culling (3 % less time on incoherent rays on the bunny). The
+//! children's boxes are the binary nodes' padded boxes, bit for bit, and each leaf is the
+//! leaf-slot range of a binary subtree, so the wide box test is exactly as conservative as
+//! the binary one (see `traverse`) and every query visits a superset of the triangles it must
+//! see.
 
 use glam::Vec4;
 
