@@ -1,4 +1,4 @@
-//! One ray-casting workload on one thread, for instruction counts under callgrind (not a
+//! One ray-casting workload (on one thread unless a thread count follows N), for instruction counts under callgrind (not a
 //! timed benchmark: `benches/raycast.rs` and `tools/bench_raycast.py` time the queries).
 //!
 //! ```text
@@ -49,17 +49,24 @@ fn read_obj(path: &Path) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let [_, mesh, workload, n] = &args[..] else {
-        eprintln!("usage: raycast_workload MESH.obj coherent|incoherent|count|occlusion|none N");
-        std::process::exit(2);
+    let (mesh, workload, n, threads) = match &args[..] {
+        [_, mesh, workload, n] => (mesh, workload, n, "1"),
+        [_, mesh, workload, n, threads] => (mesh, workload, n, threads.as_str()),
+        _ => {
+            eprintln!(
+                "usage: raycast_workload MESH.obj coherent|incoherent|count|occlusion|none N [THREADS]"
+            );
+            std::process::exit(2);
+        }
     };
     let n: usize = n.parse().expect("N is a number");
+    let threads: usize = threads.parse().expect("THREADS is a number");
     let (vertices, triangles) = read_obj(Path::new(mesh));
     let mut scene = RaycastingScene::new();
     scene.add_triangles(&vertices, &triangles).unwrap();
-    scene.commit(1).unwrap();
+    scene.commit(threads).unwrap();
     let options = QueryOptions {
-        threads: 1,
+        threads,
         cancel: None,
     };
 

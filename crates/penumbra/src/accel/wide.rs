@@ -4,10 +4,13 @@
 //!
 //! The wide tree is collapsed from the binary one (an interior child with the largest
 //! surface area is replaced by its two children until there are four, as in Wald et al.,
-//! "Getting Rid of Packets", 2008). The children's boxes are the binary nodes' padded boxes,
-//! bit for bit, and the leaves are the binary leaves (the same leaf-slot ranges), so the wide
-//! box test is exactly as conservative as the binary one (see `traverse`) and every query
-//! visits a superset of the triangles it must see.
+//! "Getting Rid of Packets", 2008), except that children of at most two leaves' worth of
+//! triangles are opened first: left alone, each would become a wide node of two leaves, a
+//! node load for little culling (3 % less time on incoherent rays on the bunny). The
+//! children's boxes are the binary nodes' padded boxes, bit for bit, and each leaf is the
+//! leaf-slot range of a binary subtree, so the wide box test is exactly as conservative as
+//! the binary one (see `traverse`) and every query visits a superset of the triangles it must
+//! see.
 
 use glam::Vec4;
 
@@ -177,8 +180,12 @@ pub(crate) fn collapse(
         let mut kids = [b; WIDTH];
         let mut len = 1;
         while len < WIDTH {
+            let small = |k: u32| slots[k as usize].1 <= 2 * leaf_max;
             let widest = (0..len).filter(|&k| splits(kids[k])).max_by(|&x, &y| {
-                half_area(&nodes[kids[x] as usize]).total_cmp(&half_area(&nodes[kids[y] as usize]))
+                let (a, b) = (kids[x], kids[y]);
+                small(a)
+                    .cmp(&small(b))
+                    .then(half_area(&nodes[a as usize]).total_cmp(&half_area(&nodes[b as usize])))
             });
             let Some(k) = widest else { break };
             let first = nodes[kids[k] as usize].first();
@@ -240,6 +247,42 @@ mod tests {
     }
 
     #[test]
+    fn small_subtrees_are_opened_rather_than_left_as_two_leaf_nodes() {
+        // A wide node of just two leaves costs a node load for little culling: the collapse
+        // opens such subtrees (of at most 2 · leaf_max triangles) first. On this sphere of
+        // 20,480 triangles that leaves 224 of 1,419 wide nodes (16 %); opening the largest
+        // child alone left 298 of 1,479 (20 %).
+        let (positions, triangles) = crate::raycast::tests_meshes::icosphere(5);
+        let sphere = Geometry {
+            positions: positions.into_iter().map(Vec3::from).collect(),
+            triangles: triangles
+                .into_iter()
+                .map(|vertices| Triangle {
+                    vertices,
+                    material: 0,
+                    object: 0,
+                    smooth: false,
+                })
+                .collect(),
+            ..Geometry::default()
+        };
+        let bvh = Bvh::build(&sphere);
+        let wide = collapse(bvh.nodes(), 8, &mut |first, _| first);
+        let two_leaves = wide
+            .iter()
+            .filter(|w| {
+                let used = (0..WIDTH).filter(|&l| w.used(l)).count();
+                used == 2 && (0..2).all(|l| w.child(l).1 > 0)
+            })
+            .count();
+        assert!(
+            two_leaves * 6 < wide.len(),
+            "{two_leaves} of {} wide nodes hold just two leaves",
+            wide.len()
+        );
+    }
+
+    #[test]
     fn a_wide_node_is_two_cache_lines() {
         assert_eq!(std::mem::size_of::<WideNode>(), 128);
         assert_eq!(std::mem::align_of::<WideNode>(), 64);
@@ -247,10 +290,13 @@ mod tests {
 
     #[test]
     fn the_wide_tree_holds_every_slot_once_in_a_binary_subtree_box() {
-        for n in [1, 2, 3, 9, 100, 1000] {
+        for (n, leaf_max) in [1, 2, 3, 9, 100, 1000]
+            .into_iter()
+            .flat_map(|n| [(n, 4), (n, 8)])
+        {
             let bvh = Bvh::build(&strip(n));
             let slots = subtree_slots(bvh.nodes());
-            let wide = collapse(bvh.nodes(), 4, &mut |first, _| first);
+            let wide = collapse(bvh.nodes(), leaf_max, &mut |first, _| first);
             let mut seen = vec![0; n];
             let mut reached = vec![false; wide.len()];
             reached[0] = true;
@@ -274,7 +320,7 @@ mod tests {
                         s == (child, count) && b.min_corner() == lo && b.max_corner() == hi
                     }));
                     assert!(
-                        count <= 4
+                        count <= leaf_max
                             || bvh
                                 .nodes()
                                 .iter()

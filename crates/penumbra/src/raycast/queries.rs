@@ -5,7 +5,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::packet::CastPackets;
-use super::run::{run, QueryOptions, CHUNK};
+use super::run::{filled, run, QueryOptions, CHUNK};
 use super::traverse::{Accel, SlotHit, Stack};
 use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
@@ -99,9 +99,10 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let n = rays.len();
         let mut out = CastRays {
-            t_hit: vec![f32::INFINITY; n],
-            geometry_ids: vec![INVALID_ID; n],
-            primitive_ids: vec![INVALID_ID; n],
+            t_hit: filled(&pool, n, f32::INFINITY),
+            geometry_ids: filled(&pool, n, INVALID_ID),
+            primitive_ids: filled(&pool, n, INVALID_ID),
+            // Zeros: pages from the allocator, touched only where a ray hits.
             primitive_uvs: vec![[0.0; 2]; n],
             primitive_normals: vec![[0.0; 3]; n],
         };
@@ -248,9 +249,9 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let n = points.len();
         let mut out = ClosestPoints {
-            points: vec![[f32::NAN; 3]; n],
-            geometry_ids: vec![INVALID_ID; n],
-            primitive_ids: vec![INVALID_ID; n],
+            points: filled(&pool, n, [f32::NAN; 3]),
+            geometry_ids: filled(&pool, n, INVALID_ID),
+            primitive_ids: filled(&pool, n, INVALID_ID),
             primitive_uvs: vec![[0.0; 2]; n],
             primitive_normals: vec![[0.0; 3]; n],
         };
