@@ -18,9 +18,10 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
     if d3 >= 0.0 && d4 <= d3 {
         return (b, 1.0, 0.0);
     }
-    // Edge region of ab.
+    // Edge region of ab (`d1 − d3 = |ab|²`: a zero-length edge has no region of its own, and
+    // would give 0/0 here).
     let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0 {
         let s = d1 / (d1 - d3);
         return (a + s * ab, s, 0.0);
     }
@@ -31,13 +32,13 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
     }
     // Edge region of ac.
     let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0 {
         let s = d2 / (d2 - d6);
         return (a + s * ac, 0.0, s);
     }
     // Edge region of bc.
     let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 && (d4 - d3) + (d5 - d6) > 0.0 {
         let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
         return (b + s * (c - b), 1.0 - s, s);
     }
@@ -90,5 +91,23 @@ mod tests {
         let dot = [[1.0, 1.0, 1.0]; 3];
         let (p, _, _) = closest_on_triangle(Vec3::ZERO, dot.map(Vec3::from));
         assert_eq!(p, Vec3::ONE);
+        // Two equal corners (a segment from a to c), in every order: the segment's point, not
+        // the 0/0 of the zero-length edge (found by proptest).
+        let (a, c) = (Vec3::new(1.0, 2.0, 0.0), Vec3::new(3.0, 2.0, 0.0));
+        let q = Vec3::new(2.5, 0.0, 1.0);
+        for tri in [
+            [a, a, c],
+            [a, c, a],
+            [c, a, a],
+            [c, c, a],
+            [c, a, c],
+            [a, c, c],
+        ] {
+            let (p, b1, b2) = closest_on_triangle(q, tri);
+            assert!(p.distance(Vec3::new(2.5, 2.0, 0.0)) < 1e-6, "{tri:?}: {p}");
+            let [t0, t1, t2] = tri;
+            let back = t0 + b1 * (t1 - t0) + b2 * (t2 - t0);
+            assert!(back.distance(p) < 1e-6, "{tri:?}: weights {b1}, {b2}");
+        }
     }
 }
