@@ -79,17 +79,10 @@ fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
     };
     // The build's copy of every primitive is not needed past this point.
     drop(prims);
-    assemble(nodes, tris, prim_ids)
-}
-
-/// The [`Bvh`] of a built binary tree, with its four-wide form for the shadow packets.
-pub(super) fn assemble(nodes: Vec<BvhNode>, tris: Vec<super::TriAccel>, prim_ids: Vec<u32>) -> Bvh {
-    let wide = super::wide::collapse(&nodes, super::WIDE_LEAF_MAX, &mut |first, _| first);
     Bvh {
         nodes,
         tris,
         prim_ids,
-        wide,
     }
 }
 

@@ -28,8 +28,6 @@ mod packet;
 mod split;
 mod traverse;
 mod validate;
-pub(crate) mod wide;
-mod wide_packet;
 
 #[cfg(test)]
 mod tests;
@@ -122,8 +120,6 @@ pub struct Bvh {
     nodes: Vec<BvhNode>,
     tris: Vec<TriAccel>,
     prim_ids: Vec<u32>,
-    /// The four-wide tree collapsed from `nodes`, for the shadow packets.
-    wide: Vec<wide::WideNode>,
 }
 
 /// Number of SAH bins per axis.
@@ -132,8 +128,6 @@ const BINS: usize = 16;
 const MAX_LEAF: usize = 8;
 /// Subtrees with at least this many triangles are built on separate threads.
 const PARALLEL_MIN: usize = 32 * 1024;
-/// Binary subtrees of at most this many triangles are one leaf of the wide tree.
-const WIDE_LEAF_MAX: u32 = 4;
 /// Entries of the fixed traversal stacks.
 const STACK_SIZE: usize = 64;
 /// Deepest leaf: the any-hit traversal holds at most `depth + 1` entries on its stack.

@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::{traverse, wide_packet, Bvh, BvhNode};
+use super::{traverse, Bvh, BvhNode, STACK_SIZE};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
 
@@ -57,9 +57,107 @@ impl Kernel for Occlude<'_> {
                     }
                 }
             } else {
-                wide_packet::occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
+                occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
             }
         }
+    }
+}
+
+/// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
+/// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
+#[inline(always)]
+pub(super) fn occlude_packet<const N: usize, I: Isa>(
+    bvh: &Bvh,
+    origin: Vec3,
+    ends: &[Vec3],
+    t_max: f32,
+    blocked: &mut [bool],
+) {
+    debug_assert!(N <= 32 && !ends.is_empty() && ends.len() <= N && ends.len() == blocked.len());
+    let count = ends.len();
+    // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
+    let mut dir = [[0.0f32; N]; 3];
+    // Lane i is bit i.
+    let mut active: u32 = 0;
+    for i in 0..N {
+        let d = ends[i.min(count - 1)] - origin;
+        for a in 0..3 {
+            dir[a][i] = d[a];
+        }
+        active |= ((i < count && !blocked[i]) as u32) << i;
+    }
+    let mut inv = [[0.0f32; N]; 3];
+    for a in 0..3 {
+        for i in 0..N {
+            inv[a][i] = 1.0 / dir[a][i];
+        }
+    }
+    let o = origin.to_array();
+    let far = [t_max; N];
+
+    // Children are tested at their parent and the one the first live lane enters first is
+    // visited first, so that occluders near the shading point end the packet early; the other
+    // waits on the stack with the lanes that entered it.
+    let mut stack = [(0u32, 0u32); STACK_SIZE];
+    let mut sp = 0;
+    let root = &bvh.nodes[0];
+    let mut node = root;
+    if slab::<N, I>(root, &o, &inv, 0.0, &far).0 & active == 0 {
+        return;
+    }
+    'nodes: loop {
+        if node.is_leaf() {
+            let first = node.first as usize;
+            for tri in &bvh.tris[first..first + node.count as usize] {
+                active &= !triangle::<N, I>(tri, origin, &dir, t_max, active);
+                if active == 0 {
+                    break 'nodes;
+                }
+            }
+        } else {
+            let (l, r) = (
+                &bvh.nodes[node.first as usize],
+                &bvh.nodes[node.first as usize + 1],
+            );
+            let ((ml, nl), (mr, nr)) = (
+                slab::<N, I>(l, &o, &inv, 0.0, &far),
+                slab::<N, I>(r, &o, &inv, 0.0, &far),
+            );
+            let (ml, mr) = (ml & active, mr & active);
+            if ml != 0 && mr != 0 {
+                let lane = active.trailing_zeros() as usize;
+                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
+                    (l, node.first + 1, mr)
+                } else {
+                    (r, node.first, ml)
+                };
+                stack[sp] = (far, far_mask);
+                sp += 1;
+                node = near;
+                continue;
+            } else if ml != 0 {
+                node = l;
+                continue;
+            } else if mr != 0 {
+                node = r;
+                continue;
+            }
+        }
+        // The next waiting subtree that a lane still live entered.
+        loop {
+            if sp == 0 {
+                break 'nodes;
+            }
+            sp -= 1;
+            let (index, mask) = stack[sp];
+            if mask & active != 0 {
+                node = &bvh.nodes[index as usize];
+                break;
+            }
+        }
+    }
+    for (i, b) in blocked.iter_mut().enumerate() {
+        *b |= active & (1 << i) == 0;
     }
 }
 
@@ -94,23 +192,9 @@ pub(super) fn slab<const N: usize, I: Isa>(
     t_min: f32,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
-    slab_box::<N, I>(&node.min, &node.max, o, inv, t_min, t_max)
-}
-
-/// [`slab`] for the box with corners `lower` and `upper`.
-#[allow(clippy::needless_range_loop)]
-#[inline(always)]
-pub(super) fn slab_box<const N: usize, I: Isa>(
-    lower: &[f32; 3],
-    upper: &[f32; 3],
-    o: &[f32; 3],
-    inv: &[[f32; N]; 3],
-    t_min: f32,
-    t_max: &[f32; N],
-) -> (u32, [f32; N]) {
     // The box relative to the shared origin, once for all lanes.
-    let lo = [lower[0] - o[0], lower[1] - o[1], lower[2] - o[2]];
-    let hi = [upper[0] - o[0], upper[1] - o[1], upper[2] - o[2]];
+    let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
+    let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
     let mut inside = [0i32; N];
     let mut entry = [0.0; N];
     for i in 0..N {
@@ -125,24 +209,59 @@ pub(super) fn slab_box<const N: usize, I: Isa>(
     (I::mask(&inside), entry)
 }
 
-/// The lanes (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
+/// The lanes of `lanes` (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
+///
+/// `t = t_num · (1 / det)` is positive only where `det` is nonzero and has the sign of
+/// `t_num` (shared by all lanes), so the lanes' `det` alone (a third of the test) rules out a
+/// triangle whose plane lies behind every lane; the rest of the test runs only when some lane
+/// is left. Either way the answer is the full test's.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-pub(super) fn triangle<const N: usize, I: Isa>(
+fn triangle<const N: usize, I: Isa>(
     tri: &super::TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],
     t_max: f32,
+    lanes: u32,
 ) -> u32 {
     let tvec = origin - tri.v0;
     let qvec = tvec.cross(tri.e1);
     let t_num = tri.e2.dot(qvec);
+    // Zero or NaN: every lane's `t` is ±0 or NaN.
+    if !(t_num != 0.0) {
+        return 0;
+    }
+    let positive = t_num > 0.0;
+    let mut ahead = [0i32; N];
+    for i in 0..N {
+        let det = determinant(tri, dir, i).1;
+        ahead[i] = -((((det > 0.0) == positive) & (det != 0.0)) as i32);
+    }
+    if I::mask(&ahead) & lanes == 0 {
+        return 0;
+    }
     let mut hit = [0i32; N];
     for i in 0..N {
         let (inside, t, _, _) = moller_trumbore(tri, tvec, qvec, t_num, dir, i);
         hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
     }
-    I::mask(&hit)
+    I::mask(&hit) & lanes
+}
+
+/// Lane `i`'s `pvec = dir × e2` (as glam's cross product) and `det = e1 · pvec`, as
+/// Möller–Trumbore computes them.
+#[inline(always)]
+fn determinant<const N: usize>(
+    tri: &super::TriAccel,
+    dir: &[[f32; N]; 3],
+    i: usize,
+) -> ([f32; 3], f32) {
+    let (e1, e2) = (tri.e1, tri.e2);
+    let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
+    let px = dy * e2.z - e2.y * dz;
+    let py = dz * e2.x - e2.z * dx;
+    let pz = dx * e2.y - e2.x * dy;
+    ([px, py, pz], e1.x * px + e1.y * py + e1.z * pz)
 }
 
 /// Lane `i` of Möller–Trumbore exactly as `geometry::intersect_triangle` computes it, with the
@@ -161,13 +280,8 @@ pub(super) fn moller_trumbore<const N: usize>(
     dir: &[[f32; N]; 3],
     i: usize,
 ) -> (bool, f32, f32, f32) {
-    let (e1, e2) = (tri.e1, tri.e2);
     let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
-    // pvec = dir × e2, as glam's cross product.
-    let px = dy * e2.z - e2.y * dz;
-    let py = dz * e2.x - e2.z * dx;
-    let pz = dx * e2.y - e2.x * dy;
-    let det = e1.x * px + e1.y * py + e1.z * pz;
+    let ([px, py, pz], det) = determinant(tri, dir, i);
     let inv_det = 1.0 / det;
     let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
     let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;

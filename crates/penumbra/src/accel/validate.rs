@@ -65,62 +65,6 @@ pub(super) fn validate(bvh: &Bvh, geometry: &Geometry) -> Result<(), String> {
             geometry.len()
         ));
     }
-    validate_wide(bvh, geometry)
-}
-
-/// The wide tree: every wide node reached once, no deeper than the traversal stack allows,
-/// every leaf slot in exactly one leaf child, and every child's box holding its triangles or
-/// its own children's boxes.
-fn validate_wide(bvh: &Bvh, geometry: &Geometry) -> Result<(), String> {
-    let mut reached = vec![false; bvh.wide.len()];
-    let mut slots = vec![false; bvh.tris.len()];
-    let mut stack = vec![(0usize, 0usize, bvh.nodes[0].bounds())];
-    while let Some((i, depth, parent)) = stack.pop() {
-        let node = bvh
-            .wide
-            .get(i)
-            .ok_or(format!("wide node {i} out of range"))?;
-        if std::mem::replace(&mut reached[i], true) || depth >= STACK_SIZE {
-            return Err(format!("wide node {i} reached twice or too deep"));
-        }
-        let used = node.used_mask();
-        if used == 0 || used & (used + 1) != 0 {
-            return Err(format!("wide node {i}: unused children before used ones"));
-        }
-        for lane in 0..used.count_ones() as usize {
-            let (child, count) = node.child(lane);
-            let (lo, hi) = node.bounds(lane);
-            let bounds = crate::math::Aabb {
-                min: lo.into(),
-                max: hi.into(),
-            };
-            if parent.union(bounds) != parent {
-                return Err(format!(
-                    "wide node {i} child {lane} sticks out of its parent"
-                ));
-            }
-            if count == 0 {
-                stack.push((child as usize, depth + 1, bounds));
-                continue;
-            }
-            let (first, end) = (child as usize, child as usize + count as usize);
-            for k in first..end {
-                let slot = slots
-                    .get_mut(k)
-                    .ok_or(format!("wide leaf slot {k} out of range"))?;
-                if std::mem::replace(slot, true) {
-                    return Err(format!("slot {k} in two wide leaves"));
-                }
-                let corners = geometry.corners(bvh.prim_ids[k] as usize);
-                if !corners.into_iter().all(|p| bounds.contains(p)) {
-                    return Err(format!("wide node {i} child {lane} does not hold slot {k}"));
-                }
-            }
-        }
-    }
-    if reached.iter().any(|r| !r) || slots.iter().any(|s| !s) {
-        return Err("a wide node or a slot is unreachable".into());
-    }
     Ok(())
 }
 

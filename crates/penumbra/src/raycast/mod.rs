@@ -49,6 +49,7 @@ mod queries;
 mod run;
 mod traverse;
 mod watertight;
+mod wide;
 
 #[cfg(test)]
 mod tests;

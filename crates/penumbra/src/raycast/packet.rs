@@ -18,7 +18,7 @@ use glam::Vec3;
 
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
 use super::watertight::{EdgeRule, PreparedRay};
-use crate::accel::wide::WIDTH;
+use super::wide::WIDTH;
 use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray and the unit normal of its triangle.

@@ -18,7 +18,7 @@ use glam::{Vec3, Vec3A};
 use super::closest::closest_on_triangle;
 use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
-use crate::accel::wide::{collapse, WideNode, WIDTH};
+use super::wide::{collapse, WideNode, WIDTH};
 use crate::accel::{Bvh, BvhNode};
 use crate::geometry::Geometry;
 use crate::simd::prefetch;

@@ -59,6 +59,16 @@ impl WideNode {
         self.count[lane] != UNUSED
     }
 
+    /// The used children, bit `i` for child `i`.
+    #[inline(always)]
+    pub fn used_mask(&self) -> u32 {
+        let mut used = 0;
+        for (i, &count) in self.count.iter().enumerate() {
+            used |= u32::from(count != UNUSED) << i;
+        }
+        used
+    }
+
     /// The box of child `lane` as its smallest and largest corners.
     #[inline(always)]
     pub fn bounds(&self, lane: usize) -> ([f32; 3], [f32; 3]) {
@@ -92,11 +102,10 @@ impl WideNode {
         let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
         let near = x0.max(y0).max(z0).max(Vec4::splat(t_min));
         let far = (x1.min(y1).min(z1) * exit_scale).min(Vec4::splat(t_max));
-        let mut used = 0;
-        for (i, &count) in self.count.iter().enumerate() {
-            used |= u32::from(count != UNUSED) << i;
-        }
-        (near.cmple(far).bitmask() & used, near.to_array())
+        (
+            near.cmple(far).bitmask() & self.used_mask(),
+            near.to_array(),
+        )
     }
 }
 
@@ -135,12 +144,19 @@ pub(crate) fn collapse(
     leaf_max: u32,
     leaf: &mut impl FnMut(u32, u32) -> u32,
 ) -> Vec<WideNode> {
-    let mut wide = Vec::new();
     if nodes.is_empty() {
-        return wide;
+        return Vec::new();
     }
     let slots = subtree_slots(nodes);
     let splits = |k: u32| nodes[k as usize].count() == 0 && slots[k as usize].1 > leaf_max;
+    // Each wide node holds at least one binary node that splits: reserving that many never
+    // grows the vector (a copy of it all) and costs only address space, as untouched pages
+    // are never made resident; the excess is returned at the end.
+    let bound = (0..nodes.len() as u32)
+        .filter(|&k| splits(k))
+        .count()
+        .max(1);
+    let mut wide = Vec::with_capacity(bound);
     wide.push(WideNode::EMPTY);
     // Wide nodes to fill: (wide index, the binary node whose subtree it holds).
     let mut todo = vec![(0usize, 0u32)];
@@ -182,6 +198,7 @@ pub(crate) fn collapse(
         }
         wide[w] = node;
     }
+    wide.shrink_to_fit();
     wide
 }
 

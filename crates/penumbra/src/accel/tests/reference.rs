@@ -5,7 +5,7 @@
 //! order.
 
 use super::*;
-use crate::accel::build::{assemble, node};
+use crate::accel::build::node;
 use crate::math::Aabb;
 
 #[derive(Clone, Copy)]
@@ -40,7 +40,11 @@ pub(super) fn reference_build(geometry: &Geometry) -> Bvh {
         .iter()
         .map(|&i| accel(geometry.corners(i as usize)))
         .collect();
-    assemble(nodes, tris, prim_ids)
+    Bvh {
+        nodes,
+        tris,
+        prim_ids,
+    }
 }
 
 fn bounds_of(prims: &[RefPrim]) -> (Aabb, Aabb) {
