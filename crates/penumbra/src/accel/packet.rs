@@ -1,11 +1,10 @@
 //! Shadow-ray packets: segments that share their origin (a shading point and the N×N samples
-//! of its lights) traced together, `N` lanes at a time, and the lane kernels that the packets
-//! (here, in `wide_packet` and in `closest`) share: the slab test and Möller–Trumbore.
+//! of its lights) traced together through the BVH, `N` lanes at a time.
 //!
-//! A lane loop runs for all lanes of a packet at once, which the compiler turns into vector
-//! instructions (`crate::simd` compiles this file's code once per instruction set and picks one
-//! at run time). A lane leaves the packet at its first occluder; the packet stops when no lane
-//! is left.
+//! Each node is fetched once per packet and its slab test runs for all lanes in one loop, which
+//! the compiler turns into vector instructions (`crate::simd` compiles this file's code once
+//! per instruction set and picks one at run time). A lane leaves the packet at its first occluder;
+//! the packet stops when no lane is left.
 //!
 //! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
 //! operation for operation (the same products, sums and comparisons in the same order, no
