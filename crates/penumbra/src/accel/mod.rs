@@ -25,6 +25,7 @@ use crate::simd::{dispatch, simd_path, SimdPath};
 mod build;
 mod closest;
 mod packet;
+mod segments;
 mod split;
 mod traverse;
 mod validate;
@@ -32,6 +33,7 @@ mod validate;
 #[cfg(test)]
 mod tests;
 
+pub use segments::Segments;
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at
@@ -257,6 +259,34 @@ impl Bvh {
             bvh: self,
             origin,
             ends,
+            t_max,
+            blocked,
+        };
+        dispatch(path, kernel);
+    }
+
+    /// Like [`Bvh::occlude_from`] for segments with origins of their own: each segment `i`
+    /// of `segments` not yet `blocked` becomes blocked when a triangle meets it for
+    /// some `t` in `(0, t_max)`, as [`Bvh::occluded`] on that ray would say. Consecutive
+    /// segments are traced together, a SIMD vector's width at a time, so they should run
+    /// close to each other: the segments from a few neighbouring shading points to one light
+    /// sample, say.
+    pub fn occlude_segments(&self, segments: Segments, t_max: f32, blocked: &mut [bool]) {
+        self.occlude_segments_on(simd_path(), segments, t_max, blocked);
+    }
+
+    /// [`Bvh::occlude_segments`] on a given SIMD path (the portable one when `path` is not
+    /// supported), so that tests can run every path the machine has.
+    pub fn occlude_segments_on(
+        &self,
+        path: SimdPath,
+        segments: Segments,
+        t_max: f32,
+        blocked: &mut [bool],
+    ) {
+        let kernel = segments::OccludeSegments {
+            bvh: self,
+            segments,
             t_max,
             blocked,
         };

@@ -18,6 +18,12 @@ use super::{traverse, Bvh, BvhNode, STACK_SIZE};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
 
+/// Trees of at least this many nodes (2 MiB of them: more than a core's L2 cache) have the
+/// packets prefetch what lies below the children they test. On smaller trees the nodes stay
+/// cached and the prefetches are pure cost (+5 % on the seed's room); on the 1M-triangle room
+/// they save 3 %.
+const PREFETCH_MIN_NODES: usize = 64 * 1024;
+
 /// [`Bvh::occlude_from`] as a [`Kernel`]: the segments in packets of `N` lanes.
 pub(super) struct Occlude<'a> {
     pub(super) bvh: &'a Bvh,
@@ -44,6 +50,7 @@ impl Kernel for Occlude<'_> {
         if bvh.nodes.is_empty() {
             return;
         }
+        let deep = bvh.nodes.len() >= PREFETCH_MIN_NODES;
         for (ends, blocked) in ends.chunks(N).zip(blocked.chunks_mut(N)) {
             let live = blocked.iter().filter(|&&b| !b).count();
             if live == 0 {
@@ -55,8 +62,10 @@ impl Kernel for Occlude<'_> {
                         *b = traverse::occluded(bvh, &Ray::new(origin, end - origin), 0.0, t_max);
                     }
                 }
+            } else if deep {
+                occlude_packet::<N, I, true>(bvh, origin, ends, t_max, blocked);
             } else {
-                occlude_packet::<N, I>(bvh, origin, ends, t_max, blocked);
+                occlude_packet::<N, I, false>(bvh, origin, ends, t_max, blocked);
             }
         }
     }
@@ -65,7 +74,7 @@ impl Kernel for Occlude<'_> {
 /// Marks `blocked[i]` for each segment from `origin` to `ends[i]` (`ends.len() <= N`) that is
 /// not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-pub(super) fn occlude_packet<const N: usize, I: Isa>(
+pub(super) fn occlude_packet<const N: usize, I: Isa, const PREFETCH: bool>(
     bvh: &Bvh,
     origin: Vec3,
     ends: &[Vec3],
@@ -118,6 +127,10 @@ pub(super) fn occlude_packet<const N: usize, I: Isa>(
                 &bvh.nodes[node.first as usize],
                 &bvh.nodes[node.first as usize + 1],
             );
+            if PREFETCH {
+                prefetch_below(bvh, l);
+                prefetch_below(bvh, r);
+            }
             let ((ml, nl), (mr, nr)) = (
                 slab::<N, I>(l, &o, &inv, 0.0, &far),
                 slab::<N, I>(r, &o, &inv, 0.0, &far),
@@ -157,6 +170,18 @@ pub(super) fn occlude_packet<const N: usize, I: Isa>(
     }
     for (i, b) in blocked.iter_mut().enumerate() {
         *b |= active & (1 << i) == 0;
+    }
+}
+
+/// Starts loading what a visit of `node` reads first (its children, or its first
+/// triangles), so that on deep trees the loads overlap the box tests of `node` and its sibling.
+#[inline(always)]
+fn prefetch_below(bvh: &Bvh, node: &BvhNode) {
+    if node.is_leaf() {
+        crate::simd::prefetch(&bvh.tris[node.first as usize]);
+    } else {
+        crate::simd::prefetch(&bvh.nodes[node.first as usize]);
+        crate::simd::prefetch(&bvh.nodes[node.first as usize + 1]);
     }
 }
 

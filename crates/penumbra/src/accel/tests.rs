@@ -138,6 +138,19 @@ fn assert_from_agrees(
     }
 }
 
+/// The coordinates of `points`, by axis.
+fn by_axis(points: &[Vec3]) -> [Vec<f32>; 3] {
+    [0, 1, 2].map(|a| points.iter().map(|p| p[a]).collect())
+}
+
+/// The segments from `o` to `e`, given by axis.
+fn segments<'a>(o: &'a [Vec<f32>; 3], e: &'a [Vec<f32>; 3]) -> Segments<'a> {
+    Segments {
+        origin: [0, 1, 2].map(|a| &o[a][..]),
+        end: [0, 1, 2].map(|a| &e[a][..]),
+    }
+}
+
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
     let expected: Vec<bool> = ends
         .iter()
@@ -148,6 +161,12 @@ fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t
             occluded
         })
         .collect();
+    // The same segments reversed: origins of their own, one shared end.
+    let reversed: Vec<bool> = ends
+        .iter()
+        .map(|&end| occluded_brute_force(g, &Ray::new(end, origin - end), 0.0, t_max))
+        .collect();
+    let shared = vec![origin; ends.len()];
     let mut mask: Vec<bool> = (0..ends.len()).map(|i| i % 2 == 0).collect();
     bvh.occluded_from(origin, ends, t_max, &mut mask);
     assert_eq!(mask, expected, "occluded_from from {origin}");
@@ -159,14 +178,18 @@ fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t
                 .collect();
             let mut blocked = start.clone();
             bvh.occlude_from_on(path, origin, ends, t_max, &mut blocked);
+            let (mut forward, mut backward) = (start.clone(), start.clone());
+            let (from, to) = (by_axis(&shared), by_axis(ends));
+            bvh.occlude_segments_on(path, segments(&from, &to), t_max, &mut forward);
+            bvh.occlude_segments_on(path, segments(&to, &from), t_max, &mut backward);
             for i in 0..ends.len() {
-                assert_eq!(
-                    blocked[i],
-                    start[i] || expected[i],
+                let why = format!(
                     "{path:?}: segment {origin} → {} (blocked from the start: {})",
-                    ends[i],
-                    start[i]
+                    ends[i], start[i]
                 );
+                assert_eq!(blocked[i], start[i] || expected[i], "{why}");
+                assert_eq!(forward[i], start[i] || expected[i], "segments, {why}");
+                assert_eq!(backward[i], start[i] || reversed[i], "reversed, {why}");
             }
         }
     }

@@ -4,10 +4,12 @@
 //!
 //! An [`Integrator`] is made once per render from the world and the shading settings: it
 //! plans every light (its emission weight under the light model and, for fixed grids, its
-//! sample points). At a shading point, [`Integrator::shade`] gathers every light sample that
-//! could contribute, tests them together with the shared-origin occlusion query, and sums the
-//! unoccluded ones in light and sample order.
+//! sample points). [`Integrator::shade_batch`] shades a few neighbouring points: at each it
+//! gathers every light sample that could contribute, traces the shadow rays of all of them
+//! (see `batch` for how they are grouped), and sums each point's unoccluded samples in light
+//! and sample order.
 
+mod batch;
 mod model;
 mod plan;
 
@@ -18,8 +20,9 @@ use glam::Vec3;
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
-use crate::simd::{dispatch, simd_path, Isa, Kernel, SimdPath};
+use crate::simd::{simd_path, SimdPath};
 use crate::world::World;
+pub(crate) use batch::BatchScratch;
 use model::{Lanes, Lobe, Model, Physical, Seed};
 use plan::{plan, Directions, LightPlan, Points, Source};
 
@@ -89,78 +92,76 @@ pub(crate) struct Scratch {
     back: Vec<bool>,
 }
 
+/// A shading point between [`Integrator::prepare`] and its shadow rays.
+struct Point {
+    /// The ambient term.
+    ambient: Rgb,
+    /// Where shadow rays toward samples on the viewer's side of the surface start, and where
+    /// those toward the other side start.
+    front: Vec3,
+    back: Vec3,
+    /// The number of shadow rays the point needs.
+    traced: u64,
+}
+
+impl Point {
+    /// The ambient term plus every unblocked sample's light, in light and sample order.
+    #[inline(always)]
+    fn radiance(&self, s: &Scratch) -> Rgb {
+        let mut radiance = self.ambient;
+        for (i, &blocked) in s.blocked.iter().enumerate() {
+            if !blocked {
+                radiance += Vec3::new(s.r[i], s.g[i], s.b[i]);
+            }
+        }
+        radiance
+    }
+}
+
 /// Direct lighting for one render: the world, the shading settings and the planned lights.
 pub(crate) struct Integrator<'w> {
     world: &'w World,
     settings: ShadingSettings,
     lights: Vec<LightPlan>,
+    /// Whether points bundle their shadow rays (see `batch`).
+    bundles: bool,
     path: SimdPath,
-}
-
-/// [`Integrator::shade`] as a [`Kernel`], to be compiled per instruction set.
-struct Shade<'a, 'w> {
-    integrator: &'a Integrator<'w>,
-    ray: &'a Ray,
-    surface: &'a Surface,
-    rng: &'a mut Rng,
-    scratch: &'a mut Scratch,
-}
-
-impl Kernel for Shade<'_, '_> {
-    type Output = (Rgb, u64);
-
-    #[inline(always)]
-    fn run<const N: usize, I: Isa>(self) -> (Rgb, u64) {
-        self.integrator
-            .shade_lanes(self.ray, self.surface, self.rng, self.scratch)
-    }
 }
 
 impl<'w> Integrator<'w> {
     /// Plans every light of `world` for `settings`.
     pub(crate) fn new(world: &'w World, settings: ShadingSettings) -> Self {
         let physical = settings.light_model == LightModel::Physical;
-        let lights = world
+        let lights: Vec<LightPlan> = world
             .lights()
             .iter()
             .map(|light| plan(light, &settings, physical))
             .collect();
+        let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
         Self {
             world,
             settings,
             lights,
+            bundles: batch::bundles(samples, world.accel().node_count()),
             path: simd_path(),
         }
     }
 
-    /// The radiance leaving `surface` back along `ray`, and the number of shadow rays traced.
-    /// `rng` supplies the jitter of jittered area lights. Runs compiled for this process's
-    /// SIMD path, so that the light-sample lanes use its vector width.
-    pub(crate) fn shade(
-        &self,
-        ray: &Ray,
-        surface: &Surface,
-        rng: &mut Rng,
-        scratch: &mut Scratch,
-    ) -> (Rgb, u64) {
-        let kernel = Shade {
-            integrator: self,
-            ray,
-            surface,
-            rng,
-            scratch,
-        };
-        dispatch(self.path, kernel)
+    /// How many points [`Integrator::shade_batch`] should be given at a time: a few pixels'
+    /// worth when they bundle their shadow rays, else one (each may trace many thousands).
+    pub(crate) fn batch_points(&self) -> usize {
+        if self.bundles {
+            batch::BUNDLE_POINTS
+        } else {
+            1
+        }
     }
 
+    /// Everything of shading a point but its shadow rays: the light samples gathered
+    /// in `scratch` (those that cannot contribute already blocked), the origins of the shadow
+    /// rays and the ambient term.
     #[inline(always)]
-    fn shade_lanes(
-        &self,
-        ray: &Ray,
-        surface: &Surface,
-        rng: &mut Rng,
-        scratch: &mut Scratch,
-    ) -> (Rgb, u64) {
+    fn prepare(&self, ray: &Ray, surface: &Surface, rng: &mut Rng, scratch: &mut Scratch) -> Point {
         let world = self.world;
         let x = surface.position;
         let (n_geom, n) = surface.facing(ray.direction);
@@ -187,18 +188,13 @@ impl<'w> Integrator<'w> {
             LightModel::Phong => self.gather::<Seed>(x, n_geom, &lobe, rng, scratch),
             LightModel::Physical => self.gather::<Physical>(x, n_geom, &lobe, rng, scratch),
         }
-        let traced = scratch.blocked.iter().filter(|&&b| !b).count() as u64;
         let offset = SHADOW_OFFSET * n_geom.abs().dot(surface.error);
-        self.occlude(x + offset * n_geom, x + offset * (-n_geom), scratch);
-
-        let mut radiance = tex * material.ambient * self.settings.ambient;
-        let s = &*scratch;
-        for (i, &blocked) in s.blocked.iter().enumerate() {
-            if !blocked {
-                radiance += Vec3::new(s.r[i], s.g[i], s.b[i]);
-            }
+        Point {
+            ambient: tex * material.ambient * self.settings.ambient,
+            front: x + offset * n_geom,
+            back: x + offset * (-n_geom),
+            traced: scratch.blocked.iter().filter(|&&b| !b).count() as u64,
         }
-        (radiance, traced)
     }
 
     /// Fills `scratch` with every sample of every light, in light and sample order.

@@ -104,6 +104,16 @@ impl Directions {
 }
 
 /// How `light` is sampled and weighted in a render with `settings`.
+impl LightPlan {
+    /// The number of samples (shadow rays) per shading point.
+    pub(super) fn sample_count(&self) -> u64 {
+        match &self.source {
+            Source::Fixed(points) => points.len() as u64,
+            Source::Jittered(light) => u64::from(light.sample_count()),
+        }
+    }
+}
+
 pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) -> LightPlan {
     match light {
         Light::Point(pl) => {

@@ -10,7 +10,8 @@ use super::aov::{self, AovContext, AovPixel};
 use super::RenderSettings;
 use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
-use crate::integrator::{Integrator, Scratch, CAMERA_T_MIN};
+use crate::geometry::Surface;
+use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
 use crate::math::{Ray, Rgb};
 use crate::sampling::{jittered_offset, Rng};
 use crate::world::World;
@@ -36,12 +37,17 @@ pub(super) struct Job<'a> {
 /// Buffers one worker reuses from one batch of pixels to the next.
 #[derive(Default)]
 pub(super) struct Buffers {
-    scratch: Scratch,
+    scratch: BatchScratch,
     /// Each camera ray's direction, its sample's generator (after the pixel jitter, ready for
     /// the light jitter) and its hit.
     dirs: Vec<Vec3>,
     rngs: Vec<Rng>,
     hits: Vec<Option<Hit>>,
+    /// The rays that hit, their surfaces and generators, and what shading them gave.
+    rays: Vec<Ray>,
+    surfaces: Vec<Surface>,
+    hit_rngs: Vec<Rng>,
+    shaded: Vec<(Rgb, u64)>,
 }
 
 impl Job<'_> {
@@ -86,6 +92,10 @@ impl Job<'_> {
             dirs,
             rngs,
             hits,
+            rays,
+            surfaces,
+            hit_rngs,
+            shaded,
         } = buffers;
         dirs.clear();
         rngs.clear();
@@ -110,30 +120,50 @@ impl Job<'_> {
             .accel()
             .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
 
+        rays.clear();
+        surfaces.clear();
+        hit_rngs.clear();
+        for ((hit, &dir), rng) in hits.iter().zip(dirs.iter()).zip(rngs.iter()) {
+            if let Some(hit) = hit {
+                rays.push(Ray::new(eye, dir));
+                surfaces.push(self.world.surface(hit));
+                hit_rngs.push(rng.clone());
+            }
+        }
+        // One pixel can hold hours of work (65536 samples of a million shadow rays each): a
+        // cancelled render stops before the next few points are shaded, within milliseconds.
+        shaded.clear();
+        let step = self.integrator.batch_points();
+        for start in (0..rays.len()).step_by(step) {
+            if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return None;
+            }
+            let end = (start + step).min(rays.len());
+            self.integrator.shade_batch(
+                &rays[start..end],
+                &surfaces[start..end],
+                &mut hit_rngs[start..end],
+                scratch,
+                shaded,
+            );
+        }
+
         let mut shadow = 0;
+        let mut next = 0;
         for (pixel, x) in xs.enumerate() {
             let mut sum = Rgb::ZERO;
             let mut albedo = Rgb::ZERO;
-            for i in pixel * spp..(pixel + 1) * spp {
-                // One pixel can hold hours of work (65536 samples of a million shadow rays
-                // each): a cancelled render stops within one sample. One relaxed load costs
-                // nothing next to a sample.
-                if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                    return None;
-                }
-                match &hits[i] {
-                    Some(hit) => {
-                        let ray = Ray::new(eye, dirs[i]);
-                        let surface = self.world.surface(hit);
-                        if self.aovs.is_some() {
-                            albedo += aov::albedo(self.world, &surface);
-                        }
-                        let (c, rays) =
-                            self.integrator.shade(&ray, &surface, &mut rngs[i], scratch);
-                        sum += c;
-                        shadow += rays;
+            for hit in &hits[pixel * spp..(pixel + 1) * spp] {
+                if hit.is_some() {
+                    if self.aovs.is_some() {
+                        albedo += aov::albedo(self.world, &surfaces[next]);
                     }
-                    None => sum += settings.background,
+                    let (c, rays) = shaded[next];
+                    sum += c;
+                    shadow += rays;
+                    next += 1;
+                } else {
+                    sum += settings.background;
                 }
             }
             out.push(sum / spp as f32);

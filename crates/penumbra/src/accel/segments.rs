@@ -1,0 +1,306 @@
+//! Shadow-ray packets whose lanes have origins of their own: the segments from neighbouring
+//! shading points (the samples of a few adjacent pixels) to one light sample, traced together
+//! through the BVH, `N` lanes at a time.
+//!
+//! This is the other way to find coherence among shadow rays (Embree's renderers bundle
+//! them so): where [`super::packet`] fans out from one shading point toward the N×N samples
+//! of a light, these rays start a pixel apart and meet at a light point, so the finer the
+//! image, the closer they run. On deep trees (fine meshes) the bundles visit far fewer nodes
+//! than the fans, whose rays spread over the light's whole extent.
+//!
+//! Exactness: every lane runs the scalar Möller–Trumbore test of
+//! `geometry::intersect_triangle` operation for operation, its own `tvec`, `qvec` and `t`
+//! numerator included, so a lane is occluded exactly when [`Bvh::occluded`] says so; the box
+//! tests are conservative on the padded boxes and only prune.
+
+use glam::Vec3;
+
+use super::packet::{max, min};
+use super::{traverse, Bvh, BvhNode, TriAccel, STACK_SIZE};
+use crate::math::Ray;
+use crate::simd::{Isa, Kernel};
+
+/// Segments by coordinate: segment `i` runs from `(origin[0][i], origin[1][i], origin[2][i])`
+/// to `(end[0][i], end[1][i], end[2][i])`. All six slices have the same length.
+#[derive(Clone, Copy, Debug)]
+pub struct Segments<'a> {
+    /// The starting points' coordinates, by axis.
+    pub origin: [&'a [f32]; 3],
+    /// The end points' coordinates, by axis.
+    pub end: [&'a [f32]; 3],
+}
+
+impl<'a> Segments<'a> {
+    /// The number of segments.
+    pub fn len(&self) -> usize {
+        self.origin[0].len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Segment `i`'s origin and end.
+    fn get(&self, i: usize) -> (Vec3, Vec3) {
+        let point = |c: &[&[f32]; 3]| Vec3::new(c[0][i], c[1][i], c[2][i]);
+        (point(&self.origin), point(&self.end))
+    }
+
+    /// Segments `start .. start + len`.
+    fn range(&self, start: usize, len: usize) -> Segments<'a> {
+        let cut = |c: [&'a [f32]; 3]| c.map(|axis| &axis[start..start + len]);
+        Segments {
+            origin: cut(self.origin),
+            end: cut(self.end),
+        }
+    }
+}
+
+/// [`Bvh::occlude_segments`] as a [`Kernel`]: consecutive segments in packets of `N` lanes.
+pub(super) struct OccludeSegments<'a> {
+    pub(super) bvh: &'a Bvh,
+    pub(super) segments: Segments<'a>,
+    pub(super) t_max: f32,
+    pub(super) blocked: &'a mut [bool],
+}
+
+impl Kernel for OccludeSegments<'_> {
+    type Output = ();
+
+    /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let OccludeSegments {
+            bvh,
+            segments,
+            t_max,
+            blocked,
+        } = self;
+        let n = segments.len();
+        assert!(
+            segments
+                .origin
+                .iter()
+                .chain(&segments.end)
+                .all(|c| c.len() == n)
+                && blocked.len() == n,
+            "one origin, end and mask slot per segment"
+        );
+        if bvh.nodes.is_empty() {
+            return;
+        }
+        for (chunk, blocked) in blocked.chunks_mut(N).enumerate() {
+            let live = blocked.iter().filter(|&&b| !b).count();
+            if live == 0 {
+                continue;
+            }
+            let segments = segments.range(chunk * N, blocked.len());
+            if live * 4 <= N {
+                for (i, b) in blocked.iter_mut().enumerate() {
+                    if !*b {
+                        let (o, end) = segments.get(i);
+                        *b = traverse::occluded(bvh, &Ray::new(o, end - o), 0.0, t_max);
+                    }
+                }
+            } else {
+                occlude_packet::<N, I>(bvh, &segments, t_max, blocked);
+            }
+        }
+    }
+}
+
+/// A packet's rays by lane: origins, directions and inverse directions by axis.
+struct Lanes<const N: usize> {
+    origin: [[f32; N]; 3],
+    dir: [[f32; N]; 3],
+    inv: [[f32; N]; 3],
+}
+
+/// Marks `blocked[i]` for each segment `i` of `segments` (at most `N`) that is not blocked
+/// yet and that a triangle meets for `t` in `(0, t_max)`.
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn occlude_packet<const N: usize, I: Isa>(
+    bvh: &Bvh,
+    segments: &Segments,
+    t_max: f32,
+    blocked: &mut [bool],
+) {
+    let count = segments.len();
+    debug_assert!(N <= 32 && count > 0 && count <= N);
+    // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
+    let mut rays = Lanes {
+        origin: [[0.0; N]; 3],
+        dir: [[0.0; N]; 3],
+        inv: [[0.0; N]; 3],
+    };
+    for a in 0..3 {
+        let (o, e) = (segments.origin[a], segments.end[a]);
+        if count == N {
+            rays.origin[a].copy_from_slice(o);
+            for i in 0..N {
+                rays.dir[a][i] = e[i] - o[i];
+            }
+        } else {
+            for i in 0..N {
+                let k = i.min(count - 1);
+                rays.origin[a][i] = o[k];
+                rays.dir[a][i] = e[k] - o[k];
+            }
+        }
+    }
+    let mut active: u32 = 0;
+    for (i, &b) in blocked.iter().enumerate() {
+        active |= u32::from(!b) << i;
+    }
+    for a in 0..3 {
+        for i in 0..N {
+            rays.inv[a][i] = 1.0 / rays.dir[a][i];
+        }
+    }
+    let far = [t_max; N];
+
+    // As in the fans of `packet`: the child the first live lane enters first is visited
+    // first, the other waits on the stack with the lanes that entered it.
+    let mut stack = [(0u32, 0u32); STACK_SIZE];
+    let mut sp = 0;
+    let mut node = &bvh.nodes[0];
+    if slab::<N, I>(node, &rays, &far).0 & active == 0 {
+        return;
+    }
+    'nodes: loop {
+        if node.is_leaf() {
+            let first = node.first as usize;
+            for tri in &bvh.tris[first..first + node.count as usize] {
+                active &= !triangle::<N, I>(tri, &rays, t_max, active);
+                if active == 0 {
+                    break 'nodes;
+                }
+            }
+        } else {
+            let (l, r) = (
+                &bvh.nodes[node.first as usize],
+                &bvh.nodes[node.first as usize + 1],
+            );
+            let ((ml, nl), (mr, nr)) = (slab::<N, I>(l, &rays, &far), slab::<N, I>(r, &rays, &far));
+            let (ml, mr) = (ml & active, mr & active);
+            if ml != 0 && mr != 0 {
+                let lane = active.trailing_zeros() as usize;
+                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
+                    (l, node.first + 1, mr)
+                } else {
+                    (r, node.first, ml)
+                };
+                stack[sp] = (far, far_mask);
+                sp += 1;
+                node = near;
+                continue;
+            } else if ml != 0 {
+                node = l;
+                continue;
+            } else if mr != 0 {
+                node = r;
+                continue;
+            }
+        }
+        // The next waiting subtree that a lane still live entered.
+        loop {
+            if sp == 0 {
+                break 'nodes;
+            }
+            sp -= 1;
+            let (index, mask) = stack[sp];
+            if mask & active != 0 {
+                node = &bvh.nodes[index as usize];
+                break;
+            }
+        }
+    }
+    for (i, b) in blocked.iter_mut().enumerate() {
+        *b |= active & (1 << i) == 0;
+    }
+}
+
+/// The lanes (bit i for lane i) that enter the node's box within `(0, t_max[i])`, and each
+/// lane's entry distance. A box entered exactly at `t_max[i]` counts.
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn slab<const N: usize, I: Isa>(
+    node: &BvhNode,
+    rays: &Lanes<N>,
+    t_max: &[f32; N],
+) -> (u32, [f32; N]) {
+    let (o, inv) = (&rays.origin, &rays.inv);
+    let mut inside = [0i32; N];
+    let mut entry = [0.0; N];
+    for i in 0..N {
+        let (x0, x1) = (
+            (node.min[0] - o[0][i]) * inv[0][i],
+            (node.max[0] - o[0][i]) * inv[0][i],
+        );
+        let (y0, y1) = (
+            (node.min[1] - o[1][i]) * inv[1][i],
+            (node.max[1] - o[1][i]) * inv[1][i],
+        );
+        let (z0, z1) = (
+            (node.min[2] - o[2][i]) * inv[2][i],
+            (node.max[2] - o[2][i]) * inv[2][i],
+        );
+        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
+        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max[i]);
+        inside[i] = -((near <= far) as i32);
+        entry[i] = near;
+    }
+    (I::mask(&inside), entry)
+}
+
+/// The lanes of `lanes` (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`:
+/// per lane, `geometry::intersect_triangle`'s products and sums in its order (glam's `cross`
+/// and `dot` written out), no fused multiply-add.
+// The comparisons are written out, negations included, to keep the scalar test's answers for
+// NaN values (a NaN `b2` passes its two tests there, and must here).
+#[allow(
+    clippy::needless_range_loop,
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::manual_range_contains
+)]
+#[inline(always)]
+fn triangle<const N: usize, I: Isa>(
+    tri: &TriAccel,
+    rays: &Lanes<N>,
+    t_max: f32,
+    lanes: u32,
+) -> u32 {
+    let (v0, e1, e2) = (tri.v0, tri.e1, tri.e2);
+    let mut hit = [0i32; N];
+    for i in 0..N {
+        let (dx, dy, dz) = (rays.dir[0][i], rays.dir[1][i], rays.dir[2][i]);
+        // pvec = dir × e2, det = e1 · pvec.
+        let px = dy * e2.z - e2.y * dz;
+        let py = dz * e2.x - e2.z * dx;
+        let pz = dx * e2.y - e2.x * dy;
+        let det = e1.x * px + e1.y * py + e1.z * pz;
+        let inv_det = 1.0 / det;
+        // tvec = origin − v0, qvec = tvec × e1.
+        let tx = rays.origin[0][i] - v0.x;
+        let ty = rays.origin[1][i] - v0.y;
+        let tz = rays.origin[2][i] - v0.z;
+        let b1 = (tx * px + ty * py + tz * pz) * inv_det;
+        let qx = ty * e1.z - e1.y * tz;
+        let qy = tz * e1.x - e1.z * tx;
+        let qz = tx * e1.y - e1.x * ty;
+        let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
+        let t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv_det;
+        let inside = (det != 0.0)
+            & det.is_finite()
+            & (0.0 <= b1)
+            & (b1 <= 1.0)
+            & !(b2 < 0.0)
+            & !(b1 + b2 > 1.0);
+        hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
+    }
+    I::mask(&hit) & lanes
+}
