@@ -110,15 +110,21 @@ impl Kernel for ShadeBatch<'_, '_> {
             }
             blocked.clear();
             blocked.resize(slots, true);
-            for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
-                for (j, &e) in point.ends.iter().enumerate() {
-                    let slot = j * lanes + i;
-                    let o = if point.behind[j] { p.back } else { p.front };
-                    for a in 0..3 {
-                        origin[a][slot] = o[a];
-                        end[a][slot] = e[a];
+            {
+                // Plain slices, so that the loop keeps their addresses in registers.
+                let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[..]);
+                let [ex, ey, ez] = end.each_mut().map(|v| &mut v[..]);
+                let blocked = &mut blocked[..];
+                for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
+                    let (ends, behind) = (&point.ends[..], &point.behind[..point.ends.len()]);
+                    let was = &point.blocked[..ends.len()];
+                    for j in 0..ends.len() {
+                        let slot = j * lanes + i;
+                        let (o, e) = (if behind[j] { p.back } else { p.front }, ends[j]);
+                        (ox[slot], oy[slot], oz[slot]) = (o.x, o.y, o.z);
+                        (ex[slot], ey[slot], ez[slot]) = (e.x, e.y, e.z);
+                        blocked[slot] = was[j];
                     }
-                    blocked[slot] = point.blocked[j];
                 }
             }
             let segments = Segments {
