@@ -1,6 +1,8 @@
 //! Kernel benchmarks on the seed's room (`scenes/cornell.toml`): the shadow rays of one
 //! shading point (the 25 segments to its 5×5 light samples) traced as packets on every SIMD
-//! path this machine has, against the same segments traced one ray at a time; and camera
+//! path this machine has, against the same segments traced one ray at a time; the shadow rays
+//! of 64 neighbouring points (a patch of 8×8 pixels' worth) as fans and as bundles (one light
+//! sample, 16 or 8 points per packet: `Bvh::occlude_segments`); and camera
 //! rays through the closest-hit traversal, in packets of 16 sharing the camera's origin on
 //! every path, and one at a time.
 //!
@@ -13,7 +15,7 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, World};
+use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, Segments, World};
 
 /// The seed's room, built once.
 fn world() -> std::sync::Arc<World> {
@@ -72,6 +74,59 @@ fn bench_shadow(c: &mut Criterion) {
     group.finish();
 }
 
+/// The segments from 64 points of a small patch (8×8, a millimetre apart, under the middle of
+/// the light) to the 25 light samples, traced as fans (one packet kind per point) and as
+/// bundles (one light sample, neighbouring points per packet).
+fn bench_bundles(c: &mut Criterion) {
+    let world = world();
+    let bvh = world.accel();
+    let (_, ends) = shadow_setup(&world);
+    let origins: Vec<Vec3> = (0..64)
+        .map(|i| {
+            Vec3::new(
+                0.3 + 1e-3 * (i % 8) as f32,
+                1e-3,
+                -3.0 - 1e-3 * (i / 8) as f32,
+            )
+        })
+        .collect();
+    let t_max = 1.0 - 1e-4;
+    // Sample-major: the 64 segments toward sample j are consecutive.
+    let axis = |f: &dyn Fn(usize, usize) -> f32| -> Vec<f32> {
+        (0..ends.len() * 64).map(|k| f(k % 64, k / 64)).collect()
+    };
+    let from: [Vec<f32>; 3] = [0, 1, 2].map(|a| axis(&|i, _| origins[i][a]));
+    let to: [Vec<f32>; 3] = [0, 1, 2].map(|a| axis(&|_, j| ends[j][a]));
+    let mut group = c.benchmark_group("shadow_patch_64_points_x_25_segments");
+    for path in supported_paths() {
+        group.bench_function(format!("fans_{}", path.name()), |b| {
+            let mut blocked = vec![false; ends.len()];
+            b.iter(|| {
+                let mut occluded = 0;
+                for &o in &origins {
+                    blocked.fill(false);
+                    bvh.occlude_from_on(path, o, &ends, t_max, &mut blocked);
+                    occluded += blocked.iter().filter(|&&b| b).count();
+                }
+                black_box(occluded)
+            })
+        });
+        group.bench_function(format!("bundles_{}", path.name()), |b| {
+            let mut blocked = vec![false; from[0].len()];
+            let segments = Segments {
+                origin: [0, 1, 2].map(|a| &from[a][..]),
+                end: [0, 1, 2].map(|a| &to[a][..]),
+            };
+            b.iter(|| {
+                blocked.fill(false);
+                bvh.occlude_segments_on(path, segments, t_max, &mut blocked);
+                black_box(blocked.iter().filter(|&&b| b).count())
+            })
+        });
+    }
+    group.finish();
+}
+
 fn bench_camera(c: &mut Criterion) {
     let world = world();
     let camera = PinholeCamera::new(&world.cameras()[0].1, 64, 64);
@@ -112,5 +167,5 @@ fn bench_camera(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_shadow, bench_camera);
+criterion_group!(benches, bench_shadow, bench_bundles, bench_camera);
 criterion_main!(benches);

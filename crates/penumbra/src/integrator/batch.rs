@@ -110,20 +110,24 @@ impl Kernel for ShadeBatch<'_, '_> {
             }
             blocked.clear();
             blocked.resize(slots, true);
-            {
-                // Plain slices, so that the loop keeps their addresses in registers.
-                let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[..]);
-                let [ex, ey, ez] = end.each_mut().map(|v| &mut v[..]);
-                let blocked = &mut blocked[..];
+            // Row `j` holds the segments toward sample `j`, point by point: the writes are
+            // contiguous, and each row's slices are cut once so that the loop needs no bounds
+            // checks (every point has the same samples: the same lights).
+            for j in 0..samples {
+                let row = j * lanes..j * lanes + count;
+                let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[row.clone()]);
+                let [ex, ey, ez] = end.each_mut().map(|v| &mut v[row.clone()]);
+                let blocked = &mut blocked[row];
                 for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
-                    let (ends, behind) = (&point.ends[..], &point.behind[..point.ends.len()]);
-                    let was = &point.blocked[..ends.len()];
-                    for j in 0..ends.len() {
-                        let slot = j * lanes + i;
-                        let (o, e) = (if behind[j] { p.back } else { p.front }, ends[j]);
-                        (ox[slot], oy[slot], oz[slot]) = (o.x, o.y, o.z);
-                        (ex[slot], ey[slot], ez[slot]) = (e.x, e.y, e.z);
-                        blocked[slot] = was[j];
+                    let was = point.blocked[j];
+                    blocked[i] = was;
+                    if !was {
+                        let (o, e) = (
+                            if point.behind[j] { p.back } else { p.front },
+                            point.ends[j],
+                        );
+                        (ox[i], oy[i], oz[i]) = (o.x, o.y, o.z);
+                        (ex[i], ey[i], ez[i]) = (e.x, e.y, e.z);
                     }
                 }
             }
