@@ -44,11 +44,12 @@ pub(super) const STACK_SIZE: usize = 64;
 /// [`WIDTH`] children, once per level of the binary build's depth limit at most.
 const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
-/// Triangles of the largest binary subtree that the wide tree holds as one leaf (two groups).
-/// With four, half of the bunny's wide nodes had only two children, both leaves: a whole
-/// node load for two groups. At eight those subtrees are leaves, and the incoherent queries
-/// take 3–16 % less CPU time, the more the busier the caches (twelve gains nothing more).
-const LEAF_MAX: u32 = 2 * GROUP as u32;
+/// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
+/// With four, half of the bunny's four-wide nodes had only two children, both leaves: a
+/// whole node load for two groups. At eight those subtrees are leaves, and the incoherent
+/// queries took 3–16 % less CPU time, the more the busier the caches (twelve gained nothing
+/// more).
+const LEAF_MAX: u32 = GROUP as u32;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
@@ -213,7 +214,7 @@ impl Accel {
             }
             for (group, valid) in self.leaf(first, count) {
                 let rule = EdgeRule::Inclusive;
-                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
@@ -338,7 +339,7 @@ impl Accel {
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {
-                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;

@@ -62,16 +62,6 @@ impl WideNode {
         self.count[lane] != UNUSED
     }
 
-    /// The used children, bit `i` for child `i`.
-    #[inline(always)]
-    pub fn used_mask(&self) -> u32 {
-        let mut used = 0;
-        for (i, &count) in self.count.iter().enumerate() {
-            used |= u32::from(count != UNUSED) << i;
-        }
-        used
-    }
-
     /// The box of child `lane` as its smallest and largest corners.
     #[inline(always)]
     pub fn bounds(&self, lane: usize) -> ([f32; 3], [f32; 3]) {
@@ -106,10 +96,11 @@ impl WideNode {
             let far = [0, 1, 2].map(|a| max(t0[a], t1[a]));
             let near = max(max(max(near[0], near[1]), near[2]), t_min);
             let far = min(min(min(far[0], far[1]), far[2]) * exit_scale, t_max);
-            inside[i] = -i32::from(near <= far);
+            // One vector compare folds the unused lanes into the mask.
+            inside[i] = -i32::from((near <= far) & (self.count[i] != UNUSED));
             entry[i] = near;
         }
-        (I::mask(&inside) & self.used_mask(), entry)
+        (I::mask(&inside), entry)
     }
 }
 
