@@ -64,7 +64,7 @@ pub(crate) struct Accel {
     /// The eight-wide view of `bvh` that the ray queries traverse; a leaf child's index is
     /// its first group in `groups` and its count its number of triangles.
     wide: Vec<WideNode>,
-    /// The triangles of each leaf in groups of four.
+    /// The triangles of each leaf as one group of up to eight.
     groups: Vec<TriangleGroup>,
     /// Corners of the triangle in each leaf slot.
     tris: Vec<SoaTriangle>,
@@ -105,7 +105,8 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        // Each leaf's triangles as groups of four, the leaf child's index its first group.
+        // Each leaf's triangles as groups (one, at most eight triangles), the leaf child's
+        // index its first group.
         let mut groups = Vec::new();
         let wide = collapse(bvh.nodes(), LEAF_MAX, &mut |first, count| {
             let index = groups.len() as u32;
