@@ -119,6 +119,12 @@ impl Isa for Avx512 {
             // AVX-512 F/DQ; the 16 lanes are 64 readable bytes.
             return unsafe { mask16_avx512(lanes.as_ptr()) };
         }
+        #[cfg(target_arch = "x86_64")]
+        if N == 8 {
+            // SAFETY: `Avx512` is only used by `run_avx512`, which runs only on CPUs with
+            // AVX-512 F, hence AVX2; the 8 lanes are 32 readable bytes.
+            return unsafe { mask8_avx2(lanes.as_ptr()) };
+        }
         mask_by_lane(lanes)
     }
 }

@@ -1,7 +1,11 @@
 //! The closest point of a triangle to a point, by Voronoi regions (Ericson, "Real-Time
-//! Collision Detection", 2005, §5.1.5).
+//! Collision Detection", 2005, §5.1.5), and of the whole surface, by a walk of the binary tree
+//! that visits the nearer child first and skips boxes farther than the best point so far.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
+
+use super::traverse::{Accel, STACK_SIZE};
+use crate::accel::BvhNode;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
@@ -50,6 +54,87 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
     }
     // A degenerate triangle whose regions all failed (NaN input): its first corner.
     (a, 0.0, 0.0)
+}
+
+/// The closest point on the surface to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Nearest {
+    pub point: Vec3,
+    pub distance_sq: f32,
+    pub b1: f32,
+    pub b2: f32,
+    pub geometry: u32,
+    pub primitive: u32,
+    pub slot: u32,
+}
+
+impl Accel {
+    /// The closest point of any triangle to `p`, nearer boxes first; `None` for an empty
+    /// scene. Ties keep the first triangle found.
+    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
+        let nodes = self.bvh().nodes();
+        if nodes.is_empty() {
+            return None;
+        }
+        let mut best: Option<Nearest> = None;
+        let mut best_d = f32::INFINITY;
+        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+        let mut sp = 1;
+        let pa = Vec3A::from(p);
+        while sp > 0 {
+            sp -= 1;
+            let (index, d_box) = stack[sp];
+            if d_box > best_d {
+                continue;
+            }
+            let node = &nodes[index as usize];
+            let first = node.first() as usize;
+            if node.count() > 0 {
+                for i in first..first + node.count() as usize {
+                    let (q, b1, b2) =
+                        closest_on_triangle(p, self.slot(i).corners().map(Vec3::from));
+                    let d = (q - p).length_squared();
+                    if d < best_d {
+                        best_d = d;
+                        best = Some(Nearest {
+                            point: q,
+                            distance_sq: d,
+                            b1,
+                            b2,
+                            geometry: self.ids(i)[0],
+                            primitive: self.ids(i)[1],
+                            slot: i as u32,
+                        });
+                    }
+                }
+            } else {
+                let (l, r) = (first, first + 1);
+                let (dl, dr) = (
+                    box_distance_sq(&nodes[l], pa),
+                    box_distance_sq(&nodes[r], pa),
+                );
+                // Push the farther child first so the nearer one is visited next.
+                let (near, far) = if dl <= dr {
+                    ((l, dl), (r, dr))
+                } else {
+                    ((r, dr), (l, dl))
+                };
+                stack[sp] = (far.0 as u32, far.1);
+                stack[sp + 1] = (near.0 as u32, near.1);
+                sp += 2;
+            }
+        }
+        best
+    }
+}
+
+/// Squared distance from `p` to the node's box (0 inside).
+#[inline(always)]
+fn box_distance_sq(node: &BvhNode, p: Vec3A) -> f32 {
+    let lo = Vec3A::from(node.min_corner());
+    let hi = Vec3A::from(node.max_corner());
+    let d = (lo - p).max(p - hi).max(Vec3A::ZERO);
+    d.length_squared()
 }
 
 #[cfg(test)]

@@ -41,6 +41,7 @@
 //! touches the surface at a fold (a silhouette edge) it counts 0 or 2, so the parity stays
 //! right. See `watertight` for the rule.
 
+mod batch;
 mod closest;
 mod group;
 mod packet;

@@ -5,7 +5,7 @@
 //! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
 //! and share the watertight test's axis permutation (then every lane runs the same
 //! operations), else one ray at a time. Each wide node is fetched once per packet and its
-//! four boxes tested for all lanes, each lane bounded by its own closest hit so far.
+//! eight boxes tested for all lanes, each lane bounded by its own closest hit so far.
 //!
 //! Exactness: per lane the box test is the single-ray test (conservative, so it only
 //! prunes), the triangle test is `PreparedRay::hit` operation for operation (a lane whose
@@ -46,7 +46,8 @@ impl Kernel for CastPackets<'_> {
                 Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
                 None => {
                     for (ray, hit) in rays.iter().zip(hits) {
-                        *hit = ray.and_then(|r| accel.closest(&r, 0.0, f32::INFINITY, &mut stack));
+                        *hit = ray
+                            .and_then(|r| accel.closest::<I>(&r, 0.0, f32::INFINITY, &mut stack));
                     }
                 }
             }

@@ -4,9 +4,10 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::batch::{prepare, Counts, Listing, Occlusions};
 use super::packet::CastPackets;
 use super::run::{filled, run, QueryOptions, CHUNK};
-use super::traverse::{Accel, SlotHit, Stack};
+use super::traverse::SlotHit;
 use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::simd::{dispatch, simd_path};
@@ -63,28 +64,6 @@ pub struct ClosestPoints {
     pub primitive_uvs: Vec<[f32; 2]>,
     /// Unit normal `(v1 − v0) × (v2 − v0)` of its triangle.
     pub primitive_normals: Vec<[f32; 3]>,
-}
-
-/// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
-fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
-    PreparedRay::new(
-        Vec3::new(ray[0], ray[1], ray[2]),
-        Vec3::new(ray[3], ray[4], ray[5]),
-    )
-}
-
-/// The hits of one ray from `t = 0` on, one per crossing, sorted by `t` then ids.
-fn hits_of(accel: &Accel, ray: &[f32; 6], stack: &mut Stack, out: &mut Vec<SlotHit>) {
-    out.clear();
-    if let Some(r) = prepare(ray) {
-        accel.each_hit(&r, 0.0, stack, &mut |h| out.push(h));
-    }
-    out.sort_by(|a, b| {
-        a.crossing
-            .t
-            .total_cmp(&b.crossing.t)
-            .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
-    });
 }
 
 impl RaycastingScene {
@@ -148,11 +127,17 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let mut out = vec![false; rays.len()];
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
-        run(&pool, options, items, |(rays, occluded)| {
-            let mut stack = Stack::default();
-            for (ray, o) in rays.iter().zip(occluded) {
-                *o = prepare(ray).is_some_and(|r| accel.occluded(&r, tnear, tfar, &mut stack));
-            }
+        run(&pool, options, items, |(rays, out)| {
+            let range = (tnear, tfar);
+            dispatch(
+                simd_path(),
+                Occlusions {
+                    accel,
+                    rays,
+                    range,
+                    out,
+                },
+            );
         })?;
         Ok(out)
     }
@@ -168,15 +153,8 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let mut out = vec![0i32; rays.len()];
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
-        run(&pool, options, items, |(rays, counts)| {
-            let mut stack = Stack::default();
-            for (ray, count) in rays.iter().zip(counts) {
-                if let Some(r) = prepare(ray) {
-                    let mut n = 0i32;
-                    accel.each_hit(&r, 0.0, &mut stack, &mut |_| n = n.saturating_add(1));
-                    *count = n;
-                }
-            }
+        run(&pool, options, items, |(rays, out)| {
+            dispatch(simd_path(), Counts { accel, rays, out });
         })?;
         Ok(out)
     }
@@ -197,14 +175,7 @@ impl RaycastingScene {
                     if options.cancelled() {
                         return None;
                     }
-                    let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
-                    let mut stack = Stack::default();
-                    for ray in rays {
-                        hits_of(accel, ray, &mut stack, &mut one);
-                        counts.push(one.len() as u32);
-                        all.extend_from_slice(&one);
-                    }
-                    Some((counts, all))
+                    Some(dispatch(simd_path(), Listing { accel, rays }))
                 })
                 .collect()
         });

@@ -5,10 +5,9 @@
 use glam::{Mat3, Vec3};
 
 use super::packet::{CastPackets, ClosestHit};
-use super::traverse::Stack;
 use super::watertight::PreparedRay;
 use super::*;
-use crate::simd::{dispatch, supported_paths};
+use crate::simd::{dispatch, supported_paths, SimdPath};
 
 use super::tests_meshes::{icosphere, subdivided_cube, targets, MeshData};
 
@@ -39,10 +38,22 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
         .iter()
         .map(|r| PreparedRay::new(Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..])))
         .collect();
-    let mut stack = Stack::default();
+    // One ray per kernel run: never a packet, the single-ray query.
     let want: Vec<ClosestHit> = prepared
         .iter()
-        .map(|r| r.and_then(|r| accel.closest(&r, 0.0, f32::INFINITY, &mut stack)))
+        .map(|r| {
+            let mut hit = [None];
+            let rays = std::slice::from_ref(r);
+            dispatch(
+                SimdPath::Portable,
+                CastPackets {
+                    accel,
+                    rays,
+                    hits: &mut hit,
+                },
+            );
+            hit[0]
+        })
         .collect();
     for path in supported_paths() {
         let mut hits = vec![None; rays.len()];

@@ -1,7 +1,8 @@
-//! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit, every hit and
-//! the closest point, with the watertight triangle test and a conservative box test. The ray
-//! queries walk the four-wide view of the tree (`wide`), the closest-point query the binary
-//! tree.
+//! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit and every hit,
+//! with the watertight triangle test and a conservative box test, on the eight-wide view of
+//! the tree (`wide`); the closest-point query (`closest`) walks the binary tree. The ray
+//! queries are generic over the instruction set (`crate::simd::Isa`) and inlined into the
+//! kernels of `batch` and `packet`, which are compiled once per instruction set.
 //!
 //! The renderer's kernels (`accel::traverse`, `accel::packet`) are left as they are; this
 //! file reads the same nodes through crate-private accessors and keeps its own copy of the
@@ -15,13 +16,12 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::closest::closest_on_triangle;
 use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use super::wide::{collapse, WideNode, WIDTH};
-use crate::accel::{Bvh, BvhNode};
+use crate::accel::Bvh;
 use crate::geometry::Geometry;
-use crate::simd::prefetch;
+use crate::simd::{prefetch, Isa};
 
 /// `1 + 2⁻¹⁶`: see [`tie_bound`].
 const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
@@ -38,17 +38,18 @@ pub(super) fn tie_bound(t_max: f32) -> f32 {
 }
 
 /// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
-const STACK_SIZE: usize = 64;
+pub(super) const STACK_SIZE: usize = 64;
 
 /// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
 /// [`WIDTH`] children, once per level of the binary build's depth limit at most.
 const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
-/// Triangles of the largest binary subtree that the wide tree holds as one leaf (two groups).
-/// With four, half of the bunny's wide nodes had only two children, both leaves: a whole
-/// node load for two groups. At eight those subtrees are leaves, and the incoherent queries
-/// take 3–16 % less CPU time, the more the busier the caches (twelve gains nothing more).
-const LEAF_MAX: u32 = 2 * GROUP as u32;
+/// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
+/// With four, half of the bunny's four-wide nodes had only two children, both leaves: a
+/// whole node load for two groups. At eight those subtrees are leaves, and the incoherent
+/// queries took 3–16 % less CPU time, the more the busier the caches (twelve gained nothing
+/// more).
+const LEAF_MAX: u32 = GROUP as u32;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
@@ -60,10 +61,10 @@ const EPS: f32 = f32::EPSILON * 0.5;
 #[derive(Debug, Default)]
 pub(crate) struct Accel {
     bvh: Bvh,
-    /// The four-wide view of `bvh` that the ray queries traverse; a leaf child's index is
+    /// The eight-wide view of `bvh` that the ray queries traverse; a leaf child's index is
     /// its first group in `groups` and its count its number of triangles.
     wide: Vec<WideNode>,
-    /// The triangles of each leaf in groups of four.
+    /// The triangles of each leaf as one group of up to eight.
     groups: Vec<TriangleGroup>,
     /// Corners of the triangle in each leaf slot.
     tris: Vec<SoaTriangle>,
@@ -80,18 +81,6 @@ pub(crate) struct SlotHit {
     /// Primitive id within the geometry.
     pub primitive: u32,
     /// Leaf slot, for [`Accel::normal`].
-    pub slot: u32,
-}
-
-/// The closest point on the surface to a query point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Nearest {
-    pub point: Vec3,
-    pub distance_sq: f32,
-    pub b1: f32,
-    pub b2: f32,
-    pub geometry: u32,
-    pub primitive: u32,
     pub slot: u32,
 }
 
@@ -116,7 +105,8 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        // Each leaf's triangles as groups of four, the leaf child's index its first group.
+        // Each leaf's triangles as groups (one, at most eight triangles), the leaf child's
+        // index its first group.
         let mut groups = Vec::new();
         let wide = collapse(bvh.nodes(), LEAF_MAX, &mut |first, count| {
             let index = groups.len() as u32;
@@ -151,6 +141,16 @@ impl Accel {
         unit_normal(&self.tris[slot as usize].corners())
     }
 
+    /// The binary tree.
+    pub(super) fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// Geometry id and primitive id of the triangle in leaf slot `slot`.
+    pub(super) fn ids(&self, slot: usize) -> [u32; 2] {
+        self.ids[slot]
+    }
+
     /// The corners of scene triangle slot `slot` (leaf order).
     pub(super) fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
@@ -158,14 +158,15 @@ impl Accel {
 
     /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive, and the
     /// unit normal of its triangle (as [`Accel::normal`] gives it).
-    pub fn closest(
+    #[inline(always)]
+    pub fn closest<I: Isa>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
         t_max: f32,
         stack: &mut Stack,
     ) -> Option<(SlotHit, Vec3)> {
-        self.first_hit::<false>(ray, t_min, t_max, stack)
+        self.first_hit::<false, I>(ray, t_min, t_max, stack)
             .map(|(i, group, c)| {
                 let normal = unit_normal(&group.corners(i - group.first as usize));
                 (self.slot_hit(i, c), normal)
@@ -174,15 +175,23 @@ impl Accel {
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
     /// inclusive; stops at the first.
-    pub fn occluded(&self, ray: &PreparedRay, t_min: f32, t_max: f32, stack: &mut Stack) -> bool {
-        self.first_hit::<true>(ray, t_min, t_max, stack).is_some()
+    #[inline(always)]
+    pub fn occluded<I: Isa>(
+        &self,
+        ray: &PreparedRay,
+        t_min: f32,
+        t_max: f32,
+        stack: &mut Stack,
+    ) -> bool {
+        self.first_hit::<true, I>(ray, t_min, t_max, stack)
+            .is_some()
     }
 
     /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
     /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
     /// first hit found. Returns the leaf slot, its group and the crossing.
     #[inline(always)]
-    fn first_hit<const ANY: bool>(
+    fn first_hit<const ANY: bool, I: Isa>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
@@ -200,13 +209,13 @@ impl Accel {
             }
             if count == 0 {
                 let node = &self.wide[first as usize];
-                let (mask, near) = node.enter(&o, &inv, t_min, bound, EXIT_SCALE);
+                let (mask, near) = node.enter::<I>(&o, &inv, t_min, bound, EXIT_SCALE);
                 stack.push_children(self, node, mask, &near, !ANY);
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {
                 let rule = EdgeRule::Inclusive;
-                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
@@ -289,14 +298,15 @@ impl Accel {
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
     /// per crossing of the surface), in traversal order.
-    pub fn each_hit(
+    #[inline(always)]
+    pub fn each_hit<I: Isa>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        self.visit(
+        self.visit::<I>(
             ray,
             t_min,
             f32::INFINITY,
@@ -310,7 +320,8 @@ impl Accel {
     }
 
     /// Visits the hits with `t` in `[t_min, t_max]` under `rule` until `f` returns false.
-    fn visit(
+    #[inline(always)]
+    fn visit<I: Isa>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
@@ -324,12 +335,12 @@ impl Accel {
         while let Some((first, count, _)) = stack.pop() {
             if count == 0 {
                 let node = &self.wide[first as usize];
-                let (mask, near) = node.enter(&o, &inv, t_min, t_max, EXIT_SCALE);
+                let (mask, near) = node.enter::<I>(&o, &inv, t_min, t_max, EXIT_SCALE);
                 stack.push_children(self, node, mask, &near, false);
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {
-                let hits = ray.hit_group(group, valid, &self.tris, t_min, t_max, rule);
+                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
@@ -341,64 +352,6 @@ impl Accel {
                 }
             }
         }
-    }
-
-    /// The closest point of any triangle to `p`, nearer boxes first; `None` for an empty
-    /// scene. Ties keep the first triangle found.
-    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
-        let nodes = self.bvh.nodes();
-        if nodes.is_empty() {
-            return None;
-        }
-        let mut best: Option<Nearest> = None;
-        let mut best_d = f32::INFINITY;
-        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
-        let mut sp = 1;
-        let pa = Vec3A::from(p);
-        while sp > 0 {
-            sp -= 1;
-            let (index, d_box) = stack[sp];
-            if d_box > best_d {
-                continue;
-            }
-            let node = &nodes[index as usize];
-            let first = node.first() as usize;
-            if node.count() > 0 {
-                for i in first..first + node.count() as usize {
-                    let (q, b1, b2) =
-                        closest_on_triangle(p, self.slot(i).corners().map(Vec3::from));
-                    let d = (q - p).length_squared();
-                    if d < best_d {
-                        best_d = d;
-                        best = Some(Nearest {
-                            point: q,
-                            distance_sq: d,
-                            b1,
-                            b2,
-                            geometry: self.ids[i][0],
-                            primitive: self.ids[i][1],
-                            slot: i as u32,
-                        });
-                    }
-                }
-            } else {
-                let (l, r) = (first, first + 1);
-                let (dl, dr) = (
-                    box_distance_sq(&nodes[l], pa),
-                    box_distance_sq(&nodes[r], pa),
-                );
-                // Push the farther child first so the nearer one is visited next.
-                let (near, far) = if dl <= dr {
-                    ((l, dl), (r, dr))
-                } else {
-                    ((r, dr), (l, dl))
-                };
-                stack[sp] = (far.0 as u32, far.1);
-                stack[sp + 1] = (near.0 as u32, near.1);
-                sp += 2;
-            }
-        }
-        best
     }
 }
 
@@ -465,13 +418,4 @@ impl Stack {
             self.len += 1;
         }
     }
-}
-
-/// Squared distance from `p` to the node's box (0 inside).
-#[inline(always)]
-fn box_distance_sq(node: &BvhNode, p: Vec3A) -> f32 {
-    let lo = Vec3A::from(node.min_corner());
-    let hi = Vec3A::from(node.max_corner());
-    let d = (lo - p).max(p - hi).max(Vec3A::ZERO);
-    d.length_squared()
 }

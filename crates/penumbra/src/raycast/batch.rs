@@ -1,0 +1,101 @@
+//! The single-ray queries of a chunk of rays as [`Kernel`]s, so that the traversal (its
+//! eight-lane box test above all, `wide`) is compiled for each instruction set by
+//! `crate::simd` and runs with the best one the CPU has: AVX2's eight lanes test a wide node's
+//! children in one pass, where the baseline's SSE needs two.
+//!
+//! Every path computes the same answers: the lanes do the same operations whatever their
+//! width, and Rust never fuses a multiply and an add on its own.
+
+use glam::Vec3;
+
+use super::traverse::{Accel, SlotHit, Stack};
+use super::watertight::PreparedRay;
+use crate::simd::{Isa, Kernel};
+
+/// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
+pub(super) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
+    PreparedRay::new(
+        Vec3::new(ray[0], ray[1], ray[2]),
+        Vec3::new(ray[3], ray[4], ray[5]),
+    )
+}
+
+/// [`Accel::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
+pub(crate) struct Occlusions<'a> {
+    pub accel: &'a Accel,
+    pub rays: &'a [[f32; 6]],
+    pub range: (f32, f32),
+    pub out: &'a mut [bool],
+}
+
+impl Kernel for Occlusions<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let (tnear, tfar) = self.range;
+        let mut stack = Stack::default();
+        for (ray, o) in self.rays.iter().zip(self.out) {
+            *o =
+                prepare(ray).is_some_and(|r| self.accel.occluded::<I>(&r, tnear, tfar, &mut stack));
+        }
+    }
+}
+
+/// The number of hits of [`Accel::each_hit`] from `t = 0` on for each ray of `rays`, written
+/// to `out` (left alone for a ray that hits nothing).
+pub(crate) struct Counts<'a> {
+    pub accel: &'a Accel,
+    pub rays: &'a [[f32; 6]],
+    pub out: &'a mut [i32],
+}
+
+impl Kernel for Counts<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let mut stack = Stack::default();
+        for (ray, count) in self.rays.iter().zip(self.out) {
+            if let Some(r) = prepare(ray) {
+                let mut n = 0i32;
+                let tally = &mut |_| n = n.saturating_add(1);
+                self.accel.each_hit::<I>(&r, 0.0, &mut stack, tally);
+                *count = n;
+            }
+        }
+    }
+}
+
+/// The hits of each ray of `rays` from `t = 0` on, one per crossing, sorted by `t` then ids:
+/// the number of each ray's hits, and all the hits one ray after the other.
+pub(crate) struct Listing<'a> {
+    pub accel: &'a Accel,
+    pub rays: &'a [[f32; 6]],
+}
+
+impl Kernel for Listing<'_> {
+    type Output = (Vec<u32>, Vec<SlotHit>);
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) -> (Vec<u32>, Vec<SlotHit>) {
+        let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
+        let mut stack = Stack::default();
+        for ray in self.rays {
+            one.clear();
+            if let Some(r) = prepare(ray) {
+                self.accel
+                    .each_hit::<I>(&r, 0.0, &mut stack, &mut |h| one.push(h));
+            }
+            one.sort_by(|a: &SlotHit, b: &SlotHit| {
+                a.crossing
+                    .t
+                    .total_cmp(&b.crossing.t)
+                    .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
+            });
+            counts.push(one.len() as u32);
+            all.extend_from_slice(&one);
+        }
+        (counts, all)
+    }
+}
