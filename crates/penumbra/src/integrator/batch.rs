@@ -118,16 +118,23 @@ impl Kernel for ShadeBatch<'_, '_> {
                 let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[row.clone()]);
                 let [ex, ey, ez] = end.each_mut().map(|v| &mut v[row.clone()]);
                 let blocked = &mut blocked[row];
+                // Without jittered lights every point has the same sample points.
+                if integrator.fixed {
+                    let e = points[0].ends[j];
+                    ex.fill(e.x);
+                    ey.fill(e.y);
+                    ez.fill(e.z);
+                }
                 for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
                     let was = point.blocked[j];
                     blocked[i] = was;
                     if !was {
-                        let (o, e) = (
-                            if point.behind[j] { p.back } else { p.front },
-                            point.ends[j],
-                        );
+                        let o = if point.behind[j] { p.back } else { p.front };
                         (ox[i], oy[i], oz[i]) = (o.x, o.y, o.z);
-                        (ex[i], ey[i], ez[i]) = (e.x, e.y, e.z);
+                        if !integrator.fixed {
+                            let e = point.ends[j];
+                            (ex[i], ey[i], ez[i]) = (e.x, e.y, e.z);
+                        }
                     }
                 }
             }
@@ -190,8 +197,9 @@ mod tests {
     use crate::math::Transform;
     use crate::world::{World, WorldBuilder};
 
-    /// A floor under a sphere, both shiny, a jittered area light and a point light above.
-    fn world() -> World {
+    /// A floor under a sphere, both shiny, an area light (`jitter`ed or not) and a point light
+    /// above.
+    fn world(jitter: bool) -> World {
         let mut b = WorldBuilder::new();
         let m = b
             .add_material(Material {
@@ -215,7 +223,7 @@ mod tests {
             v: Vec3::new(0.0, 0.0, 1.5),
             radiance: Vec3::splat(2.0),
             n: 3,
-            jitter: true,
+            jitter,
         }));
         b.add_light(Light::Point(PointLight {
             position: Vec3::new(-2.0, 2.5, 1.0),
@@ -226,7 +234,12 @@ mod tests {
 
     #[test]
     fn bundles_and_fans_shade_every_point_alike() {
-        let world = world();
+        for jitter in [true, false] {
+            shade_both_ways(&world(jitter));
+        }
+    }
+
+    fn shade_both_ways(world: &World) {
         // Rays from above and from below the floor, so that samples lie on both sides.
         let mut rays = Vec::new();
         for k in 0..40 {
@@ -250,7 +263,7 @@ mod tests {
             };
             let mut shaded = [Vec::new(), Vec::new()];
             for (bundles, out) in [true, false].into_iter().zip(&mut shaded) {
-                let mut integrator = Integrator::new(&world, settings);
+                let mut integrator = Integrator::new(world, settings);
                 integrator.bundles = bundles;
                 let mut rngs: Vec<Rng> =
                     (0..rays.len() as u64).map(|i| Rng::new(7, &[i])).collect();

@@ -125,6 +125,8 @@ pub(crate) struct Integrator<'w> {
     lights: Vec<LightPlan>,
     /// Whether points bundle their shadow rays (see `batch`).
     bundles: bool,
+    /// Whether every point has the same light samples (no jittered light).
+    fixed: bool,
     path: SimdPath,
 }
 
@@ -141,8 +143,9 @@ impl<'w> Integrator<'w> {
         Self {
             world,
             settings,
-            lights,
             bundles: batch::bundles(samples, world.accel().node_count()),
+            fixed: lights.iter().all(|l| matches!(l.source, Source::Fixed(_))),
+            lights,
             path: simd_path(),
         }
     }
