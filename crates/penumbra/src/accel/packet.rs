@@ -12,9 +12,11 @@
 //! tests only prune: like the scalar slab test they are conservative on the padded boxes, so
 //! which boxes are visited does not change any answer.
 
+use std::marker::PhantomData;
+
 use glam::Vec3;
 
-use super::{traverse, Bvh, BvhNode, STACK_SIZE};
+use super::{traverse, Bvh, BvhNode, TriAccel, STACK_SIZE};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
 
@@ -100,24 +102,54 @@ pub(super) fn occlude_packet<const N: usize, I: Isa, const PREFETCH: bool>(
             inv[a][i] = 1.0 / dir[a][i];
         }
     }
-    let o = origin.to_array();
-    let far = [t_max; N];
+    let fan = Fan::<N, I> {
+        origin,
+        o: origin.to_array(),
+        dir,
+        inv,
+        far: [t_max; N],
+        t_max,
+        isa: PhantomData,
+    };
+    let active = walk::<N, PREFETCH>(bvh, &fan, active);
+    for (i, b) in blocked.iter_mut().enumerate() {
+        *b |= active & (1 << i) == 0;
+    }
+}
 
-    // Children are tested at their parent and the one the first live lane enters first is
-    // visited first, so that occluders near the shading point end the packet early; the other
-    // waits on the stack with the lanes that entered it.
+/// A packet's lanes as the any-hit walk sees them.
+pub(super) trait ShadowLanes<const N: usize> {
+    /// The lanes (bit i for lane i) that enter `node`'s box within `(0, t_max)`, and each
+    /// lane's entry distance.
+    fn enter(&self, node: &BvhNode) -> (u32, [f32; N]);
+    /// The lanes of `lanes` that `tri` blocks.
+    fn blocks(&self, tri: &TriAccel, lanes: u32) -> u32;
+}
+
+/// The lanes of `active` that no triangle blocks: the packet's any-hit walk of the BVH.
+///
+/// Children are tested at their parent and the one the first live lane enters first is
+/// visited first, so that occluders near the rays' start end the walk early; the other waits
+/// on the stack with the lanes that entered it. A lane leaves at its first occluder; the walk
+/// stops when no lane is left. With `PREFETCH` (deep trees), each visit starts loading what
+/// lies below the two children it tests.
+#[inline(always)]
+pub(super) fn walk<const N: usize, const PREFETCH: bool>(
+    bvh: &Bvh,
+    rays: &impl ShadowLanes<N>,
+    mut active: u32,
+) -> u32 {
     let mut stack = [(0u32, 0u32); STACK_SIZE];
     let mut sp = 0;
-    let root = &bvh.nodes[0];
-    let mut node = root;
-    if slab::<N, I>(root, &o, &inv, 0.0, &far).0 & active == 0 {
-        return;
+    let mut node = &bvh.nodes[0];
+    if rays.enter(node).0 & active == 0 {
+        return active;
     }
     'nodes: loop {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !triangle::<N, I>(tri, origin, &dir, t_max, active);
+                active &= !rays.blocks(tri, active);
                 if active == 0 {
                     break 'nodes;
                 }
@@ -131,10 +163,7 @@ pub(super) fn occlude_packet<const N: usize, I: Isa, const PREFETCH: bool>(
                 prefetch_below(bvh, l);
                 prefetch_below(bvh, r);
             }
-            let ((ml, nl), (mr, nr)) = (
-                slab::<N, I>(l, &o, &inv, 0.0, &far),
-                slab::<N, I>(r, &o, &inv, 0.0, &far),
-            );
+            let ((ml, nl), (mr, nr)) = (rays.enter(l), rays.enter(r));
             let (ml, mr) = (ml & active, mr & active);
             if ml != 0 && mr != 0 {
                 let lane = active.trailing_zeros() as usize;
@@ -168,8 +197,29 @@ pub(super) fn occlude_packet<const N: usize, I: Isa, const PREFETCH: bool>(
             }
         }
     }
-    for (i, b) in blocked.iter_mut().enumerate() {
-        *b |= active & (1 << i) == 0;
+    active
+}
+
+/// A fan's lanes: rays from one origin, by lane.
+struct Fan<const N: usize, I> {
+    origin: Vec3,
+    o: [f32; 3],
+    dir: [[f32; N]; 3],
+    inv: [[f32; N]; 3],
+    far: [f32; N],
+    t_max: f32,
+    isa: PhantomData<I>,
+}
+
+impl<const N: usize, I: Isa> ShadowLanes<N> for Fan<N, I> {
+    #[inline(always)]
+    fn enter(&self, node: &BvhNode) -> (u32, [f32; N]) {
+        slab::<N, I>(node, &self.o, &self.inv, 0.0, &self.far)
+    }
+
+    #[inline(always)]
+    fn blocks(&self, tri: &TriAccel, lanes: u32) -> u32 {
+        triangle::<N, I>(tri, self.origin, &self.dir, self.t_max, lanes)
     }
 }
 
@@ -244,7 +294,7 @@ pub(super) fn slab<const N: usize, I: Isa>(
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
-    tri: &super::TriAccel,
+    tri: &TriAccel,
     origin: Vec3,
     dir: &[[f32; N]; 3],
     t_max: f32,
@@ -279,11 +329,7 @@ fn triangle<const N: usize, I: Isa>(
 /// Lane `i`'s `pvec = dir × e2` (as glam's cross product) and `det = e1 · pvec`, as
 /// Möller–Trumbore computes them.
 #[inline(always)]
-fn determinant<const N: usize>(
-    tri: &super::TriAccel,
-    dir: &[[f32; N]; 3],
-    i: usize,
-) -> ([f32; 3], f32) {
+fn determinant<const N: usize>(tri: &TriAccel, dir: &[[f32; N]; 3], i: usize) -> ([f32; 3], f32) {
     let (e1, e2) = (tri.e1, tri.e2);
     let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
     let px = dy * e2.z - e2.y * dz;
@@ -301,7 +347,7 @@ fn determinant<const N: usize>(
 #[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
 #[inline(always)]
 pub(super) fn moller_trumbore<const N: usize>(
-    tri: &super::TriAccel,
+    tri: &TriAccel,
     tvec: Vec3,
     qvec: Vec3,
     t_num: f32,

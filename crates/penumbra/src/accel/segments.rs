@@ -13,10 +13,12 @@
 //! numerator included, so a lane is occluded exactly when [`Bvh::occluded`] says so; the box
 //! tests are conservative on the padded boxes and only prune.
 
+use std::marker::PhantomData;
+
 use glam::Vec3;
 
-use super::packet::{max, min};
-use super::{traverse, Bvh, BvhNode, TriAccel, STACK_SIZE};
+use super::packet::{max, min, walk, ShadowLanes};
+use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
 
@@ -160,66 +162,35 @@ fn occlude_packet<const N: usize, I: Isa>(
             rays.inv[a][i] = 1.0 / rays.dir[a][i];
         }
     }
-    let far = [t_max; N];
-
-    // As in the fans of `packet`: the child the first live lane enters first is visited
-    // first, the other waits on the stack with the lanes that entered it.
-    let mut stack = [(0u32, 0u32); STACK_SIZE];
-    let mut sp = 0;
-    let mut node = &bvh.nodes[0];
-    if slab::<N, I>(node, &rays, &far).0 & active == 0 {
-        return;
-    }
-    'nodes: loop {
-        if node.is_leaf() {
-            let first = node.first as usize;
-            for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !triangle::<N, I>(tri, &rays, t_max, active);
-                if active == 0 {
-                    break 'nodes;
-                }
-            }
-        } else {
-            let (l, r) = (
-                &bvh.nodes[node.first as usize],
-                &bvh.nodes[node.first as usize + 1],
-            );
-            let ((ml, nl), (mr, nr)) = (slab::<N, I>(l, &rays, &far), slab::<N, I>(r, &rays, &far));
-            let (ml, mr) = (ml & active, mr & active);
-            if ml != 0 && mr != 0 {
-                let lane = active.trailing_zeros() as usize;
-                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
-                    (l, node.first + 1, mr)
-                } else {
-                    (r, node.first, ml)
-                };
-                stack[sp] = (far, far_mask);
-                sp += 1;
-                node = near;
-                continue;
-            } else if ml != 0 {
-                node = l;
-                continue;
-            } else if mr != 0 {
-                node = r;
-                continue;
-            }
-        }
-        // The next waiting subtree that a lane still live entered.
-        loop {
-            if sp == 0 {
-                break 'nodes;
-            }
-            sp -= 1;
-            let (index, mask) = stack[sp];
-            if mask & active != 0 {
-                node = &bvh.nodes[index as usize];
-                break;
-            }
-        }
-    }
+    let bundle = Bundle::<N, I> {
+        rays,
+        far: [t_max; N],
+        t_max,
+        isa: PhantomData,
+    };
+    let active = walk::<N, false>(bvh, &bundle, active);
     for (i, b) in blocked.iter_mut().enumerate() {
         *b |= active & (1 << i) == 0;
+    }
+}
+
+/// A bundle's lanes for the any-hit walk.
+struct Bundle<const N: usize, I> {
+    rays: Lanes<N>,
+    far: [f32; N],
+    t_max: f32,
+    isa: PhantomData<I>,
+}
+
+impl<const N: usize, I: Isa> ShadowLanes<N> for Bundle<N, I> {
+    #[inline(always)]
+    fn enter(&self, node: &BvhNode) -> (u32, [f32; N]) {
+        slab::<N, I>(node, &self.rays, &self.far)
+    }
+
+    #[inline(always)]
+    fn blocks(&self, tri: &TriAccel, lanes: u32) -> u32 {
+        triangle::<N, I>(tri, &self.rays, self.t_max, lanes)
     }
 }
 
