@@ -13,7 +13,10 @@
 //! - `split`: one node's split: binning (in parallel chunks for large nodes), the SAH sweep
 //!   and the partition;
 //! - `traverse`: the slab test and the closest-hit, any-hit and batch queries;
-//! - `closest` and `packet`: closest-hit and any-hit SIMD packets of rays sharing an origin;
+//! - `closest` and `packet`: closest-hit and any-hit SIMD packets of rays sharing an origin
+//!   (`packet` also holds the any-hit walk of every packet kind);
+//! - `segments`: any-hit packets of segments with origins of their own (bundles of shadow rays
+//!   from neighbouring points to one light sample);
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
 use glam::Vec3;

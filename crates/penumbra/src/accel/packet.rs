@@ -4,7 +4,8 @@
 //! Each node is fetched once per packet and its slab test runs for all lanes in one loop, which
 //! the compiler turns into vector instructions (`crate::simd` compiles this file's code once
 //! per instruction set and picks one at run time). A lane leaves the packet at its first occluder;
-//! the packet stops when no lane is left.
+//! the packet stops when no lane is left. That walk ([`walk`]) also serves the bundles of
+//! `segments`, whose lanes have origins of their own.
 //!
 //! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
 //! operation for operation (the same products, sums and comparisons in the same order, no
