@@ -1,8 +1,8 @@
 //! Shading neighbouring points together: the camera samples of a few adjacent pixels, whose
 //! shadow rays toward each light sample are traced as one bundle.
 //!
-//! [`Integrator::shade`] traces a point's shadow rays as a fan from the point to the samples
-//! of its lights. A fan's rays spread over the light's extent, so on a fine mesh between
+//! A point's shadow rays can be traced as a fan, from the point to the samples of its
+//! lights (`Bvh::occlude_from`). A fan's rays spread over the light's extent, so on a fine mesh between
 //! surface and light they part ways after a few levels of the tree. The rays from a few
 //! neighbouring points to one light sample stay within a pixel or so of each other for their
 //! whole length, and the finer the image the closer they run: bundled, they share nearly every
@@ -29,9 +29,8 @@ const FAN_MIN_SAMPLES: u64 = 8;
 
 /// Trees with at least this many nodes are deep enough for bundles to beat fans. On a room of
 /// a few large triangles a fan's rays stay together anyway, and a fan shares its origin, which
-/// saves a third of each triangle test (1024² renders, 1 thread: fans take 0.85× the time of
-/// bundles on the seed's room, bundles 0.90× of fans on the bunny room and 0.66× on the
-/// 1M-triangle room).
+/// saves a third of each triangle test (1024² renders, 1 thread: bundles take 1.03× the time
+/// of fans on the seed's room, 0.90× on the bunny room and 0.66× on the 1M-triangle room).
 const BUNDLE_MIN_NODES: usize = 4096;
 
 /// Whether points with `samples` light samples bundle their shadow rays in a tree of `nodes`
@@ -95,7 +94,9 @@ impl Kernel for ShadeBatch<'_, '_> {
         for (i, point) in points.iter_mut().enumerate() {
             prepared.push(integrator.prepare(&rays[i], &surfaces[i], &mut rngs[i], point));
         }
-        let samples = points.iter().map(|p| p.ends.len()).max().unwrap_or(0);
+        // Every point has the same lights, hence as many samples.
+        let samples = points.first().map_or(0, |p| p.ends.len());
+        debug_assert!(points.iter().all(|p| p.ends.len() == samples));
         if !integrator.bundles {
             for (point, p) in points.iter_mut().zip(prepared.iter()) {
                 integrator.occlude(p.front, p.back, point);
@@ -112,7 +113,7 @@ impl Kernel for ShadeBatch<'_, '_> {
             blocked.resize(slots, true);
             // Row `j` holds the segments toward sample `j`, point by point: the writes are
             // contiguous, and each row's slices are cut once so that the loop needs no bounds
-            // checks (every point has the same samples: the same lights).
+            // checks.
             for j in 0..samples {
                 let row = j * lanes..j * lanes + count;
                 let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[row.clone()]);
@@ -160,9 +161,10 @@ impl Kernel for ShadeBatch<'_, '_> {
 }
 
 impl Integrator<'_> {
-    /// [`Integrator::shade`] for several points at once (`rays`, `surfaces` and `rngs` side
-    /// by side): each point's radiance and shadow-ray count, in order, appended to `out`. The
-    /// answers are those of `shade` point by point; neighbouring points (the samples of a few
+    /// Shades several points at once (`rays`, `surfaces` and `rngs` side by side): the
+    /// radiance leaving each point back along its ray and the number of shadow rays it took,
+    /// in order, appended to `out`. `rngs` supply the jitter of jittered lights. Each point's
+    /// answer does not depend on the others; neighbouring points (the samples of a few
     /// adjacent pixels) make it faster.
     pub(crate) fn shade_batch(
         &self,
