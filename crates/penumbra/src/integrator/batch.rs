@@ -100,6 +100,7 @@ impl Kernel for ShadeBatch<'_, '_> {
         if !integrator.bundles {
             for (point, p) in points.iter_mut().zip(prepared.iter()) {
                 integrator.occlude(p.front, p.back, point);
+                out.push((p.radiance(point), p.traced));
             }
         } else {
             // Sample-major, `lanes` slots per sample: the segments of one packet run from
@@ -145,18 +146,19 @@ impl Kernel for ShadeBatch<'_, '_> {
             };
             let accel = integrator.world.accel();
             accel.occlude_segments_on(integrator.path, segments, SHADOW_T_MAX, blocked);
-            for (i, point) in points.iter_mut().enumerate() {
-                for (j, b) in point.blocked.iter_mut().enumerate() {
-                    *b = blocked[j * lanes + i];
-                }
-            }
+            // Each point's light, its samples' answers read where the bundles left them.
+            let blocked = &blocked[..];
+            out.extend(
+                points
+                    .iter()
+                    .zip(prepared.iter())
+                    .enumerate()
+                    .map(|(i, (point, p))| {
+                        let light = p.radiance_where(point, |j| blocked[j * lanes + i]);
+                        (light, p.traced)
+                    }),
+            );
         }
-        out.extend(
-            points
-                .iter()
-                .zip(prepared.iter())
-                .map(|(point, p)| (p.radiance(point), p.traced)),
-        );
     }
 }
 

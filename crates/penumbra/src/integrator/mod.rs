@@ -108,9 +108,15 @@ impl Point {
     /// The ambient term plus every unblocked sample's light, in light and sample order.
     #[inline(always)]
     fn radiance(&self, s: &Scratch) -> Rgb {
+        self.radiance_where(s, |i| s.blocked[i])
+    }
+
+    /// [`Point::radiance`] with sample `i` blocked when `blocked(i)`.
+    #[inline(always)]
+    fn radiance_where(&self, s: &Scratch, blocked: impl Fn(usize) -> bool) -> Rgb {
         let mut radiance = self.ambient;
-        for (i, &blocked) in s.blocked.iter().enumerate() {
-            if !blocked {
+        for i in 0..s.r.len() {
+            if !blocked(i) {
                 radiance += Vec3::new(s.r[i], s.g[i], s.b[i]);
             }
         }
