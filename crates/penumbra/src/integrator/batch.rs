@@ -194,7 +194,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::geometry::sphere;
+    use crate::geometry::{sphere, Mesh};
     use crate::integrator::{LightModel, Shading, ShadingSettings};
     use crate::light::{AreaLight, Light, PointLight};
     use crate::material::Material;
@@ -202,7 +202,7 @@ mod tests {
     use crate::world::{World, WorldBuilder};
 
     /// A floor under a sphere, both shiny, an area light (`jitter`ed or not) and a point light
-    /// above.
+    /// above, and an area light low beside the floor, partly below its plane.
     fn world(jitter: bool) -> World {
         let mut b = WorldBuilder::new();
         let m = b
@@ -212,13 +212,22 @@ mod tests {
                 ..Material::default()
             })
             .unwrap();
-        let floor = [
+        // The floor's shading normals lean toward +x, so that samples of the low light
+        // below the floor's plane are lit yet behind the surface: their shadow rays leave
+        // from below it.
+        let corners = [
             [-4.0, 0.0, -4.0],
             [4.0, 0.0, -4.0],
             [4.0, 0.0, 4.0],
             [-4.0, 0.0, 4.0],
         ];
-        b.add_triangles(&floor, &[[0, 1, 2], [0, 2, 3]], m).unwrap();
+        let floor = Mesh {
+            positions: corners.map(Vec3::from).to_vec(),
+            normals: vec![Vec3::new(0.8, 1.0, 0.0).normalize(); 4],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..Mesh::default()
+        };
+        b.add_mesh(&floor, &Transform::IDENTITY, &[m]).unwrap();
         let lift = Transform::from_matrix(glam::Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)));
         b.add_mesh(&sphere(0.8), &lift, &[m]).unwrap();
         b.add_light(Light::Area(AreaLight {
@@ -228,6 +237,14 @@ mod tests {
             radiance: Vec3::splat(2.0),
             n: 3,
             jitter,
+        }));
+        b.add_light(Light::Area(AreaLight {
+            center: Vec3::new(6.0, -0.6, 0.0),
+            u: Vec3::new(0.0, 1.0, 0.0),
+            v: Vec3::new(0.0, 0.0, -1.5),
+            radiance: Vec3::splat(1.0),
+            n: 2,
+            jitter: false,
         }));
         b.add_light(Light::Point(PointLight {
             position: Vec3::new(-2.0, 2.5, 1.0),
