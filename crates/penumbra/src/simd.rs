@@ -221,6 +221,27 @@ unsafe fn run_avx2<K: Kernel>(kernel: K) -> K::Output {
     kernel.run::<8, Avx2>()
 }
 
+/// `a < b ? a : b`: the vector min instruction's semantics, so that lane loops written with
+/// it compile to one instruction per vector (and a NaN in `a` gives `b`, as the instruction).
+#[inline(always)]
+pub(crate) fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `a > b ? a : b`: the vector max instruction's semantics (see [`min`]).
+#[inline(always)]
+pub(crate) fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// Asks the CPU to start loading the cache lines of `value` into its caches: a hint that
 /// changes no result. The traversals call it for the nodes and triangles they will visit a
 /// little later, so that the loads overlap the work in between.

@@ -19,7 +19,7 @@ use glam::Vec3;
 
 use super::{traverse, Bvh, BvhNode, TriAccel, STACK_SIZE};
 use crate::math::Ray;
-use crate::simd::{Isa, Kernel};
+use crate::simd::{max, min, Isa, Kernel};
 
 /// Trees of at least this many nodes (2 MiB of them: more than a core's L2 cache) have the
 /// packets prefetch what lies below the children they test. On smaller trees the nodes stay
@@ -233,25 +233,6 @@ fn prefetch_below(bvh: &Bvh, node: &BvhNode) {
     } else {
         crate::simd::prefetch(&bvh.nodes[node.first as usize]);
         crate::simd::prefetch(&bvh.nodes[node.first as usize + 1]);
-    }
-}
-
-/// `a < b ? a : b` and `a > b ? a : b`: the vector min and max instructions' semantics.
-#[inline(always)]
-pub(super) fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-#[inline(always)]
-pub(super) fn max(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
     }
 }
 

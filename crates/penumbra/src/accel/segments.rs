@@ -17,10 +17,10 @@ use std::marker::PhantomData;
 
 use glam::Vec3;
 
-use super::packet::{max, min, walk, ShadowLanes};
+use super::packet::{walk, ShadowLanes};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
-use crate::simd::{Isa, Kernel};
+use crate::simd::{max, min, Isa, Kernel};
 
 /// Segments by coordinate: segment `i` runs from `(origin[0][i], origin[1][i], origin[2][i])`
 /// to `(end[0][i], end[1][i], end[2][i])`. All six slices have the same length.

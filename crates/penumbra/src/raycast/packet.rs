@@ -19,7 +19,7 @@ use glam::Vec3;
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
 use super::watertight::{EdgeRule, PreparedRay};
 use super::wide::WIDTH;
-use crate::simd::{Isa, Kernel};
+use crate::simd::{max, min, Isa, Kernel};
 
 /// The closest hit of a ray and the unit normal of its triangle.
 pub(crate) type ClosestHit = Option<(SlotHit, Vec3)>;
@@ -301,25 +301,5 @@ fn triangle<const N: usize, I: Isa>(
             best.tri[i] = tri;
             best.hit |= 1 << i;
         }
-    }
-}
-
-/// `a < b ? a : b`, the vector instruction's semantics (as glam's `min` in `wide`).
-#[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// `a > b ? a : b`, the vector instruction's semantics (as glam's `max` in `wide`).
-#[inline(always)]
-fn max(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
     }
 }

@@ -17,7 +17,7 @@
 //! see.
 
 use crate::accel::BvhNode;
-use crate::simd::Isa;
+use crate::simd::{max, min, Isa};
 
 /// Children per wide node.
 pub(crate) const WIDTH: usize = 8;
@@ -101,26 +101,6 @@ impl WideNode {
             entry[i] = near;
         }
         (I::mask(&inside), entry)
-    }
-}
-
-/// `a < b ? a : b`, the vector instruction's semantics.
-#[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// `a > b ? a : b`, the vector instruction's semantics.
-#[inline(always)]
-fn max(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
     }
 }
 
