@@ -15,7 +15,9 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, Segments, World};
+use penumbra::{
+    supported_paths, Light, Pairs, PinholeCamera, Ray, Rng, SceneFile, Segments, World,
+};
 
 /// The seed's room, built once.
 fn world() -> std::sync::Arc<World> {
@@ -76,7 +78,7 @@ fn bench_shadow(c: &mut Criterion) {
 
 /// The segments from 64 points of a small patch (8×8, a millimetre apart, under the middle of
 /// the light) to the 25 light samples, traced as fans (one packet kind per point) and as
-/// bundles (one light sample, neighbouring points per packet).
+/// bundles (one light sample, neighbouring points per packet), as segments and as pairs.
 fn bench_bundles(c: &mut Criterion) {
     let world = world();
     let bvh = world.accel();
@@ -120,6 +122,21 @@ fn bench_bundles(c: &mut Criterion) {
             b.iter(|| {
                 blocked.fill(false);
                 bvh.occlude_segments_on(path, segments, t_max, &mut blocked);
+                black_box(blocked.iter().filter(|&&b| b).count())
+            })
+        });
+        // The same segments as pairs: the 64 points and the 25 samples, each given once.
+        let points: [Vec<f32>; 3] = [0, 1, 2].map(|a| origins.iter().map(|o| o[a]).collect());
+        let samples: [Vec<f32>; 3] = [0, 1, 2].map(|a| ends.iter().map(|e| e[a]).collect());
+        group.bench_function(format!("pairs_{}", path.name()), |b| {
+            let mut blocked = vec![false; from[0].len()];
+            let pairs = Pairs {
+                origins: points.each_ref().map(|axis| &axis[..]),
+                ends: samples.each_ref().map(|axis| &axis[..]),
+            };
+            b.iter(|| {
+                blocked.fill(false);
+                bvh.occlude_pairs_on(path, pairs, t_max, &mut blocked);
                 black_box(blocked.iter().filter(|&&b| b).count())
             })
         });

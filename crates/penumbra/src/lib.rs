@@ -73,7 +73,7 @@ pub mod shapes {
     pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 }
 
-pub use accel::{intersect_brute_force, occluded_brute_force, Bvh, Segments};
+pub use accel::{intersect_brute_force, occluded_brute_force, Bvh, Pairs, Segments};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
 pub use files::Files;

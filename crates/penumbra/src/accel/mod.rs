@@ -36,7 +36,7 @@ mod validate;
 #[cfg(test)]
 mod tests;
 
-pub use segments::Segments;
+pub use segments::{Pairs, Segments};
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at
@@ -290,6 +290,29 @@ impl Bvh {
         let kernel = segments::OccludeSegments {
             bvh: self,
             segments,
+            t_max,
+            blocked,
+        };
+        dispatch(path, kernel);
+    }
+
+    /// Like [`Bvh::occlude_segments`] for every segment between `pairs`' origins and ends:
+    /// slot `j · m + i` of `blocked` (for `m` origins) is segment `(j, i)`, from origin `i` to
+    /// end `j`. Each not yet blocked becomes blocked when a triangle meets it for some `t` in
+    /// `(0, t_max)`, as [`Bvh::occluded`] on that ray would say. The segments toward one end
+    /// are traced together, a SIMD vector's width at a time, so consecutive origins should lie
+    /// close to each other: a few neighbouring shading points, say, with the fixed samples of
+    /// a light for ends.
+    pub fn occlude_pairs(&self, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
+        self.occlude_pairs_on(simd_path(), pairs, t_max, blocked);
+    }
+
+    /// [`Bvh::occlude_pairs`] on a given SIMD path (the portable one when `path` is not
+    /// supported), so that tests can run every path the machine has.
+    pub fn occlude_pairs_on(&self, path: SimdPath, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
+        let kernel = segments::OccludePairs {
+            bvh: self,
+            pairs,
             t_max,
             blocked,
         };

@@ -59,6 +59,21 @@ impl<'a> Segments<'a> {
     }
 }
 
+/// Every segment between a few origins and some ends, by coordinate: segment `(j, i)` runs
+/// from origin `i` to end `j`. The three origin slices have the same length, as do the three
+/// end slices.
+///
+/// The segments from a few neighbouring shading points to each of the fixed samples of a
+/// light are such a set: they need the points and the samples once each, not once per
+/// segment.
+#[derive(Clone, Copy, Debug)]
+pub struct Pairs<'a> {
+    /// The starting points' coordinates, by axis.
+    pub origins: [&'a [f32]; 3],
+    /// The end points' coordinates, by axis.
+    pub ends: [&'a [f32]; 3],
+}
+
 /// [`Bvh::occlude_segments`] as a [`Kernel`]: consecutive segments in packets of `N` lanes.
 pub(super) struct OccludeSegments<'a> {
     pub(super) bvh: &'a Bvh,
@@ -70,7 +85,6 @@ pub(super) struct OccludeSegments<'a> {
 impl Kernel for OccludeSegments<'_> {
     type Output = ();
 
-    /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let OccludeSegments {
@@ -93,22 +107,94 @@ impl Kernel for OccludeSegments<'_> {
             return;
         }
         for (chunk, blocked) in blocked.chunks_mut(N).enumerate() {
-            let live = blocked.iter().filter(|&&b| !b).count();
-            if live == 0 {
-                continue;
-            }
             let segments = segments.range(chunk * N, blocked.len());
-            if live * 4 <= N {
-                for (i, b) in blocked.iter_mut().enumerate() {
-                    if !*b {
-                        let (o, end) = segments.get(i);
-                        *b = traverse::occluded(bvh, &Ray::new(o, end - o), 0.0, t_max);
-                    }
-                }
-            } else {
-                occlude_packet::<N, I>(bvh, &segments, t_max, blocked);
+            occlude_lanes::<N, I>(
+                bvh,
+                t_max,
+                blocked,
+                |i| segments.get(i),
+                || {
+                    Lanes::new(segments.origin, |a, i| {
+                        segments.end[a][i] - segments.origin[a][i]
+                    })
+                },
+            );
+        }
+    }
+}
+
+/// [`Bvh::occlude_pairs`] as a [`Kernel`]: for each end, the segments from consecutive
+/// origins in packets of `N` lanes.
+pub(super) struct OccludePairs<'a> {
+    pub(super) bvh: &'a Bvh,
+    pub(super) pairs: Pairs<'a>,
+    pub(super) t_max: f32,
+    pub(super) blocked: &'a mut [bool],
+}
+
+impl Kernel for OccludePairs<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let OccludePairs {
+            bvh,
+            pairs: Pairs { origins, ends },
+            t_max,
+            blocked,
+        } = self;
+        let (m, n) = (origins[0].len(), ends[0].len());
+        assert!(
+            origins.iter().all(|c| c.len() == m)
+                && ends.iter().all(|c| c.len() == n)
+                && blocked.len() == m * n,
+            "one mask slot per origin and end"
+        );
+        if bvh.nodes.is_empty() || m == 0 {
+            return;
+        }
+        for (j, row) in blocked.chunks_mut(m).enumerate() {
+            let end = [ends[0][j], ends[1][j], ends[2][j]];
+            for (chunk, blocked) in row.chunks_mut(N).enumerate() {
+                let lanes = chunk * N..chunk * N + blocked.len();
+                let origin = origins.map(|axis| &axis[lanes.clone()]);
+                let point = |i: usize| Vec3::new(origin[0][i], origin[1][i], origin[2][i]);
+                occlude_lanes::<N, I>(
+                    bvh,
+                    t_max,
+                    blocked,
+                    |i| (point(i), end.into()),
+                    || Lanes::new(origin, |a, i| end[a] - origin[a][i]),
+                );
             }
         }
+    }
+}
+
+/// Traces the segments of one packet (at most `N`, `blocked` one slot each) whose origin and
+/// end `segment(i)` gives, and whose lanes `lanes()` gives. A packet with a quarter of its
+/// lanes or fewer to trace goes one ray at a time.
+#[inline(always)]
+fn occlude_lanes<const N: usize, I: Isa>(
+    bvh: &Bvh,
+    t_max: f32,
+    blocked: &mut [bool],
+    segment: impl Fn(usize) -> (Vec3, Vec3),
+    lanes: impl FnOnce() -> Lanes<N>,
+) {
+    let live = blocked.iter().filter(|&&b| !b).count();
+    if live == 0 {
+        return;
+    }
+    if live * 4 <= N {
+        for (i, b) in blocked.iter_mut().enumerate() {
+            if !*b {
+                let (o, end) = segment(i);
+                *b = traverse::occluded(bvh, &Ray::new(o, end - o), 0.0, t_max);
+            }
+        }
+    } else {
+        occlude_packet::<N, I>(bvh, lanes(), t_max, blocked);
     }
 }
 
@@ -119,48 +205,53 @@ struct Lanes<const N: usize> {
     inv: [[f32; N]; 3],
 }
 
-/// Marks `blocked[i]` for each segment `i` of `segments` (at most `N`) that is not blocked
-/// yet and that a triangle meets for `t` in `(0, t_max)`.
-// Lane loops index several arrays by lane; that is what vectorizes.
-#[allow(clippy::needless_range_loop)]
+impl<const N: usize> Lanes<N> {
+    /// The lanes of the segments from `origin` (at most `N` of them, by axis) whose direction
+    /// along axis `a` is `dir(a, i)`. Lanes past the segments repeat the last one.
+    // Lane loops index several arrays by lane; that is what vectorizes.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn new(origin: [&[f32]; 3], dir: impl Fn(usize, usize) -> f32) -> Self {
+        let count = origin[0].len();
+        debug_assert!(N <= 32 && count > 0 && count <= N);
+        let mut rays = Lanes {
+            origin: [[0.0; N]; 3],
+            dir: [[0.0; N]; 3],
+            inv: [[0.0; N]; 3],
+        };
+        for a in 0..3 {
+            if count == N {
+                rays.origin[a].copy_from_slice(origin[a]);
+                for i in 0..N {
+                    rays.dir[a][i] = dir(a, i);
+                }
+            } else {
+                for i in 0..N {
+                    let k = i.min(count - 1);
+                    rays.origin[a][i] = origin[a][k];
+                    rays.dir[a][i] = dir(a, k);
+                }
+            }
+            for i in 0..N {
+                rays.inv[a][i] = 1.0 / rays.dir[a][i];
+            }
+        }
+        rays
+    }
+}
+
+/// Marks `blocked[i]` for each lane `i` of `rays` (`blocked` has one slot per segment, at
+/// most `N`) that is not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
 fn occlude_packet<const N: usize, I: Isa>(
     bvh: &Bvh,
-    segments: &Segments,
+    rays: Lanes<N>,
     t_max: f32,
     blocked: &mut [bool],
 ) {
-    let count = segments.len();
-    debug_assert!(N <= 32 && count > 0 && count <= N);
-    // Lanes past `count` repeat the last segment and start inactive, as do blocked lanes.
-    let mut rays = Lanes {
-        origin: [[0.0; N]; 3],
-        dir: [[0.0; N]; 3],
-        inv: [[0.0; N]; 3],
-    };
-    for a in 0..3 {
-        let (o, e) = (segments.origin[a], segments.end[a]);
-        if count == N {
-            rays.origin[a].copy_from_slice(o);
-            for i in 0..N {
-                rays.dir[a][i] = e[i] - o[i];
-            }
-        } else {
-            for i in 0..N {
-                let k = i.min(count - 1);
-                rays.origin[a][i] = o[k];
-                rays.dir[a][i] = e[k] - o[k];
-            }
-        }
-    }
     let mut active: u32 = 0;
     for (i, &b) in blocked.iter().enumerate() {
         active |= u32::from(!b) << i;
-    }
-    for a in 0..3 {
-        for i in 0..N {
-            rays.inv[a][i] = 1.0 / rays.dir[a][i];
-        }
     }
     let bundle = Bundle::<N, I> {
         rays,

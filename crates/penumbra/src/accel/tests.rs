@@ -101,10 +101,6 @@ fn assert_agree_in(g: &Geometry, bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) {
     }
 }
 
-/// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask;
-/// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
-/// blocks exactly the others that brute force finds occluded (packets of every fill, with
-/// some lanes blocked from the start).
 /// [`Bvh::intersect_from`] on every SIMD path gives each ray's brute-force closest hit.
 fn assert_from_agrees(
     g: &Geometry,
@@ -151,6 +147,12 @@ fn segments<'a>(o: &'a [Vec<f32>; 3], e: &'a [Vec<f32>; 3]) -> Segments<'a> {
     }
 }
 
+/// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask;
+/// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
+/// blocks exactly the others that brute force finds occluded (packets of every fill, with
+/// some lanes blocked from the start); so do `occlude_segments` on the same segments and on
+/// them reversed, and `occlude_pairs` from the origin to the ends and from the ends to a few
+/// points.
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
     let expected: Vec<bool> = ends
         .iter()
@@ -191,6 +193,31 @@ fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t
                 assert_eq!(forward[i], start[i] || expected[i], "segments, {why}");
                 assert_eq!(backward[i], start[i] || reversed[i], "reversed, {why}");
             }
+        }
+    }
+    if let (Some(&first), Some(&last)) = (ends.first(), ends.last()) {
+        assert_pairs_agree(g, bvh, &[origin], ends, t_max);
+        assert_pairs_agree(g, bvh, ends, &[origin, first, last], t_max);
+    }
+}
+
+/// `occlude_pairs` on every SIMD path blocks exactly the segments from each of `origins` to
+/// each of `ends` that brute force finds occluded, and leaves blocked ones blocked.
+fn assert_pairs_agree(g: &Geometry, bvh: &Bvh, origins: &[Vec3], ends: &[Vec3], t_max: f32) {
+    let (from, to) = (by_axis(origins), by_axis(ends));
+    let pairs = Pairs {
+        origins: from.each_ref().map(|axis| &axis[..]),
+        ends: to.each_ref().map(|axis| &axis[..]),
+    };
+    let m = origins.len();
+    for path in supported_paths() {
+        let start: Vec<bool> = (0..m * ends.len()).map(|k| k % 5 == 3).collect();
+        let mut blocked = start.clone();
+        bvh.occlude_pairs_on(path, pairs, t_max, &mut blocked);
+        for (k, &b) in blocked.iter().enumerate() {
+            let (o, e) = (origins[k % m], ends[k / m]);
+            let occluded = occluded_brute_force(g, &Ray::new(o, e - o), 0.0, t_max);
+            assert_eq!(b, start[k] || occluded, "{path:?}: pair {o} → {e}");
         }
     }
 }

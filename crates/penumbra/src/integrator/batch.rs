@@ -9,12 +9,18 @@
 //! node they visit. Fans still serve points with many light samples (a fan of hundreds of rays
 //! is a packet of its own, and a bundle would hold every point's samples in memory at once).
 //!
+//! When every point has the same light samples (no jittered light), a bundle is given as
+//! [`crate::accel::Pairs`]: the batch's points once and the samples once per render, the
+//! segments between them implied. Jittered samples differ from point to point, and their
+//! bundles list every segment ([`Segments`]), which costs their writes; those pay only on
+//! deep trees (see [`BUNDLE_MIN_NODES`]).
+//!
 //! Either way each shadow ray is the same segment and gets the same answer (both packet kinds
 //! answer as [`crate::accel::Bvh::occluded`] would), and each point's light is summed in light
 //! and sample order: the image does not depend on how the rays were grouped.
 
 use super::{Integrator, Point, Scratch, SHADOW_T_MAX};
-use crate::accel::Segments;
+use crate::accel::{Pairs, Segments};
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
@@ -27,16 +33,20 @@ const BUNDLE_MAX_SAMPLES: u64 = 64;
 /// bundle whatever the tree.
 const FAN_MIN_SAMPLES: u64 = 8;
 
-/// Trees with at least this many nodes are deep enough for bundles to beat fans. On a room of
-/// a few large triangles a fan's rays stay together anyway, and a fan shares its origin, which
-/// saves a third of each triangle test (1024² renders, 1 thread: bundles take 1.03× the time
-/// of fans on the seed's room, 0.90× on the bunny room and 0.66× on the 1M-triangle room).
+/// Trees with at least this many nodes are deep enough for bundles of segments (jittered
+/// lights: each point has samples of its own) to beat fans. On a room of a few large triangles
+/// a fan's rays stay together anyway, and a fan shares its origin, which saves a third of each
+/// triangle test (1024² renders, 1 thread: bundles of segments took 1.03× the time of fans on
+/// the seed's room, 0.90× on the bunny room and 0.66× on the 1M-triangle room). Fixed samples
+/// bundle as pairs, which write each point and sample once (not once per segment) and beat fans
+/// on every tree: 0.91× on the seed's room.
 const BUNDLE_MIN_NODES: usize = 4096;
 
 /// Whether points with `samples` light samples bundle their shadow rays in a tree of `nodes`
-/// BVH nodes.
-pub(super) fn bundles(samples: u64, nodes: usize) -> bool {
-    samples <= BUNDLE_MAX_SAMPLES && (samples < FAN_MIN_SAMPLES || nodes >= BUNDLE_MIN_NODES)
+/// BVH nodes; `fixed` when every point has the same samples (no jittered light).
+pub(super) fn bundles(samples: u64, fixed: bool, nodes: usize) -> bool {
+    samples <= BUNDLE_MAX_SAMPLES
+        && (fixed || samples < FAN_MIN_SAMPLES || nodes >= BUNDLE_MIN_NODES)
 }
 
 /// Points shaded together when they bundle: the 4 samples of 4 pixels, a vector of 16 lanes
@@ -49,10 +59,21 @@ pub(crate) struct BatchScratch {
     /// Each point's gathered light samples.
     points: Vec<Scratch>,
     prepared: Vec<Point>,
-    /// The bundled segments' origins and ends by axis, by light sample then point.
+    bundle: Bundle,
+}
+
+/// The shadow rays of a batch as bundles: one mask slot per light sample and point, sample
+/// by sample.
+#[derive(Default)]
+struct Bundle {
+    /// Each segment's origin and end by axis (jittered lights), or the points' shadow-ray
+    /// origins toward samples on their viewer's side (`origin`) and on the other side (`end`)
+    /// when every point has the same samples.
     origin: [Vec<f32>; 3],
     end: [Vec<f32>; 3],
     blocked: Vec<bool>,
+    /// The slots of the samples behind their surface, traced from the other side.
+    back: Vec<bool>,
 }
 
 /// [`Integrator::shade_batch`] as a [`Kernel`], to be compiled per instruction set.
@@ -82,9 +103,7 @@ impl Kernel for ShadeBatch<'_, '_> {
         let BatchScratch {
             points,
             prepared,
-            origin,
-            end,
-            blocked,
+            bundle,
         } = scratch;
         if points.len() < count {
             points.resize_with(count, Scratch::default);
@@ -102,63 +121,149 @@ impl Kernel for ShadeBatch<'_, '_> {
                 integrator.occlude(p.front, p.back, point);
                 out.push((p.radiance(point), p.traced));
             }
-        } else {
-            // Sample-major, `lanes` slots per sample: the segments of one packet run from
-            // neighbouring points to one light sample. Slots of no point stay blocked.
-            let lanes = count.next_multiple_of(N);
-            let slots = samples * lanes;
-            for axis in origin.iter_mut().chain(end.iter_mut()) {
-                axis.resize(slots, 0.0);
-            }
-            blocked.clear();
-            blocked.resize(slots, true);
-            // Row `j` holds the segments toward sample `j`, point by point: the writes are
-            // contiguous, and each row's slices are cut once so that the loop needs no bounds
-            // checks.
-            for j in 0..samples {
-                let row = j * lanes..j * lanes + count;
-                let [ox, oy, oz] = origin.each_mut().map(|v| &mut v[row.clone()]);
-                let [ex, ey, ez] = end.each_mut().map(|v| &mut v[row.clone()]);
-                let blocked = &mut blocked[row];
-                // Without jittered lights every point has the same sample points.
-                if integrator.fixed {
-                    let e = points[0].ends[j];
-                    ex.fill(e.x);
-                    ey.fill(e.y);
-                    ez.fill(e.z);
-                }
-                for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
-                    let was = point.blocked[j];
-                    blocked[i] = was;
-                    if !was {
-                        let o = if point.behind[j] { p.back } else { p.front };
-                        (ox[i], oy[i], oz[i]) = (o.x, o.y, o.z);
-                        if !integrator.fixed {
-                            let e = point.ends[j];
-                            (ex[i], ey[i], ez[i]) = (e.x, e.y, e.z);
-                        }
-                    }
-                }
-            }
-            let segments = Segments {
-                origin: [0, 1, 2].map(|a| &origin[a][..]),
-                end: [0, 1, 2].map(|a| &end[a][..]),
-            };
-            let accel = integrator.world.accel();
-            accel.occlude_segments_on(integrator.path, segments, SHADOW_T_MAX, blocked);
-            // Each point's light, its samples' answers read where the bundles left them.
-            let blocked = &blocked[..];
-            out.extend(
-                points
-                    .iter()
-                    .zip(prepared.iter())
-                    .enumerate()
-                    .map(|(i, (point, p))| {
-                        let light = p.radiance_where(point, |j| blocked[j * lanes + i]);
-                        (light, p.traced)
-                    }),
-            );
+            return;
         }
+        let (blocked, stride) = match &integrator.fixed_ends {
+            Some(ends) => {
+                let ends = ends.each_ref().map(|axis| &axis[..]);
+                bundle.pairs(integrator, points, prepared, ends);
+                (&bundle.blocked, count)
+            }
+            None => {
+                let lanes = count.next_multiple_of(N);
+                bundle.segments(integrator, points, prepared, lanes);
+                (&bundle.blocked, lanes)
+            }
+        };
+        // Each point's light, its samples' answers read where the bundles left them.
+        out.extend(
+            points
+                .iter()
+                .zip(prepared.iter())
+                .enumerate()
+                .map(|(i, (point, p))| {
+                    let light = p.radiance_where(point, |j| blocked[j * stride + i]);
+                    (light, p.traced)
+                }),
+        );
+    }
+}
+
+impl Bundle {
+    /// Traces the points' shadow rays toward light samples `ends` that every point shares, as
+    /// [`crate::accel::Pairs`]: the points' origins are written once, not once per sample.
+    /// Slot `j · points.len() + i` of `blocked` is point `i`'s sample `j`.
+    fn pairs(
+        &mut self,
+        integrator: &Integrator,
+        points: &[Scratch],
+        prepared: &[Point],
+        ends: [&[f32]; 3],
+    ) {
+        let (count, samples) = (points.len(), ends[0].len());
+        let slots = samples * count;
+        self.blocked.clear();
+        self.blocked.resize(slots, true);
+        // Samples behind the surface wait for the second pass, from the other side.
+        let mut any_behind = false;
+        for (i, point) in points.iter().enumerate() {
+            let (was, behind) = (&point.blocked[..samples], &point.behind[..samples]);
+            for j in 0..samples {
+                self.blocked[j * count + i] = was[j] | behind[j];
+                any_behind |= !was[j] & behind[j];
+            }
+        }
+        let accel = integrator.world.accel();
+        let side = |origins: &mut [Vec<f32>; 3], at: fn(&Point) -> glam::Vec3| {
+            for (a, axis) in origins.iter_mut().enumerate() {
+                axis.clear();
+                axis.extend(prepared.iter().map(|p| at(p)[a]));
+            }
+        };
+        side(&mut self.origin, |p| p.front);
+        accel.occlude_pairs_on(
+            integrator.path,
+            pairs(&self.origin, ends),
+            SHADOW_T_MAX,
+            &mut self.blocked,
+        );
+        if !any_behind {
+            return;
+        }
+        side(&mut self.end, |p| p.back);
+        self.back.clear();
+        self.back.resize(slots, true);
+        for (i, point) in points.iter().enumerate() {
+            let (was, behind) = (&point.blocked[..samples], &point.behind[..samples]);
+            for j in 0..samples {
+                self.back[j * count + i] = was[j] | !behind[j];
+            }
+        }
+        accel.occlude_pairs_on(
+            integrator.path,
+            pairs(&self.end, ends),
+            SHADOW_T_MAX,
+            &mut self.back,
+        );
+        for (i, point) in points.iter().enumerate() {
+            for (j, &behind) in point.behind[..samples].iter().enumerate() {
+                if behind {
+                    self.blocked[j * count + i] = self.back[j * count + i];
+                }
+            }
+        }
+    }
+
+    /// Traces the points' shadow rays as [`Segments`], sample-major with `lanes` slots per
+    /// sample: the segments of one packet run from neighbouring points to one light sample.
+    /// Slots of no point stay blocked.
+    fn segments(
+        &mut self,
+        integrator: &Integrator,
+        points: &[Scratch],
+        prepared: &[Point],
+        lanes: usize,
+    ) {
+        let (count, samples) = (points.len(), points.first().map_or(0, |p| p.ends.len()));
+        let slots = samples * lanes;
+        for axis in self.origin.iter_mut().chain(self.end.iter_mut()) {
+            axis.resize(slots, 0.0);
+        }
+        self.blocked.clear();
+        self.blocked.resize(slots, true);
+        // Row `j` holds the segments toward sample `j`, point by point: the writes are
+        // contiguous, and each row's slices are cut once so that the loop needs no bounds
+        // checks.
+        for j in 0..samples {
+            let row = j * lanes..j * lanes + count;
+            let [ox, oy, oz] = self.origin.each_mut().map(|v| &mut v[row.clone()]);
+            let [ex, ey, ez] = self.end.each_mut().map(|v| &mut v[row.clone()]);
+            let blocked = &mut self.blocked[row];
+            for (i, (point, p)) in points.iter().zip(prepared.iter()).enumerate() {
+                let was = point.blocked[j];
+                blocked[i] = was;
+                if !was {
+                    let o = if point.behind[j] { p.back } else { p.front };
+                    (ox[i], oy[i], oz[i]) = (o.x, o.y, o.z);
+                    let e = point.ends[j];
+                    (ex[i], ey[i], ez[i]) = (e.x, e.y, e.z);
+                }
+            }
+        }
+        let segments = Segments {
+            origin: self.origin.each_ref().map(|axis| &axis[..]),
+            end: self.end.each_ref().map(|axis| &axis[..]),
+        };
+        let accel = integrator.world.accel();
+        accel.occlude_segments_on(integrator.path, segments, SHADOW_T_MAX, &mut self.blocked);
+    }
+}
+
+/// The segments from `origins` to `ends`.
+fn pairs<'a>(origins: &'a [Vec<f32>; 3], ends: [&'a [f32]; 3]) -> Pairs<'a> {
+    Pairs {
+        origins: origins.each_ref().map(|axis| &axis[..]),
+        ends,
     }
 }
 

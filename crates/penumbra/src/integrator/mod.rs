@@ -131,8 +131,9 @@ pub(crate) struct Integrator<'w> {
     lights: Vec<LightPlan>,
     /// Whether points bundle their shadow rays (see `batch`).
     bundles: bool,
-    /// Whether every point has the same light samples (no jittered light).
-    fixed: bool,
+    /// Every light sample by axis, in light and sample order, when every point has the same
+    /// ones (no jittered light).
+    fixed_ends: Option<[Vec<f32>; 3]>,
     path: SimdPath,
 }
 
@@ -146,11 +147,12 @@ impl<'w> Integrator<'w> {
             .map(|light| plan(light, &settings, physical))
             .collect();
         let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
+        let fixed_ends = fixed_ends(&lights);
         Self {
             world,
             settings,
-            bundles: batch::bundles(samples, world.accel().node_count()),
-            fixed: lights.iter().all(|l| matches!(l.source, Source::Fixed(_))),
+            bundles: batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count()),
+            fixed_ends,
             lights,
             path: simd_path(),
         }
@@ -292,4 +294,18 @@ impl<'w> Integrator<'w> {
             s.blocked[i] = if s.behind[i] { s.back[i] } else { s.front[i] };
         }
     }
+}
+
+/// Every sample of `lights` by axis, in light and sample order, if none is jittered.
+fn fixed_ends(lights: &[LightPlan]) -> Option<[Vec<f32>; 3]> {
+    let mut ends: [Vec<f32>; 3] = Default::default();
+    for light in lights {
+        let Source::Fixed(points) = &light.source else {
+            return None;
+        };
+        for (axis, from) in ends.iter_mut().zip([&points.x, &points.y, &points.z]) {
+            axis.extend_from_slice(from);
+        }
+    }
+    Some(ends)
 }
