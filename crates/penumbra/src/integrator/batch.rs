@@ -114,8 +114,8 @@ impl Kernel for ShadeBatch<'_, '_> {
             prepared.push(integrator.prepare(&rays[i], &surfaces[i], &mut rngs[i], point));
         }
         // Every point has the same lights, hence as many samples.
-        let samples = points.first().map_or(0, |p| p.ends.len());
-        debug_assert!(points.iter().all(|p| p.ends.len() == samples));
+        let samples = points.first().map_or(0, |p| p.blocked.len());
+        debug_assert!(points.iter().all(|p| p.blocked.len() == samples));
         if !integrator.bundles {
             for (point, p) in points.iter_mut().zip(prepared.iter()) {
                 integrator.occlude(p.front, p.back, point);

@@ -80,7 +80,7 @@ pub(crate) struct Scratch {
     /// Every sample of every light, in light and sample order: its point, the light it sends
     /// toward the viewer if visible (by channel), whether it is blocked (cannot contribute,
     /// then: occluded), and whether it lies behind the surface (its shadow ray leaves from the
-    /// other side).
+    /// other side). The points are left out when bundles take them from the plan (pairs).
     ends: Vec<Vec3>,
     r: Vec<f32>,
     g: Vec<f32>,
@@ -219,6 +219,9 @@ impl<'w> Integrator<'w> {
         scratch: &mut Scratch,
     ) {
         scratch.ends.clear();
+        // Pairs take the fixed samples from the plan; only fans and segments read `ends`.
+        let ends = !(self.bundles && self.fixed_ends.is_some());
+        let mut base = 0;
         for plan in &self.lights {
             let points = match &plan.source {
                 Source::Fixed(points) => points,
@@ -228,8 +231,9 @@ impl<'w> Integrator<'w> {
                 }
             };
             let n = points.len();
-            let base = scratch.ends.len();
-            scratch.ends.extend_from_slice(&points.all);
+            if ends {
+                scratch.ends.extend_from_slice(&points.all);
+            }
             let end = base + n;
             for v in [&mut scratch.r, &mut scratch.g, &mut scratch.b] {
                 v.resize(end, 0.0);
@@ -264,8 +268,9 @@ impl<'w> Integrator<'w> {
             for i in 0..n {
                 behind[i] = n_geom.x * lx[i] + n_geom.y * ly[i] + n_geom.z * lz[i] < 0.0;
             }
+            base = end;
         }
-        let count = scratch.ends.len();
+        let count = base;
         for v in [&mut scratch.r, &mut scratch.g, &mut scratch.b] {
             v.truncate(count);
         }
