@@ -106,18 +106,15 @@ impl Kernel for OccludeSegments<'_> {
         if bvh.nodes.is_empty() {
             return;
         }
+        let mut bundle = Bundle::<N, I>::new(t_max);
         for (chunk, blocked) in blocked.chunks_mut(N).enumerate() {
             let segments = segments.range(chunk * N, blocked.len());
-            occlude_lanes::<N, I>(
+            occlude_lanes(
                 bvh,
-                t_max,
+                &mut bundle,
                 blocked,
                 |i| segments.get(i),
-                || {
-                    Lanes::new(segments.origin, |a, i| {
-                        segments.end[a][i] - segments.origin[a][i]
-                    })
-                },
+                |rays| rays.set(segments.origin, |a, i| segments.end[a][i]),
             );
         }
     }
@@ -153,18 +150,19 @@ impl Kernel for OccludePairs<'_> {
         if bvh.nodes.is_empty() || m == 0 {
             return;
         }
+        let mut bundle = Bundle::<N, I>::new(t_max);
         for (j, row) in blocked.chunks_mut(m).enumerate() {
             let end = [ends[0][j], ends[1][j], ends[2][j]];
             for (chunk, blocked) in row.chunks_mut(N).enumerate() {
                 let lanes = chunk * N..chunk * N + blocked.len();
                 let origin = origins.map(|axis| &axis[lanes.clone()]);
                 let point = |i: usize| Vec3::new(origin[0][i], origin[1][i], origin[2][i]);
-                occlude_lanes::<N, I>(
+                occlude_lanes(
                     bvh,
-                    t_max,
+                    &mut bundle,
                     blocked,
                     |i| (point(i), end.into()),
-                    || Lanes::new(origin, |a, i| end[a] - origin[a][i]),
+                    |rays| rays.set(origin, |a, _| end[a]),
                 );
             }
         }
@@ -172,16 +170,18 @@ impl Kernel for OccludePairs<'_> {
 }
 
 /// Traces the segments of one packet (at most `N`, `blocked` one slot each) whose origin and
-/// end `segment(i)` gives, and whose lanes `lanes()` gives. A packet with a quarter of its
-/// lanes or fewer to trace goes one ray at a time.
+/// end `segment(i)` gives, and whose lanes `fill` writes into `bundle`'s (in place: a packet's
+/// lanes are a few hundred bytes, and copies of them cost 10 % of the seed room's shadow rays).
+/// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
 #[inline(always)]
 fn occlude_lanes<const N: usize, I: Isa>(
     bvh: &Bvh,
-    t_max: f32,
+    bundle: &mut Bundle<N, I>,
     blocked: &mut [bool],
     segment: impl Fn(usize) -> (Vec3, Vec3),
-    lanes: impl FnOnce() -> Lanes<N>,
+    fill: impl FnOnce(&mut Lanes<N>),
 ) {
+    let t_max = bundle.t_max;
     let live = blocked.iter().filter(|&&b| !b).count();
     if live == 0 {
         return;
@@ -194,7 +194,8 @@ fn occlude_lanes<const N: usize, I: Isa>(
             }
         }
     } else {
-        occlude_packet::<N, I>(bvh, lanes(), t_max, blocked);
+        fill(&mut bundle.rays);
+        occlude_packet(bvh, bundle, blocked);
     }
 }
 
@@ -206,60 +207,44 @@ struct Lanes<const N: usize> {
 }
 
 impl<const N: usize> Lanes<N> {
-    /// The lanes of the segments from `origin` (at most `N` of them, by axis) whose direction
-    /// along axis `a` is `dir(a, i)`. Lanes past the segments repeat the last one.
+    /// Sets the lanes to the segments from `origin` (at most `N` of them, by axis) to the
+    /// points whose coordinate along axis `a` is `end(a, i)`. Lanes past the segments repeat
+    /// the last one. Each direction is `end − origin`, read from the lanes' own origins (fixed
+    /// arrays, so that the loop needs no bounds checks and vectorizes).
     // Lane loops index several arrays by lane; that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn new(origin: [&[f32]; 3], dir: impl Fn(usize, usize) -> f32) -> Self {
+    fn set(&mut self, origin: [&[f32]; 3], end: impl Fn(usize, usize) -> f32) {
         let count = origin[0].len();
         debug_assert!(N <= 32 && count > 0 && count <= N);
-        let mut rays = Lanes {
-            origin: [[0.0; N]; 3],
-            dir: [[0.0; N]; 3],
-            inv: [[0.0; N]; 3],
-        };
+        let last = count - 1;
         for a in 0..3 {
             if count == N {
-                rays.origin[a].copy_from_slice(origin[a]);
-                for i in 0..N {
-                    rays.dir[a][i] = dir(a, i);
-                }
+                self.origin[a].copy_from_slice(&origin[a][..N]);
             } else {
                 for i in 0..N {
-                    let k = i.min(count - 1);
-                    rays.origin[a][i] = origin[a][k];
-                    rays.dir[a][i] = dir(a, k);
+                    self.origin[a][i] = origin[a][i.min(last)];
                 }
             }
             for i in 0..N {
-                rays.inv[a][i] = 1.0 / rays.dir[a][i];
+                self.dir[a][i] = end(a, i.min(last)) - self.origin[a][i];
+            }
+            for i in 0..N {
+                self.inv[a][i] = 1.0 / self.dir[a][i];
             }
         }
-        rays
     }
 }
 
-/// Marks `blocked[i]` for each lane `i` of `rays` (`blocked` has one slot per segment, at
+/// Marks `blocked[i]` for each lane `i` of `bundle` (`blocked` has one slot per segment, at
 /// most `N`) that is not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-fn occlude_packet<const N: usize, I: Isa>(
-    bvh: &Bvh,
-    rays: Lanes<N>,
-    t_max: f32,
-    blocked: &mut [bool],
-) {
+fn occlude_packet<const N: usize, I: Isa>(bvh: &Bvh, bundle: &Bundle<N, I>, blocked: &mut [bool]) {
     let mut active: u32 = 0;
     for (i, &b) in blocked.iter().enumerate() {
         active |= u32::from(!b) << i;
     }
-    let bundle = Bundle::<N, I> {
-        rays,
-        far: [t_max; N],
-        t_max,
-        isa: PhantomData,
-    };
-    let active = walk::<N, false>(bvh, &bundle, active);
+    let active = walk::<N, false>(bvh, bundle, active);
     for (i, b) in blocked.iter_mut().enumerate() {
         *b |= active & (1 << i) == 0;
     }
@@ -271,6 +256,22 @@ struct Bundle<const N: usize, I> {
     far: [f32; N],
     t_max: f32,
     isa: PhantomData<I>,
+}
+
+impl<const N: usize, I> Bundle<N, I> {
+    /// A bundle of segments traced for `t` in `(0, t_max)`, its lanes to be set.
+    fn new(t_max: f32) -> Self {
+        Bundle {
+            rays: Lanes {
+                origin: [[0.0; N]; 3],
+                dir: [[0.0; N]; 3],
+                inv: [[0.0; N]; 3],
+            },
+            far: [t_max; N],
+            t_max,
+            isa: PhantomData,
+        }
+    }
 }
 
 impl<const N: usize, I: Isa> ShadowLanes<N> for Bundle<N, I> {
