@@ -231,9 +231,11 @@ fn render_impl(
     let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
 
     let results: Vec<Option<TileOut>> = pool.install(|| {
+        // Scratch buffers are made once per rayon job, not per tile: a tile's worth of
+        // work is small, and filling fresh buffers cost allocations and page faults.
         tiles
             .par_iter()
-            .map(|tile| {
+            .map_init(Buffers::default, |buffers, tile| {
                 if cancelled() {
                     return None;
                 }
@@ -241,9 +243,8 @@ fn render_impl(
                 let mut out = Vec::with_capacity(n);
                 let mut aovs = Vec::with_capacity(if with_aovs { n } else { 0 });
                 let mut shadow = 0;
-                let mut buffers = Buffers::default();
                 for y in tile.y0..tile.y1 {
-                    shadow += job.row(y, tile.x0..tile.x1, &mut buffers, &mut out, &mut aovs)?;
+                    shadow += job.row(y, tile.x0..tile.x1, buffers, &mut out, &mut aovs)?;
                 }
                 let n = out.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;
