@@ -29,6 +29,7 @@ mod build;
 mod closest;
 mod packet;
 mod segments;
+mod shaft;
 mod split;
 mod traverse;
 mod validate;

@@ -135,6 +135,52 @@ proptest! {
         assert_segments_agree(&g, &bvh, Vec3::from(origin), &ends, T_MAX);
     }
 
+    /// A renderer's bundles: neighbouring points on a floor (some exactly on it, some a
+    /// hair above) to the N×N samples of a light, among a room's large triangles and a few
+    /// small ones, so that the batch's shaft holds few candidates, or many when the soup is
+    /// dense.
+    #[test]
+    fn bundles_to_a_light_grid_equal_brute_force_occlusion(
+        tris in prop::collection::vec(
+            (arb_point(), prop::array::uniform3(prop::array::uniform3(-1.5f32..1.5))),
+            0..60,
+        ),
+        center in prop::array::uniform2(-5.0f32..5.0),
+        spread in prop_oneof![Just(0.0f32), 1e-3f32..0.5],
+        lifts in prop::collection::vec((0.0f32..=1.0, 0.0f32..=1.0, 0u8..4), 1..20),
+        light in (arb_point(), -3.0f32..3.0, -3.0f32..3.0),
+        n in 1usize..6,
+    ) {
+        // A floor at y = −6 and a ceiling at y = 6 that the light may lie in or below.
+        let mut soup_tris: Vec<[[f32; 3]; 3]> = tris
+            .into_iter()
+            .map(|(c, offs)| offs.map(|o| [c[0] + o[0], c[1] + o[1], c[2] + o[2]]))
+            .collect();
+        let (x, z) = (Vec3::X * 20.0, Vec3::Z * 20.0);
+        soup_tris.extend(parallelogram(Vec3::new(-10.0, -6.0, -10.0), x, z));
+        soup_tris.extend(parallelogram(Vec3::new(-10.0, 6.0, -10.0), z, x));
+        let g = soup(&soup_tris);
+        let bvh = build_checked(&g);
+        let origins: Vec<Vec3> = lifts
+            .iter()
+            .map(|&(a, b, lift)| {
+                let lift = [0.0, 1e-6, 1e-4, 0.3][usize::from(lift)];
+                Vec3::new(center[0] + a * spread, -6.0 + lift, center[1] + b * spread)
+            })
+            .collect();
+        let (corner, a, b) = light;
+        let corner = Vec3::new(corner[0], corner[1].abs().min(6.0), corner[2]);
+        let (u, v) = (Vec3::new(a, 0.0, 0.0), Vec3::new(0.0, 0.0, b));
+        let step = 1.0 / n as f32;
+        let ends: Vec<Vec3> = (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) as f32 + 0.5, (k / n) as f32 + 0.5);
+                corner + (i * step) * u + (j * step) * v
+            })
+            .collect();
+        assert_pairs_agree(&g, &bvh, &origins, &ends, T_MAX);
+    }
+
     /// Rays sharing an origin, as a pinhole camera's, in packets of every width.
     #[test]
     fn intersect_from_equals_brute_force(
