@@ -18,7 +18,7 @@ use std::marker::PhantomData;
 use glam::Vec3;
 
 use super::packet::{walk, ShadowLanes};
-use super::shaft::Shaft;
+use super::shaft::{self, Shaft};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
 use crate::simd::{max, min, Isa, Kernel};
@@ -151,24 +151,21 @@ impl Kernel for OccludePairs<'_> {
         if bvh.nodes.is_empty() || m == 0 || n == 0 {
             return;
         }
-        let mut bundle = Bundle::<N, I>::new(t_max);
-        let candidates = Shaft::new(bvh, origins, ends).gather(bvh);
-        if candidates.as_ref().is_some_and(|c| c.as_slice().is_empty()) {
-            return;
+        match Shaft::new(bvh, origins, ends).gather(bvh) {
+            Some(candidates) if candidates.as_slice().is_empty() => return,
+            Some(candidates) => {
+                let pairs = Pairs { origins, ends };
+                shaft::occlude_pairs::<N, I>(bvh, candidates.as_slice(), pairs, t_max, blocked);
+                return;
+            }
+            None => {}
         }
+        let mut bundle = Bundle::<N, I>::new(t_max);
         for (j, row) in blocked.chunks_mut(m).enumerate() {
             let end = [ends[0][j], ends[1][j], ends[2][j]];
             for (chunk, blocked) in row.chunks_mut(N).enumerate() {
                 let lanes = chunk * N..chunk * N + blocked.len();
                 let origin = origins.map(|axis| &axis[lanes.clone()]);
-                if let Some(candidates) = &candidates {
-                    if blocked.iter().all(|&b| b) {
-                        continue;
-                    }
-                    bundle.rays.set(origin, |a, _| end[a]);
-                    occlude_candidates(bvh, &bundle, candidates.as_slice(), blocked);
-                    continue;
-                }
                 let point = |i: usize| Vec3::new(origin[0][i], origin[1][i], origin[2][i]);
                 occlude_lanes(
                     bvh,
@@ -269,31 +266,6 @@ fn occlude_packet<const N: usize, I: Isa>(bvh: &Bvh, bundle: &Bundle<N, I>, bloc
         active |= u32::from(!b) << i;
     }
     let active = walk::<N, false>(bvh, bundle, active);
-    for (i, b) in blocked.iter_mut().enumerate() {
-        *b |= active & (1 << i) == 0;
-    }
-}
-
-/// Marks `blocked[i]` for each lane `i` of `bundle` (`blocked` has one slot per segment, at
-/// most `N`) that is not blocked yet and that one of the triangles `candidates` (leaf-order
-/// indices) meets for `t` in `(0, t_max)`: a shaft's candidates, tested without the tree.
-#[inline(always)]
-fn occlude_candidates<const N: usize, I: Isa>(
-    bvh: &Bvh,
-    bundle: &Bundle<N, I>,
-    candidates: &[u32],
-    blocked: &mut [bool],
-) {
-    let mut active: u32 = 0;
-    for (i, &b) in blocked.iter().enumerate() {
-        active |= u32::from(!b) << i;
-    }
-    for &k in candidates {
-        active &= !triangle::<N, I>(&bvh.tris[k as usize], &bundle.rays, bundle.t_max, active);
-        if active == 0 {
-            break;
-        }
-    }
     for (i, b) in blocked.iter_mut().enumerate() {
         *b |= active & (1 << i) == 0;
     }

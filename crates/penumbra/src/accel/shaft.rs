@@ -18,7 +18,8 @@
 
 use glam::Vec3;
 
-use super::{Bvh, BvhNode, TriAccel, STACK_SIZE};
+use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
+use crate::simd::Isa;
 
 /// Most triangles a shaft may hold for its batch to test them alone; beyond, the batch walks
 /// the tree.
@@ -175,4 +176,143 @@ fn bounds(points: [&[f32]; 3]) -> (Vec3, Vec3) {
     };
     let [(x0, x1), (y0, y1), (z0, z1)] = points.map(range);
     (Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
+}
+
+/// Ends tested together against one candidate: their lanes' masks fit on the stack.
+const ENDS_PER_PASS: usize = 64;
+
+/// Marks slot `j · m + i` of `blocked` (for `m` origins) when segment `(j, i)` of `pairs` is
+/// not blocked yet and one of the triangles `candidates` (leaf-order indices: a shaft's)
+/// meets it for `t` in `(0, t_max)`, `N` origins at a time.
+///
+/// Each lane runs `geometry::intersect_triangle`'s operations in its order (see
+/// [`segments`](super::segments)' `triangle`); the terms that do not depend on the segment's
+/// end (`tvec`, `qvec` and the `t` numerator) are computed once per triangle and origin, not
+/// once per end: the same values, so the same answers.
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(super) fn occlude_pairs<const N: usize, I: Isa>(
+    bvh: &Bvh,
+    candidates: &[u32],
+    Pairs { origins, ends }: Pairs,
+    t_max: f32,
+    blocked: &mut [bool],
+) {
+    let (m, n) = (origins[0].len(), ends[0].len());
+    debug_assert!(N <= 32 && blocked.len() == m * n);
+    for start in (0..m).step_by(N) {
+        let count = N.min(m - start);
+        // Lanes past the origins repeat the last one; their masks keep them out.
+        let mut o = [[0.0f32; N]; 3];
+        for a in 0..3 {
+            for i in 0..N {
+                o[a][i] = origins[a][start + i.min(count - 1)];
+            }
+        }
+        for first in (0..n).step_by(ENDS_PER_PASS) {
+            let ends_here = first..n.min(first + ENDS_PER_PASS);
+            let mut active = [0u32; ENDS_PER_PASS];
+            let mut live = false;
+            for (mask, j) in active.iter_mut().zip(ends_here.clone()) {
+                for (i, &b) in blocked[j * m + start..][..count].iter().enumerate() {
+                    *mask |= u32::from(!b) << i;
+                }
+                live |= *mask != 0;
+            }
+            if !live {
+                continue;
+            }
+            for &k in candidates {
+                let tri = &bvh.tris[k as usize];
+                let fixed = Fixed::new(tri, &o);
+                for (mask, j) in active.iter_mut().zip(ends_here.clone()) {
+                    if *mask != 0 {
+                        let end = [ends[0][j], ends[1][j], ends[2][j]];
+                        *mask &= !fixed.hits::<I>(tri, &o, end, t_max, *mask);
+                    }
+                }
+            }
+            for (mask, j) in active.iter().zip(ends_here) {
+                for (i, b) in blocked[j * m + start..][..count].iter_mut().enumerate() {
+                    *b |= mask & (1 << i) == 0;
+                }
+            }
+        }
+    }
+}
+
+/// One triangle's Möller–Trumbore terms that depend on the origin alone, by lane: `tvec =
+/// origin − v0`, `qvec = tvec × e1` and the `t` numerator `e2 · qvec`.
+struct Fixed<const N: usize> {
+    tvec: [[f32; N]; 3],
+    qvec: [[f32; N]; 3],
+    t_num: [f32; N],
+}
+
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
+impl<const N: usize> Fixed<N> {
+    #[inline(always)]
+    fn new(tri: &TriAccel, o: &[[f32; N]; 3]) -> Self {
+        let (v0, e1, e2) = (tri.v0, tri.e1, tri.e2);
+        let mut f = Fixed {
+            tvec: [[0.0; N]; 3],
+            qvec: [[0.0; N]; 3],
+            t_num: [0.0; N],
+        };
+        for i in 0..N {
+            let tx = o[0][i] - v0.x;
+            let ty = o[1][i] - v0.y;
+            let tz = o[2][i] - v0.z;
+            let qx = ty * e1.z - e1.y * tz;
+            let qy = tz * e1.x - e1.z * tx;
+            let qz = tx * e1.y - e1.x * ty;
+            (f.tvec[0][i], f.tvec[1][i], f.tvec[2][i]) = (tx, ty, tz);
+            (f.qvec[0][i], f.qvec[1][i], f.qvec[2][i]) = (qx, qy, qz);
+            f.t_num[i] = e2.x * qx + e2.y * qy + e2.z * qz;
+        }
+        f
+    }
+
+    /// The lanes of `lanes` whose segment from `o` to `end` the triangle meets with `t` in
+    /// `(0, t_max)`: the rest of the lane test, written as `segments`' `triangle` writes it.
+    // The comparisons are written out, negations included, to keep the scalar test's answers
+    // for NaN values.
+    #[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+    #[inline(always)]
+    fn hits<I: Isa>(
+        &self,
+        tri: &TriAccel,
+        o: &[[f32; N]; 3],
+        end: [f32; 3],
+        t_max: f32,
+        lanes: u32,
+    ) -> u32 {
+        let (e1, e2) = (tri.e1, tri.e2);
+        let mut hit = [0i32; N];
+        for i in 0..N {
+            let dx = end[0] - o[0][i];
+            let dy = end[1] - o[1][i];
+            let dz = end[2] - o[2][i];
+            let px = dy * e2.z - e2.y * dz;
+            let py = dz * e2.x - e2.z * dx;
+            let pz = dx * e2.y - e2.x * dy;
+            let det = e1.x * px + e1.y * py + e1.z * pz;
+            let inv_det = 1.0 / det;
+            let (tx, ty, tz) = (self.tvec[0][i], self.tvec[1][i], self.tvec[2][i]);
+            let b1 = (tx * px + ty * py + tz * pz) * inv_det;
+            let (qx, qy, qz) = (self.qvec[0][i], self.qvec[1][i], self.qvec[2][i]);
+            let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
+            let t = self.t_num[i] * inv_det;
+            let inside = (det != 0.0)
+                & det.is_finite()
+                & (0.0 <= b1)
+                & (b1 <= 1.0)
+                & !(b2 < 0.0)
+                & !(b1 + b2 > 1.0);
+            hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
+        }
+        I::mask(&hit) & lanes
+    }
 }
