@@ -19,7 +19,7 @@
 use glam::Vec3;
 
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
-use crate::simd::Isa;
+use crate::simd::{max, min, Isa};
 
 /// Most triangles a shaft may hold for its batch to test them alone; beyond, the batch walks
 /// the tree.
@@ -51,6 +51,7 @@ impl Candidates {
 impl Shaft {
     /// The hull of `origins` and `ends` (each by axis, neither empty) in the scene of `bvh`
     /// (not empty).
+    #[inline(always)]
     pub(super) fn new(bvh: &Bvh, origins: [&[f32]; 3], ends: [&[f32]; 3]) -> Shaft {
         // The hull of the two sets lies in the hull of their boxes (Haines and Wallace's shaft
         // between two boxes), whose extent along an axis is the union of the boxes'.
@@ -128,6 +129,7 @@ impl Shaft {
 
     /// The triangles of `bvh` (not empty) the shaft holds, or `None` when there are more
     /// than [`MAX_CANDIDATES`].
+    #[inline(always)]
     pub(super) fn gather(&self, bvh: &Bvh) -> Option<Candidates> {
         let mut found = Candidates {
             index: [0; MAX_CANDIDATES],
@@ -165,14 +167,27 @@ impl Shaft {
     }
 }
 
-/// The smallest and largest coordinates of `points` (by axis, not empty), as corners.
+/// The smallest and largest coordinates of `points` (by axis, not empty), as corners. NaN
+/// coordinates are left out: a segment with one meets no triangle in the lane test.
+// Eight running minima and maxima, so that the loops vectorize.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn bounds(points: [&[f32]; 3]) -> (Vec3, Vec3) {
     let range = |c: &[f32]| {
-        c.iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &x| {
-                (lo.min(x), hi.max(x))
-            })
+        let (mut lo, mut hi) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8]);
+        let chunks = c.chunks_exact(8);
+        for (i, &x) in chunks.remainder().iter().enumerate() {
+            (lo[i], hi[i]) = (min(x, lo[i]), max(x, hi[i]));
+        }
+        for chunk in chunks {
+            for i in 0..8 {
+                (lo[i], hi[i]) = (min(chunk[i], lo[i]), max(chunk[i], hi[i]));
+            }
+        }
+        (
+            lo.into_iter().fold(f32::INFINITY, min),
+            hi.into_iter().fold(f32::NEG_INFINITY, max),
+        )
     };
     let [(x0, x1), (y0, y1), (z0, z1)] = points.map(range);
     (Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
