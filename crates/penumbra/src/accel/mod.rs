@@ -17,6 +17,8 @@
 //!   (`packet` also holds the any-hit walk of every packet kind);
 //! - `segments`: any-hit packets of segments with origins of their own (bundles of shadow rays
 //!   from neighbouring points to one light sample);
+//! - `shaft`: shaft culling for those bundles when every point has the same light samples:
+//!   the few triangles in the hull of a batch's points and samples, tested without the tree;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
 use glam::Vec3;
@@ -304,6 +306,9 @@ impl Bvh {
     /// are traced together, a SIMD vector's width at a time, so consecutive origins should lie
     /// close to each other: a few neighbouring shading points, say, with the fixed samples of
     /// a light for ends.
+    ///
+    /// The triangles that lie in the hull of all the origins and ends (the shaft) are gathered
+    /// first; when there are few, each packet tests those alone instead of walking the tree.
     pub fn occlude_pairs(&self, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
         self.occlude_pairs_on(simd_path(), pairs, t_max, blocked);
     }

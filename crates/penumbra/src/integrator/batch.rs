@@ -11,7 +11,9 @@
 //!
 //! When every point has the same light samples (no jittered light), a bundle is given as
 //! [`crate::accel::Pairs`]: the batch's points once and the samples once per render, the
-//! segments between them implied. Jittered samples differ from point to point, and their
+//! segments between them implied. All of a batch's segments then lie in one shaft between its
+//! points and the samples, and the BVH finds the few triangles in it once for the batch
+//! (in a room of large triangles, usually the points' own surface alone). Jittered samples differ from point to point, and their
 //! bundles list every segment ([`Segments`]), which costs their writes; those pay only on
 //! deep trees (see [`BUNDLE_MIN_NODES`]).
 //!
