@@ -324,9 +324,6 @@ fn determinant<const N: usize>(tri: &TriAccel, dir: &[[f32; N]; 3], i: usize) ->
 /// origin's terms (`tvec = origin − v0`, `qvec = tvec × e1`, `t_num = e2·qvec`) shared by all
 /// lanes: whether the ray meets the triangle's inside (edges included), and `t`, `b1`, `b2`.
 /// The caller bounds `t`.
-// The comparisons are written out, negations included, to keep the scalar test's answers for
-// NaN values (a NaN `b2` passes its two tests there, and must here).
-#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
 #[inline(always)]
 pub(super) fn moller_trumbore<const N: usize>(
     tri: &TriAccel,
@@ -342,7 +339,16 @@ pub(super) fn moller_trumbore<const N: usize>(
     let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
     let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;
     let t = t_num * inv_det;
-    let inside =
-        (det != 0.0) & det.is_finite() & (0.0 <= b1) & (b1 <= 1.0) & !(b2 < 0.0) & !(b1 + b2 > 1.0);
-    (inside, t, b1, b2)
+    (inside(det, b1, b2), t, b1, b2)
+}
+
+/// Möller–Trumbore's verdict from its determinant and barycentrics, as
+/// `geometry::intersect_triangle` gives it: the ray meets the triangle's inside, edges
+/// included. Every lane test ends here, so that all of them answer alike.
+// The comparisons are written out, negations included, to keep the scalar test's answers for
+// NaN values (a NaN `b2` passes its two tests there, and must here).
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+#[inline(always)]
+pub(super) fn inside(det: f32, b1: f32, b2: f32) -> bool {
+    (det != 0.0) & det.is_finite() & (0.0 <= b1) & (b1 <= 1.0) & !(b2 < 0.0) & !(b1 + b2 > 1.0)
 }

@@ -17,7 +17,7 @@ use std::marker::PhantomData;
 
 use glam::Vec3;
 
-use super::packet::{walk, ShadowLanes};
+use super::packet::{inside, walk, ShadowLanes};
 use super::shaft::{self, Shaft};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
@@ -344,13 +344,8 @@ fn slab<const N: usize, I: Isa>(
 /// The lanes of `lanes` (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`:
 /// per lane, `geometry::intersect_triangle`'s products and sums in its order (glam's `cross`
 /// and `dot` written out), no fused multiply-add.
-// The comparisons are written out, negations included, to keep the scalar test's answers for
-// NaN values (a NaN `b2` passes its two tests there, and must here).
-#[allow(
-    clippy::needless_range_loop,
-    clippy::neg_cmp_op_on_partial_ord,
-    clippy::manual_range_contains
-)]
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
     tri: &TriAccel,
@@ -378,13 +373,7 @@ fn triangle<const N: usize, I: Isa>(
         let qz = tx * e1.y - e1.x * ty;
         let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
         let t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv_det;
-        let inside = (det != 0.0)
-            & det.is_finite()
-            & (0.0 <= b1)
-            & (b1 <= 1.0)
-            & !(b2 < 0.0)
-            & !(b1 + b2 > 1.0);
-        hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
+        hit[i] = -((inside(det, b1, b2) & (t > 0.0) & (t < t_max)) as i32);
     }
     I::mask(&hit) & lanes
 }

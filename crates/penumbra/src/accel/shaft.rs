@@ -18,6 +18,7 @@
 
 use glam::Vec3;
 
+use super::packet::inside;
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
 
@@ -292,9 +293,6 @@ impl<const N: usize> Fixed<N> {
 
     /// The lanes of `lanes` whose segment from `o` to `end` the triangle meets with `t` in
     /// `(0, t_max)`: the rest of the lane test, written as `segments`' `triangle` writes it.
-    // The comparisons are written out, negations included, to keep the scalar test's answers
-    // for NaN values.
-    #[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
     #[inline(always)]
     fn hits<I: Isa>(
         &self,
@@ -320,13 +318,7 @@ impl<const N: usize> Fixed<N> {
             let (qx, qy, qz) = (self.qvec[0][i], self.qvec[1][i], self.qvec[2][i]);
             let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
             let t = self.t_num[i] * inv_det;
-            let inside = (det != 0.0)
-                & det.is_finite()
-                & (0.0 <= b1)
-                & (b1 <= 1.0)
-                & !(b2 < 0.0)
-                & !(b1 + b2 > 1.0);
-            hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
+            hit[i] = -((inside(det, b1, b2) & (t > 0.0) & (t < t_max)) as i32);
         }
         I::mask(&hit) & lanes
     }
