@@ -29,12 +29,38 @@ pub(crate) fn load_texture_image(
     decode_texture_image(&bytes, srgb, max_bytes)
 }
 
+/// The eight bytes every PNG file starts with.
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+/// Refuses a PNG whose palette (a `PLTE` chunk) is not a whole number of RGB entries, or has
+/// more than 256: png 0.18.1 accepts such a chunk and then panics while it expands the
+/// paletted image (`decoder/transform/palette.rs`; found by fuzzing the `texture` target). Other
+/// files, and PNGs with sound palettes, pass untouched.
+fn check_png_palette(bytes: &[u8]) -> Result<(), String> {
+    let Some(mut rest) = bytes.strip_prefix(&PNG_SIGNATURE[..]) else {
+        return Ok(());
+    };
+    // Chunks: a 4-byte big-endian length, a 4-byte type, the data, a 4-byte CRC.
+    while let [a, b, c, d, kind @ ..] = rest {
+        let len = u32::from_be_bytes([*a, *b, *c, *d]) as usize;
+        if kind.starts_with(b"PLTE") && (!len.is_multiple_of(3) || len > 3 * 256) {
+            return Err(format!(
+                "the PNG palette (PLTE chunk) has {len} bytes, not a whole number of RGB \
+                 entries up to 256"
+            ));
+        }
+        rest = rest.get(len.saturating_add(12)..).unwrap_or_default();
+    }
+    Ok(())
+}
+
 /// [`load_texture_image`] on the bytes of the image file.
 pub fn decode_texture_image(
     bytes: &[u8],
     srgb: bool,
     max_bytes: Option<u64>,
 ) -> Result<Image, String> {
+    check_png_palette(bytes)?;
     let reader = || {
         image::ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()
@@ -143,5 +169,17 @@ mod tests {
         assert!(load_texture_image(&Files::disk(), &corrupt, true, None).is_err());
         assert!(load_texture_image(&Files::disk(), &dir.join("missing.png"), true, None).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn sound_palettes_decode_and_broken_ones_are_errors_not_panics() {
+        let good = include_bytes!("../../../fuzz/corpus/texture/palette_2x2.png");
+        let image = decode_texture_image(good, true, None).unwrap();
+        assert_eq!((image.width, image.height), (2, 2));
+        // A 262-byte palette with valid CRCs: png 0.18.1 alone panics on it.
+        let bad =
+            include_bytes!("../../../fuzz/regressions/texture/png_palette_not_whole_entries.png");
+        let err = decode_texture_image(bad, true, None).unwrap_err();
+        assert!(err.contains("PLTE chunk) has 262 bytes"), "{err}");
     }
 }
