@@ -6,9 +6,9 @@
 //! outside the shaft cannot meet any of them. The shaft is described by its extent along a few
 //! axes (the coordinate axes, and three across the shaft's direction), and a box or a triangle
 //! whose extent along one of them is apart from the shaft's is outside it. One walk of the BVH
-//! gathers the triangles left (a room of large triangles leaves a handful, often none); the
-//! batch's packets then test those alone, and a batch whose shaft holds too many goes back to
-//! walking the tree packet by packet.
+//! gathers the triangles left (in a room of large triangles, usually the points' own surface
+//! alone); the batch's packets then test those alone, and a batch whose shaft holds too many
+//! goes back to walking the tree packet by packet.
 //!
 //! Exactness: the gathering only prunes, with a margin far above the rounding of the
 //! projections. A packet tests every candidate with the same lane test as the walk, which
