@@ -311,7 +311,11 @@ fn triangle<const N: usize, I: Isa>(
 /// Lane `i`'s `pvec = dir × e2` (as glam's cross product) and `det = e1 · pvec`, as
 /// Möller–Trumbore computes them.
 #[inline(always)]
-fn determinant<const N: usize>(tri: &TriAccel, dir: &[[f32; N]; 3], i: usize) -> ([f32; 3], f32) {
+pub(super) fn determinant<const N: usize>(
+    tri: &TriAccel,
+    dir: &[[f32; N]; 3],
+    i: usize,
+) -> ([f32; 3], f32) {
     let (e1, e2) = (tri.e1, tri.e2);
     let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
     let px = dy * e2.z - e2.y * dz;

@@ -18,7 +18,7 @@
 
 use glam::Vec3;
 
-use super::packet::inside;
+use super::packet::{determinant, inside};
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
 
@@ -81,15 +81,8 @@ impl Shaft {
         // above both. A NaN coordinate (a degenerate point) makes the shaft prune nothing.
         let margin = scale * (1.0 / (1 << 14) as f32) + f32::MIN_POSITIVE;
         let (mut lo, mut hi) = ([f32::NEG_INFINITY; AXES], [f32::INFINITY; AXES]);
-        for (k, axis) in axes.iter().enumerate() {
-            let extent = |(min, max): (Vec3, Vec3)| {
-                let (c, r) = (
-                    axis.dot((min + max) * 0.5),
-                    axis.abs().dot((max - min) * 0.5),
-                );
-                (c - r, c + r)
-            };
-            let ((a, b), (c, d)) = (extent(from), extent(to));
+        for (k, &axis) in axes.iter().enumerate() {
+            let ((a, b), (c, d)) = (extent(axis, from), extent(axis, to));
             let (l, h) = (a.min(c) - margin, b.max(d) + margin);
             if l <= h {
                 (lo[k], hi[k]) = (l, h);
@@ -107,15 +100,10 @@ impl Shaft {
                 return true;
             }
         }
-        let (center, half) = ((min + max) * 0.5, (max - min) * 0.5);
-        for k in 3..AXES {
-            let axis = self.axes[k];
-            let (c, r) = (axis.dot(center), axis.abs().dot(half));
-            if c + r < self.lo[k] || c - r > self.hi[k] {
-                return true;
-            }
-        }
-        false
+        (3..AXES).any(|k| {
+            let (l, h) = extent(self.axes[k], (min, max));
+            h < self.lo[k] || l > self.hi[k]
+        })
     }
 
     /// Whether the triangle lies outside the shaft.
@@ -166,6 +154,17 @@ impl Shaft {
         }
         Some(found)
     }
+}
+
+/// The extent along `axis` of the box with corners `(min, max)`: its center's projection
+/// minus and plus its half-size's.
+#[inline(always)]
+fn extent(axis: Vec3, (min, max): (Vec3, Vec3)) -> (f32, f32) {
+    let (c, r) = (
+        axis.dot((min + max) * 0.5),
+        axis.abs().dot((max - min) * 0.5),
+    );
+    (c - r, c + r)
 }
 
 /// The smallest and largest coordinates of `points` (by axis, not empty), as corners. NaN
@@ -302,16 +301,16 @@ impl<const N: usize> Fixed<N> {
         t_max: f32,
         lanes: u32,
     ) -> u32 {
-        let (e1, e2) = (tri.e1, tri.e2);
+        let mut dir = [[0.0f32; N]; 3];
+        for a in 0..3 {
+            for i in 0..N {
+                dir[a][i] = end[a] - o[a][i];
+            }
+        }
         let mut hit = [0i32; N];
         for i in 0..N {
-            let dx = end[0] - o[0][i];
-            let dy = end[1] - o[1][i];
-            let dz = end[2] - o[2][i];
-            let px = dy * e2.z - e2.y * dz;
-            let py = dz * e2.x - e2.z * dx;
-            let pz = dx * e2.y - e2.x * dy;
-            let det = e1.x * px + e1.y * py + e1.z * pz;
+            let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
+            let ([px, py, pz], det) = determinant(tri, &dir, i);
             let inv_det = 1.0 / det;
             let (tx, ty, tz) = (self.tvec[0][i], self.tvec[1][i], self.tvec[2][i]);
             let b1 = (tx * px + ty * py + tz * pz) * inv_det;
