@@ -14,15 +14,13 @@
 //! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
 //! visit.
 
-use glam::Vec3;
-
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
 use super::watertight::{EdgeRule, PreparedRay};
 use super::wide::WIDTH;
 use crate::simd::{max, min, Isa, Kernel};
 
-/// The closest hit of a ray and the unit normal of its triangle.
-pub(crate) type ClosestHit = Option<(SlotHit, Vec3)>;
+/// The closest hit of a ray.
+pub(crate) type ClosestHit = Option<SlotHit>;
 
 /// [`Accel::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that hits
 /// nothing), written to `hits`, as a [`Kernel`].
@@ -105,14 +103,12 @@ fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<N>> {
     Some(lanes)
 }
 
-/// The closest hits so far, by lane: `slot` is the leaf slot (valid where `hit`), `tri` the
-/// group index and lane of the triangle.
+/// The closest hits so far, by lane: `slot` is the leaf slot (valid where `hit`).
 struct Best<const N: usize> {
     t: [f32; N],
     b1: [f32; N],
     b2: [f32; N],
     slot: [u32; N],
-    tri: [(u32, u32); N],
     hit: u32,
 }
 
@@ -129,7 +125,6 @@ fn trace<const N: usize, I: Isa>(
         b1: [0.0; N],
         b2: [0.0; N],
         slot: [0; N],
-        tri: [(0, 0); N],
         hit: 0,
     };
     let all = if N == 32 { u32::MAX } else { (1 << N) - 1 };
@@ -164,35 +159,25 @@ fn trace<const N: usize, I: Isa>(
             }
             continue;
         }
-        for (g, (group, valid)) in accel.leaf_groups(index, count) {
+        for (group, valid) in accel.leaf(index, count) {
             let mut tris = valid;
             while tris != 0 {
                 let lane = tris.trailing_zeros() as usize;
                 tris &= tris - 1;
                 let corners = group.corners(lane);
                 let slot = group.first + lane as u32;
-                triangle::<N, I>(
-                    accel,
-                    lanes,
-                    &corners,
-                    slot,
-                    (g, lane as u32),
-                    mask,
-                    &mut best,
-                );
+                triangle::<N, I>(accel, lanes, &corners, slot, mask, &mut best);
             }
         }
     }
     for (i, hit) in hits.iter_mut().enumerate() {
         *hit = (best.hit >> i & 1 == 1).then(|| {
-            let (g, lane) = best.tri[i];
             let crossing = super::watertight::Crossing {
                 t: best.t[i],
                 b1: best.b1[i],
                 b2: best.b2[i],
             };
-            let normal = accel.group_normal(g, lane as usize);
-            (accel.slot_hit(best.slot[i] as usize, crossing), normal)
+            accel.slot_hit(best.slot[i] as usize, crossing)
         });
     }
 }
@@ -222,16 +207,15 @@ fn slab<const N: usize, I: Isa>(
     (I::mask(&inside), entry)
 }
 
-/// Tests the triangle `corners` (leaf slot `slot`, group and lane `tri`) on the lanes of
+/// Tests the triangle `corners` (leaf slot `slot`) on the lanes of
 /// `mask` and keeps it where it is closer than the lane's best hit.
-#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
     accel: &Accel,
     lanes: &Lanes<N>,
     corners: &super::watertight::Corners,
     slot: u32,
-    tri: (u32, u32),
     mask: u32,
     best: &mut Best<N>,
 ) {
@@ -298,7 +282,6 @@ fn triangle<const N: usize, I: Isa>(
             best.b1[i] = b1[i];
             best.b2[i] = b2[i];
             best.slot[i] = slot;
-            best.tri[i] = tri;
             best.hit |= 1 << i;
         }
     }

@@ -104,12 +104,12 @@ impl RaycastingScene {
             };
             dispatch(simd_path(), kernel);
             for (i, hit) in hits.into_iter().enumerate() {
-                let Some((hit, n)) = hit else { continue };
+                let Some(hit) = hit else { continue };
                 let c = hit.crossing;
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);
                 uv[i] = [c.b1, c.b2];
-                normal[i] = n.to_array();
+                normal[i] = accel.normal(hit.slot);
             }
         })?;
         Ok(out)
@@ -247,7 +247,7 @@ impl RaycastingScene {
                 pts[i] = near.point.to_array();
                 (g[i], p[i]) = (near.geometry, near.primitive);
                 uv[i] = [near.b1, near.b2];
-                normal[i] = accel.normal(near.slot).to_array();
+                normal[i] = accel.normal(near.slot);
             }
         })?;
         Ok(out)

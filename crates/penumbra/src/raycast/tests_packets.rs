@@ -11,9 +11,9 @@ use crate::simd::{dispatch, supported_paths, SimdPath};
 
 use super::tests_meshes::{icosphere, subdivided_cube, targets, MeshData};
 
-/// A hit as comparable bits: t, b1, b2, ids, slot and normal.
-fn bits(hit: &ClosestHit) -> Option<[u32; 9]> {
-    hit.map(|(h, n)| {
+/// A hit as comparable bits: t, b1, b2, ids and slot (the slot gives the normal).
+fn bits(hit: &ClosestHit) -> Option<[u32; 6]> {
+    hit.map(|h| {
         let c = h.crossing;
         [
             c.t.to_bits(),
@@ -22,9 +22,6 @@ fn bits(hit: &ClosestHit) -> Option<[u32; 9]> {
             h.geometry,
             h.primitive,
             h.slot,
-            n.x.to_bits(),
-            n.y.to_bits(),
-            n.z.to_bits(),
         ]
     })
 }

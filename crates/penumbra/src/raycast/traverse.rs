@@ -14,7 +14,7 @@
 //! skipped by a ray that meets it. The build pads boxes so that `bound − origin` is never zero
 //! for a ray touching the true box, hence no `0·∞` NaN there.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
@@ -70,6 +70,10 @@ pub(crate) struct Accel {
     tris: Vec<SoaTriangle>,
     /// Geometry id and primitive id of the triangle in each leaf slot.
     ids: Vec<[u32; 2]>,
+    /// Unit normal of the triangle in each leaf slot ([`unit_normal`]): made once here, where
+    /// `cast_rays` computed one per hit (from the hit's group, a square root and a division
+    /// each: 4 % of coherent rays' time).
+    normals: Vec<[f32; 3]>,
 }
 
 /// A hit of the closest-hit or every-hit traversal: where, and which triangle.
@@ -101,6 +105,10 @@ impl Accel {
             .iter()
             .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
             .collect();
+        let normals = tris
+            .iter()
+            .map(|t| unit_normal(&t.corners()).to_array())
+            .collect();
         let ids = slots
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
@@ -122,6 +130,7 @@ impl Accel {
             groups,
             tris,
             ids,
+            normals,
         }
     }
 
@@ -137,8 +146,9 @@ impl Accel {
     }
 
     /// The unit normal `(v1 − v0) × (v2 − v0)` of the triangle in leaf slot `slot`.
-    pub fn normal(&self, slot: u32) -> Vec3 {
-        unit_normal(&self.tris[slot as usize].corners())
+    #[inline(always)]
+    pub fn normal(&self, slot: u32) -> [f32; 3] {
+        self.normals[slot as usize]
     }
 
     /// The binary tree.
@@ -156,8 +166,7 @@ impl Accel {
         &self.tris[slot]
     }
 
-    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive, and the
-    /// unit normal of its triangle (as [`Accel::normal`] gives it).
+    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
     #[inline(always)]
     pub fn closest<I: Isa>(
         &self,
@@ -165,12 +174,9 @@ impl Accel {
         t_min: f32,
         t_max: f32,
         stack: &mut Stack,
-    ) -> Option<(SlotHit, Vec3)> {
+    ) -> Option<SlotHit> {
         self.first_hit::<false, I>(ray, t_min, t_max, stack)
-            .map(|(i, group, c)| {
-                let normal = unit_normal(&group.corners(i - group.first as usize));
-                (self.slot_hit(i, c), normal)
-            })
+            .map(|(i, c)| self.slot_hit(i, c))
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
@@ -189,7 +195,7 @@ impl Accel {
 
     /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
     /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
-    /// first hit found. Returns the leaf slot, its group and the crossing.
+    /// first hit found. Returns the leaf slot and the crossing.
     #[inline(always)]
     fn first_hit<const ANY: bool, I: Isa>(
         &self,
@@ -197,8 +203,8 @@ impl Accel {
         t_min: f32,
         mut t_max: f32,
         stack: &mut Stack,
-    ) -> Option<(usize, &TriangleGroup, Crossing)> {
-        let mut best: Option<(usize, &TriangleGroup, Crossing)> = None;
+    ) -> Option<(usize, Crossing)> {
+        let mut best: Option<(usize, Crossing)> = None;
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
         while let Some((first, count, near)) = stack.pop() {
@@ -222,19 +228,17 @@ impl Accel {
                     mask &= mask - 1;
                     let (i, c) = (group.first as usize + lane, hits.crossing(lane));
                     if ANY {
-                        return Some((i, group, c));
+                        return Some((i, c));
                     }
                     // Lanes of one group are tested against the same `t_max`: a later lane
                     // may be farther than an earlier one's hit. Ids are read only for a tie.
                     let closer = match best {
                         None => true,
-                        Some((b, _, _)) => {
-                            c.t < t_max || (c.t == t_max && self.key(i) < self.key(b))
-                        }
+                        Some((b, _)) => c.t < t_max || (c.t == t_max && self.key(i) < self.key(b)),
                     };
                     if closer {
                         t_max = c.t;
-                        best = Some((i, group, c));
+                        best = Some((i, c));
                     }
                 }
             }
@@ -258,25 +262,14 @@ impl Accel {
         &self.wide
     }
 
-    /// [`Accel::leaf`] with each group's index.
-    #[inline(always)]
-    pub(super) fn leaf_groups(
-        &self,
-        first: u32,
-        count: u32,
-    ) -> impl Iterator<Item = (u32, (&TriangleGroup, u32))> {
-        (first..).zip(self.leaf(first, count))
-    }
-
-    /// The unit normal of the triangle in lane `lane` of group `group`.
-    pub(super) fn group_normal(&self, group: u32, lane: usize) -> Vec3 {
-        unit_normal(&self.groups[group as usize].corners(lane))
-    }
-
     /// The groups of the leaf whose first group is `first` and which holds `count`
     /// triangles, each with its mask of valid lanes.
     #[inline(always)]
-    fn leaf(&self, first: u32, count: u32) -> impl Iterator<Item = (&TriangleGroup, u32)> {
+    pub(super) fn leaf(
+        &self,
+        first: u32,
+        count: u32,
+    ) -> impl Iterator<Item = (&TriangleGroup, u32)> {
         let groups = count.div_ceil(GROUP as u32) as usize;
         let first = first as usize;
         self.groups[first..first + groups]
