@@ -6,7 +6,8 @@ importable, on the same meshes and rays, alternately in the same run.
     python tools/bench_raycast.py MESH.obj [MESH.obj ...] --threads 2 --scale 0.25
 
 For each mesh (an OBJ file; polygons are fanned into triangles): (a) 1024² coherent pinhole
-rays from a camera that frames the mesh, (b) 1 M incoherent rays between random points around
+rays from a camera that frames the mesh, as `create_rays_pinhole` makes them (an image,
+shape (1024, 1024, 6), which both libraries take as it is), (b) 1 M incoherent rays between random points around
 and inside its bounding box, (c) 1 M occlusion segments between random points of its box.
 Times cast_rays on (a) and (b), count_intersections on (b) and test_occlusions on (c), each the
 best of --repeat runs, and prints Mrays/s, penumbra / Open3D ratios, and the fraction of rays
@@ -51,7 +52,7 @@ def workloads(v: np.ndarray, scale: float, rng: np.random.Generator):
     n = max(1000, int(1_000_000 * scale))
     coherent = penumbra.RaycastingScene.create_rays_pinhole(
         fov_deg=50, center=center, eye=center + size * np.array([0.3, 0.4, 1.1]),
-        up=[0, 1, 0], width_px=side, height_px=side).reshape(-1, 6)
+        up=[0, 1, 0], width_px=side, height_px=side)  # (side, side, 6), as both libraries make it
     a = center + size * rng.uniform(-0.75, 0.75, (n, 3))
     b = rng.uniform(lo, hi, (n, 3))
     incoherent = np.hstack([a, b - a]).astype(np.float32)
@@ -99,7 +100,7 @@ def bench_mesh(path: Path, args, o3d) -> list:
     for key, fn in mine.items():
         call, load = key
         r = rays[load]
-        print(f"{path.name}: {call} {load} ({len(r)} rays)", file=sys.stderr)
+        print(f"{path.name}: {call} {load} ({r.size // 6} rays)", file=sys.stderr)
         t_ours = t_o3d = np.inf
         a = b = same = None
         for _ in range(args.repeat):  # alternate the two libraries
@@ -112,7 +113,7 @@ def bench_mesh(path: Path, args, o3d) -> list:
             t_o3d = None
         else:
             same = float(np.mean(a == b))
-        rows.append((path.name, call, load, len(r), t_ours, t_o3d, same))
+        rows.append((path.name, call, load, r.size // 6, t_ours, t_o3d, same))
     return rows
 
 

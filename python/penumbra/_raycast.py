@@ -128,9 +128,13 @@ class RaycastingScene:
         the direction's length, inf on a miss; ``geometry_ids`` and ``primitive_ids`` (...)
         uint32, ``INVALID_ID`` on a miss; ``primitive_uvs`` (..., 2) float32, the weights of
         the triangle's vertices 1 and 2; ``primitive_normals`` (..., 3) float32, the unit
-        normal e1 x e2 of the triangle hit (not flipped toward the ray; zero on a miss)."""
+        normal e1 x e2 of the triangle hit (not flipped toward the ray; zero on a miss).
+
+        Rays shaped (height, width, 6), as ``create_rays_pinhole`` makes them, are traced as
+        an image: square packets of neighbouring rays, the same results, faster."""
         r, lead = _rows(rays, 6, "rays")
-        return _shaped(self._core.cast_rays(r, _threads(nthreads)), lead)
+        row_length = lead[-1] if len(lead) >= 2 else 0
+        return _shaped(self._core.cast_rays(r, _threads(nthreads), row_length), lead)
 
     def test_occlusions(
         self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0

@@ -141,6 +141,22 @@ def test_create_rays_pinhole_follows_open3ds_formula():
     np.testing.assert_array_equal(same_kw, rays)
 
 
+def test_an_image_of_rays_gives_the_flat_batchs_answers(sphere):
+    # (height, width, 6) rays are traced as an image (square packets); every answer must be
+    # the flat batch's, bit for bit, whatever the image's shape.
+    for w, h in [(64, 48), (37, 23), (3, 5), (1, 7)]:
+        rays = penumbra.RaycastingScene.create_rays_pinhole(
+            fov_deg=40, center=[0, 0, 0], eye=[0.4, 0.3, 2.5], up=[0, 1, 0], width_px=w, height_px=h)
+        image = sphere.cast_rays(rays)
+        flat = sphere.cast_rays(rays.reshape(-1, 6))
+        assert image["t_hit"].shape == (h, w)
+        assert np.isfinite(image["t_hit"]).sum() > w * h // 4 or w * h < 40
+        same(image, {k: v.reshape(image[k].shape) for k, v in flat.items()})
+        # Leading shapes of more than two axes.
+        deep = sphere.cast_rays(rays.reshape(1, h, w, 6))
+        same({k: v[0] for k, v in deep.items()}, image)
+
+
 def test_create_rays_pinhole_fov_form_is_open3ds_look_at():
     eye, center, up = np.array([-1.0, -1, -1]), np.array([0.5, 0.5, 0.5]), np.array([0.0, 0, 1])
     rays = penumbra.RaycastingScene.create_rays_pinhole(

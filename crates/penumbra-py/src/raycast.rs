@@ -136,15 +136,18 @@ impl CoreRaycastingScene {
         self.scene.triangle_count()
     }
 
-    /// Closest hits of (n, 6) rays.
+    /// Closest hits of (n, 6) rays; `row_length` > 0 when they are the rows of an image,
+    /// that many rays per row (the same results, traced in square packets).
+    #[pyo3(signature = (rays, nthreads, row_length = 0))]
     fn cast_rays<'py>(
         &self,
         py: Python<'py>,
         rays: PyReadonlyArray2<'py, f32>,
         nthreads: usize,
+        row_length: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
-        let hits = self.query(py, nthreads, |s, o| s.cast_rays(rays, o))?;
+        let hits = self.query(py, nthreads, |s, o| s.cast_rays_rows(rays, row_length, o))?;
         let d = PyDict::new(py);
         d.set_item("t_hit", vec1(py, hits.t_hit))?;
         d.set_item("geometry_ids", vec1(py, hits.geometry_ids))?;

@@ -6,8 +6,9 @@
 //! valgrind --tool=callgrind target/release/examples/raycast_workload MESH.obj coherent 65536
 //! ```
 //!
-//! The workloads are those of `tools/bench_raycast.py`: `coherent` (`cast_rays` on a square
-//! pinhole image of `n` rays framing the mesh), `incoherent` (`cast_rays` between random points
+//! The workloads are those of `tools/bench_raycast.py`: `coherent` (`cast_rays_rows` on a
+//! square pinhole image of `n` rays framing the mesh; `rows` is the same rays through plain
+//! `cast_rays`, as a flat batch), `incoherent` (`cast_rays` between random points
 //! around and inside the mesh's box), `count` (`count_intersections` on those rays), `occlusion`
 //! (`test_occlusions` on segments between random points of the box, `t` in `[0, 1]`) and `none`
 //! (build only, to subtract). Prints a checksum of the answers on stdout and the
@@ -57,7 +58,7 @@ fn main() {
         }
         _ => {
             eprintln!(
-                "usage: raycast_workload MESH.obj coherent|incoherent|count|occlusion|none N [THREADS [REPEAT]]"
+                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|occlusion|none N [THREADS [REPEAT]]"
             );
             std::process::exit(2);
         }
@@ -83,7 +84,7 @@ fn main() {
     let mut random_in =
         |a: Vec3, b: Vec3| a + (b - a) * Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
     let rays: Vec<[f32; 6]> = match workload.as_str() {
-        "coherent" => {
+        "coherent" | "rows" => {
             let side = (n as f64).sqrt() as u32;
             let eye = center + size * Vec3::new(0.3, 0.4, 1.1);
             create_rays_pinhole_fov(
@@ -115,8 +116,14 @@ fn main() {
     };
     let query = || -> u64 {
         match workload.as_str() {
-            "coherent" | "incoherent" => {
-                let hits = scene.cast_rays(&rays, &options).unwrap();
+            "coherent" | "rows" | "incoherent" => {
+                let hits = match workload.as_str() {
+                    "coherent" => {
+                        let side = (rays.len() as f64).sqrt() as usize;
+                        scene.cast_rays_rows(&rays, side, &options).unwrap()
+                    }
+                    _ => scene.cast_rays(&rays, &options).unwrap(),
+                };
                 hits.primitive_ids
                     .iter()
                     .zip(&hits.t_hit)

@@ -54,8 +54,9 @@ impl Kernel for CastPackets<'_> {
 }
 
 /// `N` rays by lane, in the watertight test's permuted axes (shared by all lanes).
-struct Lanes<const N: usize> {
-    rays: [PreparedRay; N],
+struct Lanes<'a, const N: usize> {
+    /// The rays themselves (all `Some`), for the one-triangle test of a lane on an edge.
+    rays: &'a [Option<PreparedRay>],
     /// The axis permutation `[kx, ky, kz]`.
     k: [usize; 3],
     /// Origin and `1/direction` by world axis.
@@ -69,14 +70,14 @@ struct Lanes<const N: usize> {
 
 /// The packet of `rays` when there are `N`, all valid, with one axis permutation.
 #[inline(always)]
-fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<N>> {
+fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<'_, N>> {
     if rays.len() != N {
         return None;
     }
     let first = rays[0]?;
     let k = first.axes();
     let mut lanes = Lanes {
-        rays: [first; N],
+        rays,
         k,
         origin: [[0.0; N]; 3],
         inv_dir: [[0.0; N]; 3],
@@ -98,7 +99,6 @@ fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<N>> {
         let shear = r.shear();
         (lanes.shear[0][i], lanes.shear[1][i]) = (shear[0], shear[1]);
         lanes.inv_dz[i] = r.inv_dz();
-        lanes.rays[i] = r;
     }
     Some(lanes)
 }
@@ -116,7 +116,7 @@ struct Best<const N: usize> {
 #[inline(always)]
 fn trace<const N: usize, I: Isa>(
     accel: &Accel,
-    lanes: &Lanes<N>,
+    lanes: &Lanes<'_, N>,
     stack: &mut Vec<(u32, u32, u32)>,
     hits: &mut [ClosestHit],
 ) {
@@ -188,7 +188,7 @@ fn trace<const N: usize, I: Isa>(
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     (lo, hi): ([f32; 3], [f32; 3]),
-    lanes: &Lanes<N>,
+    lanes: &Lanes<'_, N>,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
     let mut inside = [0i32; N];
@@ -213,7 +213,7 @@ fn slab<const N: usize, I: Isa>(
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
     accel: &Accel,
-    lanes: &Lanes<N>,
+    lanes: &Lanes<'_, N>,
     corners: &super::watertight::Corners,
     slot: u32,
     mask: u32,
@@ -259,7 +259,8 @@ fn triangle<const N: usize, I: Isa>(
     while rest != 0 {
         let i = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        let ray = &lanes.rays[i];
+        // Every lane's ray is `Some` (see `lanes`).
+        let Some(ray) = &lanes.rays[i] else { continue };
         if let Some(c) = ray.hit(
             accel.slot(slot as usize),
             0.0,

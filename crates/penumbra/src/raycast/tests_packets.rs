@@ -96,3 +96,79 @@ fn packets_aimed_at_every_edge_and_vertex_answer_as_single_rays() {
         assert!(hits > rays.len() / 2, "{hits} of {} rays hit", rays.len());
     }
 }
+
+/// `cast_rays_rows` and `cast_rays` give the same bits on `rays` with row length `w`.
+fn same_by_rows(scene: &RaycastingScene, rays: &[[f32; 6]], w: usize) {
+    let options = QueryOptions::default();
+    let flat = scene.cast_rays(rays, &options).unwrap();
+    let tiled = scene.cast_rays_rows(rays, w, &options).unwrap();
+    let bits = |c: &CastRays| {
+        let t: Vec<u32> = c.t_hit.iter().map(|x| x.to_bits()).collect();
+        let uv: Vec<[u32; 2]> = c
+            .primitive_uvs
+            .iter()
+            .map(|x| x.map(f32::to_bits))
+            .collect();
+        let n: Vec<[u32; 3]> = c
+            .primitive_normals
+            .iter()
+            .map(|x| x.map(f32::to_bits))
+            .collect();
+        (t, c.geometry_ids.clone(), c.primitive_ids.clone(), uv, n)
+    };
+    assert!(
+        bits(&flat) == bits(&tiled),
+        "{} rays, rows of {w}",
+        rays.len()
+    );
+}
+
+#[test]
+fn images_cast_by_rows_answer_as_flat_batches() {
+    for (mesh, eye) in [
+        (subdivided_cube(4, Mat3::IDENTITY), [0.0, 0.0, 4.0]),
+        (icosphere(2), [0.3, -0.2, 3.0]),
+    ] {
+        let mut scene = RaycastingScene::new();
+        scene.add_triangles(&mesh.0, &mesh.1).unwrap();
+        for (w, h) in [(64, 48), (37, 23), (5, 3), (1, 9), (4, 4)] {
+            let rays = create_rays_pinhole_fov(50.0, [0.0; 3], eye, [0.0, 1.0, 0.0], w, h).unwrap();
+            // The image's own rows, rows that do not divide the batch, and the plain query.
+            for row in [w as usize, 7, 3, 0, 5000] {
+                same_by_rows(&scene, &rays, row);
+            }
+        }
+        // Rays aimed exactly at every shared edge and vertex, as rows of 16.
+        let eye = Vec3::from(eye.map(|x: f64| x as f32));
+        let aimed: Vec<[f32; 6]> = targets(&mesh)
+            .iter()
+            .map(|t| {
+                let d = t.point - eye;
+                [eye.x, eye.y, eye.z, d.x, d.y, d.z]
+            })
+            .collect();
+        same_by_rows(&scene, &aimed, 16);
+    }
+}
+
+#[test]
+fn tile_order_visits_each_ray_of_a_band_once() {
+    for (len, w) in [
+        (0, 4),
+        (16, 4),
+        (15, 4),
+        (40, 10),
+        (7, 3),
+        (4096, 1024),
+        (9, 1),
+        (6, 7),
+    ] {
+        let mut seen: Vec<usize> = super::queries::tile_order(len, w).collect();
+        seen.sort_unstable();
+        assert_eq!(
+            seen,
+            (0..len).collect::<Vec<_>>(),
+            "{len} rays, rows of {w}"
+        );
+    }
+}
