@@ -22,13 +22,17 @@ pub(crate) const GROUP: usize = 8;
 /// Up to eight triangles of one leaf: `v[corner][axis]` holds that coordinate of each
 /// triangle's corner, one lane per triangle. The triangles are the leaf slots
 /// `first .. first + 8` (lanes past the leaf's end repeat its last triangle and are masked
-/// out by the caller). Five cache lines, aligned to them.
+/// out by the caller). Six cache lines, aligned to them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 pub(crate) struct TriangleGroup {
     v: [[[f32; GROUP]; 3]; 3],
     /// The leaf slot of lane 0.
     pub first: u32,
+    /// Each lane's geometry id and primitive id. A closest hit's ids are read when its ray
+    /// is done, from a group still in the caches: read from a separate array indexed by
+    /// slot, they were a cache miss at the end of each incoherent ray.
+    ids: [[u32; 2]; GROUP],
 }
 
 /// What a group test finds: the lanes hit (bit `i` for lane `i`) and each lane's crossing
@@ -53,9 +57,16 @@ impl GroupHits {
 }
 
 impl TriangleGroup {
-    /// The group of leaf slots `first .. first + count` (`1 <= count <= 8`) of `tris`.
-    pub fn new(tris: &[SoaTriangle], first: usize, count: usize) -> TriangleGroup {
+    /// The group of leaf slots `first .. first + count` (`1 <= count <= 8`) of `tris`, whose
+    /// geometry and primitive ids are `ids`.
+    pub fn new(
+        tris: &[SoaTriangle],
+        ids: &[[u32; 2]],
+        first: usize,
+        count: usize,
+    ) -> TriangleGroup {
         let mut v = [[[0.0; GROUP]; 3]; 3];
+        let ids = std::array::from_fn(|lane| ids[first + lane.min(count - 1)]);
         for lane in 0..GROUP {
             let corners = tris[first + lane.min(count - 1)].corners();
             for (corner, c) in corners.iter().enumerate() {
@@ -67,7 +78,14 @@ impl TriangleGroup {
         TriangleGroup {
             v,
             first: first as u32,
+            ids,
         }
+    }
+
+    /// The geometry id and primitive id of the triangle in lane `lane`.
+    #[inline(always)]
+    pub fn ids(&self, lane: usize) -> [u32; 2] {
+        self.ids[lane]
     }
 
     /// The corners of the triangle in lane `lane`.
@@ -210,7 +228,11 @@ mod tests {
             for rule in [EdgeRule::Inclusive, EdgeRule::Owned] {
                 for first in (0..tris.len()).step_by(3) {
                     let count = (tris.len() - first).min(GROUP);
-                    let group = TriangleGroup::new(&tris, first, count);
+                    let ids: Vec<[u32; 2]> = (0..tris.len() as u32).map(|i| [0, i]).collect();
+                    let group = TriangleGroup::new(&tris, &ids, first, count);
+                    for lane in 0..count {
+                        assert_eq!(group.ids(lane), [0, (first + lane) as u32]);
+                    }
                     let valid = (1 << count) - 1;
                     for path in supported_paths() {
                         let (ray, group, tris) = (&ray, &group, &tris[..]);

@@ -109,7 +109,7 @@ impl Accel {
             .iter()
             .map(|t| unit_normal(&t.corners()).to_array())
             .collect();
-        let ids = slots
+        let ids: Vec<[u32; 2]> = slots
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
@@ -120,7 +120,7 @@ impl Accel {
             let index = groups.len() as u32;
             for start in (first..first + count).step_by(GROUP) {
                 let n = (first + count - start).min(GROUP as u32);
-                groups.push(TriangleGroup::new(&tris, start as usize, n as usize));
+                groups.push(TriangleGroup::new(&tris, &ids, start as usize, n as usize));
             }
             index
         });
@@ -166,7 +166,9 @@ impl Accel {
         &self.tris[slot]
     }
 
-    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive.
+    /// The closest hit with `t` in `[t_min, t_max]`, edges and vertices inclusive. Its ids
+    /// come from the hit's group, still in the caches when the ray is done: read from the
+    /// array indexed by slot, they were a cache miss at the end of each incoherent ray.
     #[inline(always)]
     pub fn closest<I: Isa>(
         &self,
@@ -176,7 +178,15 @@ impl Accel {
         stack: &mut Stack,
     ) -> Option<SlotHit> {
         self.first_hit::<false, I>(ray, t_min, t_max, stack)
-            .map(|(i, c)| self.slot_hit(i, c))
+            .map(|(group, lane, crossing)| {
+                let [geometry, primitive] = group.ids(lane);
+                SlotHit {
+                    crossing,
+                    geometry,
+                    primitive,
+                    slot: group.first + lane as u32,
+                }
+            })
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
@@ -195,7 +205,7 @@ impl Accel {
 
     /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
     /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
-    /// first hit found. Returns the leaf slot and the crossing.
+    /// first hit found. Returns the group, the lane and the crossing.
     #[inline(always)]
     fn first_hit<const ANY: bool, I: Isa>(
         &self,
@@ -203,8 +213,8 @@ impl Accel {
         t_min: f32,
         mut t_max: f32,
         stack: &mut Stack,
-    ) -> Option<(usize, Crossing)> {
-        let mut best: Option<(usize, Crossing)> = None;
+    ) -> Option<(&TriangleGroup, usize, Crossing)> {
+        let mut best: Option<(&TriangleGroup, usize, Crossing)> = None;
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
         while let Some((first, count, near)) = stack.pop() {
@@ -228,17 +238,20 @@ impl Accel {
                     mask &= mask - 1;
                     let (i, c) = (group.first as usize + lane, hits.crossing(lane));
                     if ANY {
-                        return Some((i, c));
+                        return Some((group, lane, c));
                     }
                     // Lanes of one group are tested against the same `t_max`: a later lane
                     // may be farther than an earlier one's hit. Ids are read only for a tie.
                     let closer = match best {
                         None => true,
-                        Some((b, _)) => c.t < t_max || (c.t == t_max && self.key(i) < self.key(b)),
+                        Some((g, l, _)) => {
+                            let b = g.first as usize + l;
+                            c.t < t_max || (c.t == t_max && self.key(i) < self.key(b))
+                        }
                     };
                     if closer {
                         t_max = c.t;
-                        best = Some((i, c));
+                        best = Some((group, lane, c));
                     }
                 }
             }
