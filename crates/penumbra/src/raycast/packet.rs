@@ -15,7 +15,7 @@
 //! visit.
 
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
-use super::watertight::{EdgeRule, PreparedRay};
+use super::watertight::{Crossing, EdgeRule, PreparedRay};
 use super::wide::WIDTH;
 use crate::simd::{max, min, Isa, Kernel};
 
@@ -159,6 +159,13 @@ fn trace<const N: usize, I: Isa>(
             }
             continue;
         }
+        // With half the lanes or fewer, lane by lane (in the 1M-triangle blob's image, a
+        // triangle is about one pixel: 1.2x the rays per second, bunny 1.03-1.15x; always
+        // lane by lane lost 6-11 % on the bunny).
+        if mask.count_ones() as usize <= N / 2 {
+            leaf_by_lane::<N, I>(accel, lanes, (index, count), mask, &mut best);
+            continue;
+        }
         for (group, valid) in accel.leaf(index, count) {
             let mut tris = valid;
             while tris != 0 {
@@ -172,7 +179,7 @@ fn trace<const N: usize, I: Isa>(
     }
     for (i, hit) in hits.iter_mut().enumerate() {
         *hit = (best.hit >> i & 1 == 1).then(|| {
-            let crossing = super::watertight::Crossing {
+            let crossing = Crossing {
                 t: best.t[i],
                 b1: best.b1[i],
                 b2: best.b2[i],
@@ -271,19 +278,64 @@ fn triangle<const N: usize, I: Isa>(
             hits |= 1 << i;
         }
     }
-    // Keep the hits closer than each lane's best; ids decide exact ties.
     while hits != 0 {
         let i = hits.trailing_zeros() as usize;
         hits &= hits - 1;
-        let closer = best.hit >> i & 1 == 0
-            || t[i] < best.t[i]
-            || (t[i] == best.t[i] && accel.key(slot as usize) < accel.key(best.slot[i] as usize));
+        let c = Crossing {
+            t: t[i],
+            b1: b1[i],
+            b2: b2[i],
+        };
+        best.keep(accel, i, c, slot);
+    }
+}
+
+impl<const N: usize> Best<N> {
+    /// Keeps the hit `c` of leaf slot `slot` as lane `lane`'s best when it is closer; ids
+    /// decide exact ties.
+    #[inline(always)]
+    fn keep(&mut self, accel: &Accel, lane: usize, c: Crossing, slot: u32) {
+        let i = lane;
+        let closer = self.hit >> i & 1 == 0
+            || c.t < self.t[i]
+            || (c.t == self.t[i] && accel.key(slot as usize) < accel.key(self.slot[i] as usize));
         if closer {
-            best.t[i] = t[i];
-            best.b1[i] = b1[i];
-            best.b2[i] = b2[i];
-            best.slot[i] = slot;
-            best.hit |= 1 << i;
+            self.t[i] = c.t;
+            self.b1[i] = c.b1;
+            self.b2[i] = c.b2;
+            self.slot[i] = slot;
+            self.hit |= 1 << i;
+        }
+    }
+}
+
+/// Tests the leaf `(index, count)` on the lanes of `mask` one lane at a time, each lane's ray
+/// against all the leaf's triangles at once (the single-ray group test), and keeps the closer
+/// hits: where few lanes reach a leaf (small triangles), cheaper than testing its triangles
+/// one by one on every lane.
+#[inline(always)]
+fn leaf_by_lane<const N: usize, I: Isa>(
+    accel: &Accel,
+    lanes: &Lanes<'_, N>,
+    (index, count): (u32, u32),
+    mask: u32,
+    best: &mut Best<N>,
+) {
+    let mut rest = mask;
+    while rest != 0 {
+        let i = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        // Every lane's ray is `Some` (see `lanes`).
+        let Some(ray) = &lanes.rays[i] else { continue };
+        for (group, valid) in accel.leaf(index, count) {
+            let rule = EdgeRule::Inclusive;
+            let hits = ray.hit_group::<I>(group, valid, accel.tris(), 0.0, best.t[i], rule);
+            let mut lanes_hit = hits.mask;
+            while lanes_hit != 0 {
+                let lane = lanes_hit.trailing_zeros() as usize;
+                lanes_hit &= lanes_hit - 1;
+                best.keep(accel, i, hits.crossing(lane), group.first + lane as u32);
+            }
         }
     }
 }

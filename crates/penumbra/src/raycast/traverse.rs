@@ -161,6 +161,12 @@ impl Accel {
         self.ids[slot]
     }
 
+    /// The corners of every triangle by leaf slot.
+    #[inline(always)]
+    pub(super) fn tris(&self) -> &[SoaTriangle] {
+        &self.tris
+    }
+
     /// The corners of scene triangle slot `slot` (leaf order).
     pub(super) fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
