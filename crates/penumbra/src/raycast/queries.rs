@@ -145,12 +145,10 @@ impl RaycastingScene {
             .into_par_iter();
         run(&pool, options, items, |(rays, t, g, p, uv, normal)| {
             // The rays in the order of the packets: tile by tile across a band, or as given.
-            let order: Vec<usize> = match row_length {
-                Some(w) => tile_order(rays.len(), w).collect(),
-                None => (0..rays.len()).collect(),
-            };
+            let order: Option<Vec<usize>> = row_length.map(|w| tile_order(rays.len(), w).collect());
+            let index = |j: usize| order.as_ref().map_or(j, |o| o[j]);
             let prepared: Vec<Option<PreparedRay>> =
-                order.iter().map(|&i| prepare(&rays[i])).collect();
+                (0..rays.len()).map(|j| prepare(&rays[index(j)])).collect();
             let mut hits = vec![None; rays.len()];
             let kernel = CastPackets {
                 accel,
@@ -158,8 +156,9 @@ impl RaycastingScene {
                 hits: &mut hits,
             };
             dispatch(simd_path(), kernel);
-            for (&i, hit) in order.iter().zip(hits) {
+            for (j, hit) in hits.into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
+                let i = index(j);
                 let c = hit.crossing;
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);
