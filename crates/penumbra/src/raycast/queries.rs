@@ -129,9 +129,8 @@ impl RaycastingScene {
             t_hit: filled(&pool, n, f32::INFINITY),
             geometry_ids: filled(&pool, n, INVALID_ID),
             primitive_ids: filled(&pool, n, INVALID_ID),
-            // Zeros: pages from the allocator, touched only where a ray hits.
-            primitive_uvs: vec![[0.0; 2]; n],
-            primitive_normals: vec![[0.0; 3]; n],
+            primitive_uvs: filled(&pool, n, [0.0; 2]),
+            primitive_normals: filled(&pool, n, [0.0; 3]),
         };
         let chunk = row_length.map_or(CHUNK, |w| TILE * w);
         let items = (
@@ -277,8 +276,8 @@ impl RaycastingScene {
             points: filled(&pool, n, [f32::NAN; 3]),
             geometry_ids: filled(&pool, n, INVALID_ID),
             primitive_ids: filled(&pool, n, INVALID_ID),
-            primitive_uvs: vec![[0.0; 2]; n],
-            primitive_normals: vec![[0.0; 3]; n],
+            primitive_uvs: filled(&pool, n, [0.0; 2]),
+            primitive_normals: filled(&pool, n, [0.0; 3]),
         };
         let items = (
             points.par_chunks(CHUNK),
