@@ -1,5 +1,7 @@
-//! One ray-casting workload (on one thread unless a thread count follows N), for instruction counts under callgrind (not a
-//! timed benchmark: `benches/raycast.rs` and `tools/bench_raycast.py` time the queries).
+//! One ray-casting workload (on one thread unless a thread count follows N; the best of
+//! REPEAT runs when a count follows THREADS), for instruction counts under callgrind and
+//! interleaved A/B runs of two builds (`benches/raycast.rs` and `tools/bench_raycast.py` are
+//! the benchmarks).
 //!
 //! ```text
 //! cargo build --release -p penumbra --example raycast_workload

@@ -291,11 +291,10 @@ fn triangle<const N: usize, I: Isa>(
 }
 
 impl<const N: usize> Best<N> {
-    /// Keeps the hit `c` of leaf slot `slot` as lane `lane`'s best when it is closer; ids
-    /// decide exact ties.
+    /// Keeps the hit `c` of leaf slot `slot` as lane `i`'s best when it is closer; ids decide
+    /// exact ties.
     #[inline(always)]
-    fn keep(&mut self, accel: &Accel, lane: usize, c: Crossing, slot: u32) {
-        let i = lane;
+    fn keep(&mut self, accel: &Accel, i: usize, c: Crossing, slot: u32) {
         let closer = self.hit >> i & 1 == 0
             || c.t < self.t[i]
             || (c.t == self.t[i] && accel.key(slot as usize) < accel.key(self.slot[i] as usize));
