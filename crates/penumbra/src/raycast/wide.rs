@@ -87,13 +87,25 @@ impl WideNode {
         t_max: f32,
         exit_scale: f32,
     ) -> (u32, [f32; WIDTH]) {
+        // The ray enters each slab through the plane its direction faces first: the smallest
+        // corner's where `1/d ≥ +0`, the largest's where the sign bit is set (`−0` too, whose
+        // `1/d` is `−∞`). Where `(lo − o)·(1/d)` and `(hi − o)·(1/d)` are numbers, rounding is
+        // monotonic, so this is the slab test's `min`/`max` of the two, bit for bit, without
+        // the six `min`/`max` per node; it differs only where one is NaN (`0·∞`, a ray in the
+        // plane of a padded face, which never touches the true box: see `traverse`).
+        let faces = |a: usize| {
+            if inv_dir[a].is_sign_negative() {
+                (&self.max[a], &self.min[a])
+            } else {
+                (&self.min[a], &self.max[a])
+            }
+        };
+        let planes = [faces(0), faces(1), faces(2)];
         let mut inside = [0i32; WIDTH];
         let mut entry = [0.0f32; WIDTH];
         for i in 0..WIDTH {
-            let t0 = [0, 1, 2].map(|a| (self.min[a][i] - origin[a]) * inv_dir[a]);
-            let t1 = [0, 1, 2].map(|a| (self.max[a][i] - origin[a]) * inv_dir[a]);
-            let near = [0, 1, 2].map(|a| min(t0[a], t1[a]));
-            let far = [0, 1, 2].map(|a| max(t0[a], t1[a]));
+            let near = [0, 1, 2].map(|a| (planes[a].0[i] - origin[a]) * inv_dir[a]);
+            let far = [0, 1, 2].map(|a| (planes[a].1[i] - origin[a]) * inv_dir[a]);
             let near = max(max(max(near[0], near[1]), near[2]), t_min);
             let far = min(min(min(far[0], far[1]), far[2]) * exit_scale, t_max);
             // One vector compare folds the unused lanes into the mask.
