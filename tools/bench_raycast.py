@@ -6,13 +6,15 @@ importable, on the same meshes and rays, alternately in the same run.
     python tools/bench_raycast.py MESH.obj [MESH.obj ...] --threads 2 --scale 0.25
 
 For each mesh (an OBJ file; polygons are fanned into triangles): (a) 1024² coherent pinhole
-rays from a camera that frames the mesh, as `create_rays_pinhole` makes them (an image,
-shape (1024, 1024, 6), which both libraries take as it is), (b) 1 M incoherent rays between random points around
-and inside its bounding box, (c) 1 M occlusion segments between random points of its box.
-Times cast_rays on (a) and (b), count_intersections on (b) and test_occlusions on (c), each the
-best of --repeat runs, and prints Mrays/s, penumbra / Open3D ratios, and the fraction of rays
-with identical results (primitive ids, counts, occlusion flags). --scale shrinks the batches
-(1024² · scale and 1 M · scale rays) on a busy machine. Progress on stderr, table on stdout.
+rays from a camera that frames the mesh, as `create_rays_pinhole` makes them (an image, shape
+(1024, 1024, 6), which both libraries take as it is), (b) 1 M incoherent rays between random
+points around and inside its bounding box, (c) 1 M occlusion segments between random points of
+its box. Times cast_rays on (a) and (b), count_intersections on (b) and test_occlusions on (c),
+each --repeat times, the two libraries alternately, and prints Mrays/s of the best runs, the
+penumbra / Open3D ratio of the best runs, the median of the ratios of each run to the other
+library's run beside it (steadier on a busy machine), and the fraction of rays with identical
+results (primitive ids, counts, occlusion flags). --scale shrinks the batches (1024² · scale and
+1 M · scale rays) on a busy machine. Progress on stderr, table on stdout.
 """
 
 from __future__ import annotations
@@ -101,19 +103,20 @@ def bench_mesh(path: Path, args, o3d) -> list:
         call, load = key
         r = rays[load]
         print(f"{path.name}: {call} {load} ({r.size // 6} rays)", file=sys.stderr)
-        t_ours = t_o3d = np.inf
+        mine_s, theirs_s = [], []
         a = b = same = None
         for _ in range(args.repeat):  # alternate the two libraries
             dt, a = timed(fn, r)
-            t_ours = min(t_ours, dt)
+            mine_s.append(dt)
             if theirs is not None:
                 dt, b = timed(theirs[key], tensors[load])
-                t_o3d = min(t_o3d, dt)
-        if theirs is None:
-            t_o3d = None
-        else:
+                theirs_s.append(dt)
+        t_ours, t_o3d, pairs = min(mine_s), None, None
+        if theirs is not None:
+            t_o3d = min(theirs_s)
+            pairs = float(np.median(np.array(theirs_s) / np.array(mine_s)))
             same = float(np.mean(a == b))
-        rows.append((path.name, call, load, r.size // 6, t_ours, t_o3d, same))
+        rows.append((path.name, call, load, r.size // 6, t_ours, t_o3d, pairs, same))
     return rows
 
 
@@ -136,13 +139,15 @@ def main() -> int:
     print(f"threads {args.threads}, scale {args.scale}, best of {args.repeat}, "
           f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
           + (f", Open3D {o3d.__version__}" if o3d else ""))
-    print("| mesh | call | rays | n | penumbra Mrays/s | Open3D Mrays/s | ratio | identical |")
-    print("|---|---|---|---|---|---|---|---|")
-    for mesh, call, load_name, n, t_ours, t_o3d, same in rows:
+    print("| mesh | call | rays | n | penumbra Mrays/s | Open3D Mrays/s | ratio | median ratio | identical |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for mesh, call, load_name, n, t_ours, t_o3d, pairs, same in rows:
         theirs = f"{n / t_o3d / 1e6:.2f}" if t_o3d else "-"
         ratio = f"{t_o3d / t_ours:.2f}" if t_o3d else "-"
+        median = f"{pairs:.2f}" if pairs is not None else "-"
         ident = f"{same:.5f}" if same is not None else "-"
-        print(f"| {mesh} | {call} | {load_name} | {n} | {n / t_ours / 1e6:.2f} | {theirs} | {ratio} | {ident} |")
+        print(f"| {mesh} | {call} | {load_name} | {n} | {n / t_ours / 1e6:.2f} | {theirs} | {ratio} "
+              f"| {median} | {ident} |")
     return 0
 
 
