@@ -4,7 +4,8 @@
 //! occupancy and signed distance against closed forms, and the pinhole ray layout.
 //!
 //! The same edge sets measure the renderer's `f32` Möller–Trumbore (printed with
-//! `--nocapture`, not asserted): `PENUMBRA_EXTRA_MESH=path.obj` adds a mesh to the list.
+//! `--nocapture`, not asserted): `PENUMBRA_EXTRA_MESH=path.obj` adds a mesh to the list (an
+//! absolute path: cargo runs the tests in `crates/penumbra`).
 
 use std::path::Path;
 
