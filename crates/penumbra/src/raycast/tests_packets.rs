@@ -81,17 +81,22 @@ fn packets_of_pinhole_images_answer_as_single_rays() {
     }
 }
 
+/// Rays from `eye` to each point of `mesh` aimed at by [`targets`] (its shared edges and
+/// vertices), `t = 1` at the point.
+fn rays_from(eye: Vec3, mesh: &MeshData) -> Vec<[f32; 6]> {
+    targets(mesh)
+        .iter()
+        .map(|t| {
+            let d = t.point - eye;
+            [eye.x, eye.y, eye.z, d.x, d.y, d.z]
+        })
+        .collect()
+}
+
 #[test]
 fn packets_aimed_at_every_edge_and_vertex_answer_as_single_rays() {
     for mesh in [subdivided_cube(3, Mat3::IDENTITY), icosphere(1)] {
-        let eye = Vec3::new(0.7, 0.4, 3.5);
-        let rays: Vec<[f32; 6]> = targets(&mesh)
-            .iter()
-            .map(|t| {
-                let d = t.point - eye;
-                [eye.x, eye.y, eye.z, d.x, d.y, d.z]
-            })
-            .collect();
+        let rays = rays_from(Vec3::new(0.7, 0.4, 3.5), &mesh);
         let hits = check(&mesh, &rays);
         assert!(hits > rays.len() / 2, "{hits} of {} rays hit", rays.len());
     }
@@ -139,14 +144,7 @@ fn images_cast_by_rows_answer_as_flat_batches() {
             }
         }
         // Rays aimed exactly at every shared edge and vertex, as rows of 16.
-        let eye = Vec3::from(eye.map(|x: f64| x as f32));
-        let aimed: Vec<[f32; 6]> = targets(&mesh)
-            .iter()
-            .map(|t| {
-                let d = t.point - eye;
-                [eye.x, eye.y, eye.z, d.x, d.y, d.z]
-            })
-            .collect();
+        let aimed = rays_from(Vec3::from(eye.map(|x: f64| x as f32)), &mesh);
         same_by_rows(&scene, &aimed, 16);
     }
 }
