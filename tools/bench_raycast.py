@@ -29,7 +29,9 @@ import numpy as np
 
 import penumbra
 
-BUNNY = Path("/work/shared/assets/meshes/stanford_bunny.obj")
+# The shared folder beside the repository holds the public meshes.
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+BUNNY = SHARED / "assets" / "meshes" / "stanford_bunny.obj"
 
 
 def read_obj(path: Path):

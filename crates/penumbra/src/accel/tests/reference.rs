@@ -212,17 +212,25 @@ fn large_soups_match_the_reference() {
 }
 
 /// The scene of the 1M-triangle mesh the build is benchmarked on, when it is on this machine
-/// (`PENUMBRA_BLOB_SCENE`, else the shared benchmark folder, whose setup generates the mesh
-/// beside the scene); skipped when either is missing.
+/// (`PENUMBRA_BLOB_SCENE`, else `../shared/embree-bench/` beside the repository, whose
+/// `setup.sh` generates the mesh beside the scene); skipped, saying which file is missing,
+/// when either is.
 #[test]
 fn blob_mesh_matches_the_reference() {
     let path = std::env::var_os("PENUMBRA_BLOB_SCENE").map_or_else(
-        || "/work/shared/embree-bench/scenes/cornell_blob1m.toml".into(),
+        || {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../../shared/embree-bench/scenes/cornell_blob1m.toml")
+        },
         std::path::PathBuf::from,
     );
     let mesh = path.with_file_name("meshes/blob_1m.obj");
-    if !path.is_file() || !mesh.is_file() {
-        eprintln!("skipped: no {} or no {}", path.display(), mesh.display());
+    if let Some(missing) = [&path, &mesh].into_iter().find(|p| !p.is_file()) {
+        eprintln!(
+            "blob_mesh_matches_the_reference skipped: no {} (run ../shared/embree-bench/setup.sh, \
+             or set PENUMBRA_BLOB_SCENE)",
+            missing.display()
+        );
         return;
     }
     let scene = crate::SceneFile::load(&path).unwrap().build(2).unwrap();
