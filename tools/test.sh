@@ -8,13 +8,17 @@
 # Needs the Rust toolchain and Python 3.9+ with pip; the first run downloads maturin, numpy,
 # pytest, tqdm and Ray from PyPI into a virtual environment under target/ (kept between runs;
 # PENUMBRA_TEST_VENV picks another place). The extension is built with cargo's dev profile
-# (opt-level 2, as `cargo test` builds the library, so only the binding compiles anew);
+# (opt-level 2), not LTO'd release: pyo3's macros turn on syn features that serde's derive
+# shares, so its build compiles the library once more, and at opt-level 2 that is quick;
 # PENUMBRA_PY_PROFILE=release builds it as a plain `pip install .` does.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$SECONDS
 
-cargo test --workspace
+# penumbra-py has no Rust tests; maturin builds it below. Leaving it out here keeps this build's
+# features those of `cargo run` (pyo3's macros would turn on syn features that serde's derive
+# shares, and so rebuild the library), so the README's render command's build is reused.
+cargo test --workspace --exclude penumbra-py
 # The binary the Python tests compare images with (the CLI's tests have built it already).
 cargo build -p penumbra-cli
 cli="$PWD/target/debug/penumbra"
