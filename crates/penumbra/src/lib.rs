@@ -100,7 +100,7 @@ pub use scene::{
     Location, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile,
     SceneFormat, ScenePack, MAX_SCENE_BYTES,
 };
-pub use simd::{simd_path, supported_paths, SimdPath};
+pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use texture_file::decode_texture_image;
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};

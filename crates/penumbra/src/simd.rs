@@ -60,18 +60,56 @@ pub fn supported_paths() -> Vec<SimdPath> {
         .collect()
 }
 
+/// Why `PENUMBRA_SIMD` cannot be honoured.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SimdEnvError {
+    /// It names no path.
+    #[error("PENUMBRA_SIMD={0:?} is not one of avx512, avx2, portable")]
+    Unknown(String),
+    /// It names a path this CPU cannot run.
+    #[error("PENUMBRA_SIMD={} names a path this CPU does not support (it supports {})", .0.name(), names(&supported_paths()))]
+    Unsupported(SimdPath),
+}
+
+fn names(paths: &[SimdPath]) -> String {
+    paths
+        .iter()
+        .map(|p| p.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// What the environment variable `PENUMBRA_SIMD` asks for: `None` when it is unset or empty,
+/// the path when it names one this CPU supports, else why not. [`simd_path`] falls back to the
+/// best path on an error; front ends call this first to report it.
+pub fn forced_simd_path() -> Result<Option<SimdPath>, SimdEnvError> {
+    parse_forced(std::env::var("PENUMBRA_SIMD").ok().as_deref())
+}
+
+fn parse_forced(value: Option<&str>) -> Result<Option<SimdPath>, SimdEnvError> {
+    let Some(name) = value.filter(|v| !v.is_empty()) else {
+        return Ok(None);
+    };
+    let path = [SimdPath::Avx512, SimdPath::Avx2, SimdPath::Portable]
+        .into_iter()
+        .find(|p| p.name() == name)
+        .ok_or_else(|| SimdEnvError::Unknown(name.to_owned()))?;
+    if path.is_supported() {
+        Ok(Some(path))
+    } else {
+        Err(SimdEnvError::Unsupported(path))
+    }
+}
+
 /// The path this process uses, chosen on first use: `PENUMBRA_SIMD` if it names a supported
-/// path, else the best supported one.
+/// path (see [`forced_simd_path`]), else the best supported one.
 pub fn simd_path() -> SimdPath {
     static PATH: OnceLock<SimdPath> = OnceLock::new();
     *PATH.get_or_init(|| {
-        let supported = supported_paths();
-        let forced = std::env::var("PENUMBRA_SIMD").ok();
-        supported
-            .iter()
-            .copied()
-            .find(|p| forced.as_deref() == Some(p.name()))
-            .unwrap_or(supported[0])
+        forced_simd_path()
+            .ok()
+            .flatten()
+            .unwrap_or(supported_paths()[0])
     })
 }
 
@@ -259,4 +297,31 @@ pub(crate) fn prefetch<T>(value: &T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = value;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn penumbra_simd_is_checked_name_by_name() {
+        assert_eq!(parse_forced(None), Ok(None));
+        assert_eq!(parse_forced(Some("")), Ok(None));
+        assert_eq!(parse_forced(Some("portable")), Ok(Some(SimdPath::Portable)));
+        for typo in ["avx-2", "AVX2", "sse2", "avx512 "] {
+            let err = parse_forced(Some(typo)).unwrap_err();
+            assert_eq!(err, SimdEnvError::Unknown(typo.into()));
+            assert!(err
+                .to_string()
+                .contains("not one of avx512, avx2, portable"));
+        }
+        for path in [SimdPath::Avx512, SimdPath::Avx2] {
+            let expected = if path.is_supported() {
+                Ok(Some(path))
+            } else {
+                Err(SimdEnvError::Unsupported(path))
+            };
+            assert_eq!(parse_forced(Some(path.name())), expected);
+        }
+    }
 }
