@@ -38,13 +38,9 @@ pub fn settings(
             SamplerArg::Rgss => Sampler::Rgss,
             SamplerArg::Jittered => Sampler::Jittered,
         };
-        // A sampler without --spp takes its own default count: 1 for center, else the
-        // file's `samples`, else 4.
-        s.spp = match (s.sampler, file.desc.render.samples) {
-            (Sampler::Center, _) => 1,
-            (_, Some(n)) => u32::try_from(n).unwrap_or(u32::MAX),
-            (_, None) => 4,
-        };
+        // Without --spp the sampler takes its own count, by the rule an override of
+        // `render.sampler` alone follows: 1 for center, else the file's `samples`, else 4.
+        s.spp = file.spp_for_sampler(s.sampler);
     }
     if let Some(spp) = args.spp {
         s.spp = spp;

@@ -6,6 +6,8 @@ mod harness;
 #[path = "../../penumbra/tests/support/mod.rs"]
 mod support;
 
+use std::path::{Path, PathBuf};
+
 use harness::{error_line, image, ok, run_in};
 use support::{TempDir, BASE_TOML};
 
@@ -103,4 +105,77 @@ fn a_malformed_override_is_a_usage_error() {
     let line = error_line(&r, 2);
     assert!(line.contains("--set"), "{line}");
     assert!(line.contains("KEY.PATH=VALUE"), "{line}");
+}
+
+/// The repository's own scenes, the ones a newcomer tries first.
+fn shipped_scenes() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "json"))
+        .collect();
+    scenes.sort();
+    scenes
+}
+
+#[test]
+fn set_sampler_center_means_one_sample_on_every_shipped_scene() {
+    let dir = TempDir::new("set-center");
+    let scenes = shipped_scenes();
+    assert!(scenes.len() >= 5, "{scenes:?}");
+    for scene in &scenes {
+        let scene = scene.to_str().unwrap();
+        let r = ok(run_in(
+            dir.path(),
+            ["check", scene, "-D", "render.sampler=center", "--json"],
+        ));
+        let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        assert_eq!(summary["sampler"], "center", "{scene}");
+        assert_eq!(summary["spp"], 1, "{scene}");
+    }
+    // The override and the flag render the same image.
+    let cornell = scenes.iter().find(|p| p.ends_with("cornell.toml")).unwrap();
+    let cornell = cornell.to_str().unwrap();
+    let small = ["--width", "8", "--height", "8", "-q"];
+    let set = [
+        "render",
+        cornell,
+        "-o",
+        "set.png",
+        "-D",
+        "render.sampler=center",
+    ];
+    let flag = ["render", cornell, "-o", "flag.png", "--sampler", "center"];
+    ok(run_in(dir.path(), set.iter().chain(&small)));
+    ok(run_in(dir.path(), flag.iter().chain(&small)));
+    assert_eq!(image(&dir.join("set.png")), image(&dir.join("flag.png")));
+}
+
+#[test]
+fn center_with_an_explicit_count_names_the_override_not_a_line() {
+    let dir = TempDir::new("set-center-count");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
+    let scene = scene.to_str().unwrap();
+    for pair in [
+        ["render.sampler=center", "render.samples=4"],
+        ["render.samples=4", "render.sampler=center"],
+    ] {
+        let r = run_in(
+            dir.path(),
+            ["render", scene, "-o", "o.png", "-D", pair[0], "-D", pair[1]],
+        );
+        let line = error_line(&r, 2);
+        assert!(
+            line.contains("render.samples (--set render.samples=4)"),
+            "{line}"
+        );
+        assert!(
+            line.contains("the center sampler takes exactly 1 sample"),
+            "{line}"
+        );
+        // The file's name with no line:column after it: the override is to blame.
+        assert!(line.contains("cornell.toml: render.samples"), "{line}");
+        assert!(!dir.join("o.png").exists());
+    }
 }

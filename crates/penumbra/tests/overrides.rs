@@ -6,7 +6,7 @@ mod support;
 
 use std::path::Path;
 
-use penumbra::{ErrorKind, Override, SceneError, SceneFile, SceneFormat};
+use penumbra::{ErrorKind, Override, Sampler, SceneError, SceneFile, SceneFormat};
 use support::{line_of, BASE_JSON, BASE_TOML as BASE};
 
 fn load(text: &str, format: SceneFormat, set: &[&str]) -> Result<SceneFile, SceneError> {
@@ -187,4 +187,86 @@ fn malformed_overrides_are_refused_before_loading() {
         let e = Override::parse(bad).expect_err(bad);
         assert!(e.to_string().contains("KEY.PATH=VALUE"), "{e}");
     }
+}
+
+/// [`BASE`] rendering with `render` as its `[render]` table.
+fn with_render(render: &str) -> String {
+    format!("{BASE}\n[render]\n{render}\n")
+}
+
+/// The sampler and samples per pixel `text` builds with `set`.
+fn sampling(text: &str, set: &[&str]) -> (Sampler, u32) {
+    let scene = load(text, SceneFormat::Toml, set)
+        .unwrap()
+        .build(1)
+        .unwrap();
+    (scene.settings.sampler, scene.settings.spp)
+}
+
+#[test]
+fn a_sampler_overridden_alone_takes_its_own_count_as_the_flag_does() {
+    // The shipped rooms say rgss with 4 samples; a file saying center without a count gets 1.
+    let text = with_render("sampler = \"rgss\"\nsamples = 16");
+    assert_eq!(
+        sampling(&text, &["render.sampler=center"]),
+        (Sampler::Center, 1)
+    );
+    assert_eq!(
+        sampling(&text, &["render.sampler=grid"]),
+        (Sampler::Grid, 16)
+    );
+    let set = ["render.sampler=grid", "render.samples=9"];
+    assert_eq!(sampling(&text, &set), (Sampler::Grid, 9));
+    let set = ["render.samples=1", "render.sampler=center"];
+    assert_eq!(sampling(&text, &set), (Sampler::Center, 1));
+    // The command line's --sampler gets the same counts from the same file.
+    let file = load(&text, SceneFormat::Toml, &[]).unwrap();
+    assert_eq!(file.spp_for_sampler(Sampler::Center), 1);
+    assert_eq!(file.spp_for_sampler(Sampler::Grid), 16);
+    // A file without [render]: center alone is 1, as a file saying center without samples.
+    assert_eq!(
+        sampling(BASE, &["render.sampler=center"]),
+        (Sampler::Center, 1)
+    );
+    let text = with_render("sampler = \"center\"");
+    assert_eq!(sampling(&text, &[]), (Sampler::Center, 1));
+}
+
+#[test]
+fn center_with_a_count_above_1_is_refused_naming_who_said_it() {
+    let text = with_render("sampler = \"rgss\"\nsamples = 4");
+    for set in [
+        ["render.sampler=center", "render.samples=4"],
+        ["render.samples=4", "render.sampler=center"],
+    ] {
+        let e = error(&text, SceneFormat::Toml, &set);
+        let words = ["center sampler takes exactly 1 sample"];
+        assert_override_error(
+            &e,
+            ErrorKind::BadValue,
+            "render.samples",
+            "render.samples=4",
+            &words,
+        );
+    }
+    // A file that says both keeps its line, overrides or not.
+    let text = with_render("sampler = \"center\"\nsamples = 4");
+    let e = error(&text, SceneFormat::Toml, &["film.width=8"]);
+    let loc = e.location().unwrap();
+    assert_eq!(
+        (loc.set_by.as_deref(), loc.key.as_deref()),
+        (None, Some("render.samples"))
+    );
+    assert_eq!(loc.line, Some(line_of(&text, "samples = 4")));
+    // An override of the count alone against the file's center names the override.
+    let text = with_render("sampler = \"center\"");
+    let e = error(&text, SceneFormat::Toml, &["render.samples=4"]);
+    let words = ["center sampler"];
+    assert_override_error(
+        &e,
+        ErrorKind::BadValue,
+        "render.samples",
+        "render.samples=4",
+        &words,
+    );
 }

@@ -17,6 +17,7 @@ use std::time::Duration;
 
 use crate::files::{read_bounded, Files};
 use crate::render::RenderSettings;
+use crate::sampling::Sampler;
 use crate::world::World;
 
 pub use desc::SceneDesc;
@@ -181,6 +182,38 @@ impl SceneFile {
     /// workers for reading meshes and building the BVH (0: all cores).
     pub fn build(&self, threads: usize) -> Result<Scene, SceneError> {
         build::build(self, threads)
+    }
+
+    /// Samples per pixel for `sampler` chosen without a count of its own, as the command
+    /// line's `--sampler` chooses it: 1 for [`Sampler::Center`], its only count; else the
+    /// file's `render.samples` (with overrides), else 4. An override of `render.sampler`
+    /// without one of `render.samples` follows the same rule when the file is built.
+    ///
+    /// ```
+    /// use penumbra::{Override, Sampler, SceneFile, SceneFormat};
+    ///
+    /// let text = "[film]\nwidth = 8\nheight = 8\n[render]\nsampler = \"rgss\"\nsamples = 16\n";
+    /// let file = SceneFile::from_str(text, SceneFormat::Toml, "s.toml", ".")?;
+    /// assert_eq!(file.spp_for_sampler(Sampler::Center), 1);
+    /// assert_eq!(file.spp_for_sampler(Sampler::Grid), 16);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn spp_for_sampler(&self, sampler: Sampler) -> u32 {
+        // A count out of range cannot come from a file that builds; it is passed on as
+        // u32::MAX for the settings check to refuse.
+        let samples = self
+            .desc
+            .render
+            .samples
+            .map(|n| u32::try_from(n).unwrap_or(u32::MAX));
+        build::implied_spp(sampler, samples)
+    }
+
+    /// True when an override set `render.sampler` and none set `render.samples`: the file's
+    /// count was written for another sampler, so the new one takes its own (see
+    /// [`SceneFile::spp_for_sampler`]).
+    pub(crate) fn sampler_set_alone(&self) -> bool {
+        self.source.sampler_set_alone()
     }
 
     /// Resolves a path written in the scene file against its folder.

@@ -54,6 +54,14 @@ impl Source {
         self.set.iter().map(|(_, text)| text.as_str())
     }
 
+    /// True when an override set `render.sampler` and none set `render.samples` (nor a
+    /// table holding it).
+    pub(super) fn sampler_set_alone(&self) -> bool {
+        let render = KeyPath::root("render");
+        overrides::setter(&self.set, &render.key("sampler")).is_some()
+            && overrides::setter(&self.set, &render.key("samples")).is_none()
+    }
+
     /// The description: the text as written, or with `overrides` applied in order.
     pub(super) fn parse(&mut self, overrides: &[Override]) -> Result<SceneDesc, SceneError> {
         if overrides.is_empty() {

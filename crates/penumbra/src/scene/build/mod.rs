@@ -10,6 +10,8 @@ mod materials;
 mod objects;
 mod settings;
 
+pub(super) use settings::implied_spp;
+
 use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::sync::Arc;

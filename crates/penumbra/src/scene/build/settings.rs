@@ -125,11 +125,10 @@ impl Builder<'_> {
         let path = KeyPath::root("render");
         let defaults = RenderSettings::default();
         let sampler = r.sampler.unwrap_or(defaults.sampler);
-        let spp = match r.samples {
-            None if sampler == Sampler::Center => 1,
-            None => defaults.spp,
-            Some(s) => {
-                let n = u32::try_from(s)
+        let samples = match r.samples {
+            None => None,
+            Some(s) => Some(
+                u32::try_from(s)
                     .ok()
                     .filter(|&s| s <= MAX_SPP && perfect_square_root(s).is_some())
                     .ok_or_else(|| {
@@ -139,7 +138,12 @@ impl Builder<'_> {
                                 "samples must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {s}"
                             ),
                         )
-                    })?;
+                    })?,
+            ),
+        };
+        let spp = match samples {
+            // A sampler an override chose without a count takes its own, as `--sampler` does.
+            Some(n) if !self.file.sampler_set_alone() => {
                 if sampler == Sampler::Center && n != 1 {
                     return Err(self.bad(
                         &path.key("samples"),
@@ -148,6 +152,7 @@ impl Builder<'_> {
                 }
                 n
             }
+            samples => implied_spp(sampler, samples),
         };
         let light_samples = match r.light_samples {
             None => DEFAULT_LIGHT_SAMPLES,
@@ -180,5 +185,17 @@ impl Builder<'_> {
                     format!("light samples N must be between 1 and {MAX_LIGHT_SAMPLES}, not {n}"),
                 )
             })
+    }
+}
+
+/// Samples per pixel of `sampler` chosen without a count of its own: 1 for
+/// [`Sampler::Center`], its only count; else `samples`, the count the file gives; else the
+/// default, 4. A file's `sampler` without `samples`, an override of `render.sampler` alone and
+/// the command line's `--sampler` all follow this one rule.
+pub(in crate::scene) fn implied_spp(sampler: Sampler, samples: Option<u32>) -> u32 {
+    match (sampler, samples) {
+        (Sampler::Center, _) => 1,
+        (_, Some(n)) => n,
+        (_, None) => RenderSettings::default().spp,
     }
 }
