@@ -83,7 +83,9 @@ pub struct RenderArgs {
     #[arg(long, value_enum, value_name = "S")]
     pub sampler: Option<SamplerArg>,
     /// Samples per pixel, a perfect square.
-    #[arg(long, value_name = "N")]
+    // pbrt's flag; the alias is the scene key's name (`render.samples`), which clap would
+    // otherwise answer with a suggestion of --sampler.
+    #[arg(long, visible_alias = "samples", value_name = "N")]
     pub spp: Option<u32>,
     /// N for every area light (N×N samples), overriding the scene's values.
     #[arg(long, value_name = "N")]
@@ -126,7 +128,7 @@ pub struct RenderArgs {
     pub cropwindow: Option<CropWindow>,
     /// A fast preview (pbrt's --quick): a quarter of the width and height, center sampling
     /// with 1 sample per pixel, 1 light sample per area light. Explicit --sampler, --spp and
-    /// --light-samples still apply.
+    /// --light-samples still apply (--spp without --sampler keeps the scene's sampler).
     #[arg(long)]
     pub quick: bool,
     /// Passes beside the image: a comma list of depth, normal, albedo, position, object_id,

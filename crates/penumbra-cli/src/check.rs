@@ -9,7 +9,7 @@ use serde_json::{json, Value};
 
 use crate::args::CheckArgs;
 use crate::check_obj;
-use crate::failure::{note, say, Failure};
+use crate::failure::{invalid, note, say, Failure};
 use crate::input;
 use crate::summary::{bounds_json, bounds_text, light_samples};
 use crate::warnings::{light_warnings, unused_warnings, view_warnings};
@@ -17,10 +17,15 @@ use crate::warnings::{light_warnings, unused_warnings, view_warnings};
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
     if check_obj::is_obj(path) {
+        if let Some(o) = args.set.first() {
+            return Err(invalid(format!(
+                "--set {o}: overrides change scene keys, and a .obj mesh has none (check a scene that places the mesh instead)"
+            )));
+        }
         return check_obj::run(path, args.json);
     }
-    let file = input::load(path, &args.set)?;
-    let scene = file.build(0).map_err(crate::failure::invalid)?;
+    let file = input::load(path, &args.set, input::Reader::Check)?;
+    let scene = file.build(0).map_err(invalid)?;
     let world = &scene.world;
     let name = if input::is_stdin(path) {
         input::STDIN_NAME.to_owned()

@@ -15,9 +15,34 @@ pub fn is_stdin(path: &Path) -> bool {
     path.as_os_str() == "-"
 }
 
-/// Reads and parses the scene at `path` (`-`: standard input) with `set` applied.
-pub fn load(path: &Path, set: &[Override]) -> Result<SceneFile, Failure> {
+/// The subcommand reading a scene: each accepts its own kinds of file.
+#[derive(Clone, Copy)]
+pub enum Reader {
+    Render,
+    Check,
+}
+
+impl Reader {
+    /// What it reads, as a message says it.
+    fn accepts(self) -> &'static str {
+        match self {
+            Reader::Render => "`penumbra render` reads a .toml or .json scene file (a .obj mesh goes into a scene as an object of type \"mesh\")",
+            Reader::Check => "`penumbra check` reads a .toml or .json scene file or a .obj mesh",
+        }
+    }
+}
+
+/// Reads and parses the scene at `path` (`-`: standard input) with `set` applied, for
+/// `reader`.
+pub fn load(path: &Path, set: &[Override], reader: Reader) -> Result<SceneFile, Failure> {
     if !is_stdin(path) {
+        if SceneFormat::from_path(path).is_none() {
+            return Err(invalid(format!(
+                "{}: unknown file type: {}",
+                path.display(),
+                reader.accepts()
+            )));
+        }
         return SceneFile::load_with(path, set).map_err(invalid);
     }
     let mut bytes = Vec::new();

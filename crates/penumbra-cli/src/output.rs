@@ -90,6 +90,16 @@ pub fn format_of(arg: FormatArg) -> OutputFormat {
     }
 }
 
+/// The `--format` value that names `f`, as users type it.
+fn flag_value(f: OutputFormat) -> &'static str {
+    match f {
+        OutputFormat::Png => "png",
+        OutputFormat::Jpeg => "jpg",
+        OutputFormat::Exr => "exr",
+        OutputFormat::Pfm => "pfm",
+    }
+}
+
 impl Output {
     /// The output of the expanded name `path` (`-`: standard output) and `--format`.
     pub fn new(path: PathBuf, format: Option<FormatArg>) -> Result<Output, Failure> {
@@ -109,8 +119,9 @@ impl Output {
             )));
         };
         if let Some(f) = format.map(format_of).filter(|&f| f != by_name) {
+            let (asked, named) = (flag_value(f), flag_value(by_name));
             return Err(invalid(format!(
-                "--format: {f:?} disagrees with the name {name} ({by_name:?})"
+                "--format {asked} disagrees with the extension of {name} ({named}): drop --format, or name the file .{asked}"
             )));
         }
         Ok(Output {

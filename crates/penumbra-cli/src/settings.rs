@@ -9,8 +9,8 @@ use crate::args::{CropWindow, RenderArgs, SamplerArg};
 /// (`None`: the file's default).
 ///
 /// In order: the file (with `--set`), `--width`/`--height`, `--quick` (a quarter of each
-/// side, as pbrt: `max(1, side / 4)`; center sampling, 1 spp, 1 light sample per area light),
-/// then `--sampler`, `--spp`, `--light-samples` and `--seed`.
+/// side, as pbrt: `max(1, side / 4)`; center sampling with 1 spp unless `--spp` is given, 1
+/// light sample per area light), then `--sampler`, `--spp`, `--light-samples` and `--seed`.
 pub fn settings(
     args: &RenderArgs,
     file: &SceneFile,
@@ -27,8 +27,12 @@ pub fn settings(
     if args.quick {
         s.width = (s.width / 4).max(1);
         s.height = (s.height / 4).max(1);
-        s.sampler = Sampler::Center;
-        s.spp = 1;
+        // Center sampling is the preview's 1 sample: a count from --spp keeps the scene's
+        // sampler instead, which center (1 sample only) would refuse.
+        if args.spp.is_none() {
+            s.sampler = Sampler::Center;
+            s.spp = 1;
+        }
         s.light_samples = Some(1);
     }
     if let Some(sampler) = args.sampler {

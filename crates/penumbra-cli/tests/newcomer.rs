@@ -1,0 +1,136 @@
+//! What a newcomer meets first: flags spelled as other renderers spell them, and messages in
+//! the words typed on the command line (flag values and file extensions, never Rust names).
+
+mod harness;
+#[path = "../../penumbra/tests/support/mod.rs"]
+mod support;
+
+use harness::{error_line, image, ok, run_in};
+use support::{TempDir, BASE_TOML};
+
+fn scene_dir(name: &str) -> TempDir {
+    let dir = TempDir::new(name);
+    dir.write("s.toml", BASE_TOML);
+    dir
+}
+
+#[test]
+fn samples_is_another_name_for_spp() {
+    let dir = scene_dir("samples-alias");
+    let r = ok(run_in(
+        dir.path(),
+        ["render", "s.toml", "-o", "a.png", "--samples", "16"],
+    ));
+    assert!(r.stderr.contains(", 16 spp rgss,"), "{}", r.stderr);
+    ok(run_in(
+        dir.path(),
+        ["render", "s.toml", "-o", "b.png", "--spp", "16", "-q"],
+    ));
+    assert_eq!(image(&dir.join("a.png")), image(&dir.join("b.png")));
+    // Still a perfect square, and the message names the flag as documented.
+    let r = run_in(
+        dir.path(),
+        ["render", "s.toml", "-o", "c.png", "--samples", "3"],
+    );
+    assert!(error_line(&r, 2).contains("perfect square"), "{r:?}");
+    assert!(!dir.join("c.png").exists());
+}
+
+#[test]
+fn a_format_that_disagrees_with_the_name_says_so_in_flag_values() {
+    let dir = scene_dir("format-words");
+    for (format, out, want) in [
+        (
+            "jpg",
+            "out.png",
+            "error: --format jpg disagrees with the extension of out.png (png): drop --format, or name the file .jpg",
+        ),
+        (
+            "jpeg",
+            "out.exr",
+            "error: --format jpg disagrees with the extension of out.exr (exr): drop --format, or name the file .jpg",
+        ),
+        (
+            "pfm",
+            "out.JPEG",
+            "error: --format pfm disagrees with the extension of out.JPEG (jpg): drop --format, or name the file .pfm",
+        ),
+    ] {
+        let r = run_in(
+            dir.path(),
+            ["render", "s.toml", "--format", format, "-o", out],
+        );
+        assert_eq!(error_line(&r, 2), want);
+        assert!(!dir.join(out).exists());
+    }
+}
+
+#[test]
+fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
+    let dir = scene_dir("file-kinds");
+    dir.write("model.ply", "ply\nformat ascii 1.0\nend_header\n");
+    dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let check = "`penumbra check` reads a .toml or .json scene file or a .obj mesh";
+    let render = "`penumbra render` reads a .toml or .json scene file";
+    for (args, want) in [
+        (["check", "model.ply"], check),
+        (["render", "model.ply"], render),
+        (["render", "tri.obj"], render),
+    ] {
+        let line = error_line(&run_in(dir.path(), args), 2);
+        assert!(line.starts_with(&format!("error: {}: ", args[1])), "{line}");
+        assert!(line.contains(want), "{args:?}: {line}");
+    }
+    // What render says about a mesh leads to its place in a scene.
+    let line = error_line(&run_in(dir.path(), ["render", "tri.obj"]), 2);
+    assert!(line.contains("type \"mesh\""), "{line}");
+    // And check does read the mesh.
+    ok(run_in(dir.path(), ["check", "tri.obj"]));
+}
+
+#[test]
+fn overrides_on_a_bare_mesh_are_refused_not_ignored() {
+    let dir = scene_dir("mesh-set");
+    dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let r = run_in(dir.path(), ["check", "tri.obj", "--set", "film.width=3"]);
+    let line = error_line(&r, 2);
+    assert!(line.starts_with("error: --set film.width=3: "), "{line}");
+    assert!(r.stdout.is_empty(), "{}", r.out());
+}
+
+#[test]
+fn quick_with_a_sample_count_keeps_the_scenes_sampler() {
+    let dir = scene_dir("quick-spp");
+    let r = ok(run_in(
+        dir.path(),
+        ["render", "s.toml", "-o", "q.png", "--quick", "--spp", "16"],
+    ));
+    // A quarter of 16x12, 16 samples with the file's sampler (rgss by default), 1 light sample.
+    assert!(
+        r.stderr.contains("4x3, 16 spp rgss, 1 light sample, "),
+        "{}",
+        r.stderr
+    );
+    // Without a count the preview is center sampling, 1 sample.
+    let r = ok(run_in(
+        dir.path(),
+        ["render", "s.toml", "-o", "c.png", "--quick"],
+    ));
+    assert!(r.stderr.contains("4x3, 1 spp center, "), "{}", r.stderr);
+    // An explicit center sampler with a count above 1 is still refused, naming --spp.
+    let r = run_in(
+        dir.path(),
+        [
+            "render",
+            "s.toml",
+            "-o",
+            "x.png",
+            "--quick",
+            "--sampler",
+            "center",
+            "--spp",
+            "4",
+        ],
+    );
+    assert!(error_line(&r, 2).starts_with("error: --spp: "), "{r:?}");
+}
