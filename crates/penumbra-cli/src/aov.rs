@@ -172,13 +172,15 @@ pub fn write_exr(
     write_atomic(path, &bytes, interrupt)
 }
 
-/// Writes each of `passes` to its own file beside `image` (see [`pass_path`]).
+/// Writes each of `passes` to its own file beside `image` (see [`pass_path`]); returns the
+/// files written, in the order of `passes`.
 pub fn write_files(
     image: &Path,
     aovs: &AovFilm,
     passes: &Passes,
     interrupt: &Interrupt,
-) -> Result<(), Failure> {
+) -> Result<Vec<PathBuf>, Failure> {
+    let mut written = Vec::with_capacity(passes.0.len());
     for &p in &passes.0 {
         let bytes = if p.is_id() {
             let v = aovs.pixels.iter().map(|px| id_of(px, p)).collect();
@@ -193,9 +195,11 @@ pub fn write_files(
                 .collect();
             pfm_bytes(aovs.width, aovs.height, n, &v)
         };
-        write_atomic(&pass_path(image, p), &bytes, interrupt)?;
+        let path = pass_path(image, p);
+        write_atomic(&path, &bytes, interrupt)?;
+        written.push(path);
     }
-    Ok(())
+    Ok(written)
 }
 
 /// An EXR of one layer holding `channels` (sorted by name, as the format wants), losslessly

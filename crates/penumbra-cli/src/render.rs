@@ -80,22 +80,28 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             e => runtime(e),
         })?;
         interrupt.check()?;
-        match (&args.aov, &aovs, &job.output.target) {
+        // The files written beside the image, one per pass (none for an EXR, which holds them).
+        let aov_files = match (&args.aov, &aovs, &job.output.target) {
             (Some(passes), Some(aovs), Target::File(path)) => {
                 if job.output.format == OutputFormat::Exr {
                     aov::write_exr(path, &film, aovs, passes, &interrupt)?;
+                    Vec::new()
                 } else {
                     job.output.write(&film, scene.gamma, &interrupt)?;
-                    aov::write_files(path, aovs, passes, &interrupt)?;
+                    aov::write_files(path, aovs, passes, &interrupt)?
                 }
             }
-            _ => job.output.write(&film, scene.gamma, &interrupt)?,
-        }
+            _ => {
+                job.output.write(&film, scene.gamma, &interrupt)?;
+                Vec::new()
+            }
+        };
 
         let report = Report {
             scene: &scene_name(&args.scene),
             camera: camera_name(&job.settings.view, &scene.world),
             output: &job.output.display(),
+            aov_files: &aov_files,
             film: &film,
             settings: &job.settings,
             world: &scene.world,

@@ -1,7 +1,7 @@
 //! What a finished render reports: the one-line summary on stderr and the `--json` object on
 //! stdout.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use penumbra::{Aabb, Film, Light, RenderSettings, RenderStats, World};
@@ -26,6 +26,8 @@ pub struct Report<'a> {
     /// The camera's name.
     pub camera: &'a str,
     pub output: &'a str,
+    /// The `--aov` files written beside the output, if any.
+    pub aov_files: &'a [PathBuf],
     pub film: &'a Film,
     pub settings: &'a RenderSettings,
     pub world: &'a World,
@@ -65,7 +67,7 @@ impl Report<'_> {
             stats.threads,
             if stats.threads == 1 { "" } else { "s" },
             self.output
-        )
+        ) + &aov_files_text(self.aov_files)
     }
 
     /// The `--json` object.
@@ -76,6 +78,7 @@ impl Report<'_> {
             "scene": self.scene.display().to_string(),
             "camera": self.camera,
             "output": self.output,
+            "aovs": self.aov_files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "width": film.width,
             "height": film.height,
             "film_width": settings.width,
@@ -93,6 +96,18 @@ impl Report<'_> {
             "rays_per_second": stats.rays_per_second(),
             "threads": stats.threads,
         })
+    }
+}
+
+/// " + 2 AOV files: out.depth.pfm, out.normal.pfm" after the output's name; empty for none.
+fn aov_files_text(files: &[PathBuf]) -> String {
+    match files.len() {
+        0 => String::new(),
+        n => {
+            let names: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
+            let s = if n == 1 { "" } else { "s" };
+            format!(" + {n} AOV file{s}: {}", names.join(", "))
+        }
     }
 }
 

@@ -321,3 +321,54 @@ fn passes_of_a_region_match_the_full_film() {
     let ids = read_exr(&dir.join("part.object_id.exr"));
     assert_eq!(ids[0].1, FlatSamples::U32(vec![1, 1, 1, 1]));
 }
+
+#[test]
+fn the_summary_names_every_file_written() {
+    let dir = TempDir::new("aov-summary");
+    dir.write("quad.toml", SCENE);
+    let r = ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "quad.toml",
+            "-o",
+            "out/shot.png",
+            "--aov",
+            "all",
+            "--json",
+        ],
+    ));
+    let passes = [
+        "depth.pfm",
+        "normal.pfm",
+        "albedo.pfm",
+        "position.pfm",
+        "object_id.exr",
+        "primitive_id.exr",
+    ];
+    let files: Vec<String> = passes.iter().map(|p| format!("out/shot.{p}")).collect();
+    let line = format!("-> out/shot.png + 6 AOV files: {}\n", files.join(", "));
+    assert!(r.stderr.ends_with(&line), "{}", r.stderr);
+    let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(summary["output"], "out/shot.png");
+    assert_eq!(summary["aovs"], serde_json::json!(files));
+    for f in &files {
+        assert!(dir.join(f).is_file(), "{f} was named but not written");
+    }
+    // An EXR holds the passes itself: one file, and the summary names just it.
+    let r = ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "quad.toml",
+            "-o",
+            "shot.exr",
+            "--aov",
+            "depth",
+            "--json",
+        ],
+    ));
+    assert!(r.stderr.ends_with("-> shot.exr\n"), "{}", r.stderr);
+    let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(summary["aovs"], serde_json::json!([]));
+}
