@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::math::Ray;
+use crate::math::{unit, Ray};
 
 /// Where a pinhole camera stands and what it sees: a checked pose and vertical field of view,
 /// independent of any film. A [`World`](crate::World) keeps its cameras in this form; a render
@@ -45,28 +45,12 @@ fn frame(position: Vec3, look_at: Vec3, up: Vec3) -> Option<(Vec3, Vec3, Vec3)> 
         // The difference of two finite points can overflow (3e38 − −3e38); halves cannot.
         to_target = 0.5 * look_at - 0.5 * position;
     }
-    let forward = direction(to_target);
-    let right = direction(forward.cross(up));
+    let forward = unit(to_target);
+    let right = unit(forward.cross(up));
     if forward == Vec3::ZERO || right == Vec3::ZERO || !right.is_finite() {
         return None;
     }
     Some((forward, right, right.cross(forward)))
-}
-
-/// `v` normalized, or zero for a zero or non-finite `v`. A vector whose squared length
-/// overflows (|v| ≳ 1e19) or underflows (|v| ≲ 1e-19) is first scaled by its largest
-/// component; other vectors take the plain path, bit for bit.
-fn direction(v: Vec3) -> Vec3 {
-    let n = v.normalize_or_zero();
-    if n != Vec3::ZERO {
-        return n;
-    }
-    let largest = v.abs().max_element();
-    if largest > 0.0 && largest.is_finite() {
-        (v / largest).normalize_or_zero()
-    } else {
-        Vec3::ZERO
-    }
 }
 
 impl Camera {

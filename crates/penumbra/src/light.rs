@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::math::Rgb;
+use crate::math::{unit_cross, Rgb};
 use crate::sampling::{jittered_offset, Rng};
 
 /// A light source.
@@ -44,7 +44,7 @@ pub struct PointLight {
 impl AreaLight {
     /// The unit normal `normalize(u × v)`, the side a physical area light emits toward.
     pub fn normal(&self) -> Vec3 {
-        self.u.cross(self.v).normalize_or_zero()
+        unit_cross(self.u, self.v)
     }
 
     /// The area `|u × v|`.

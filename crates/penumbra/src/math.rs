@@ -2,6 +2,40 @@
 
 use glam::{Mat3, Mat4, Vec3};
 
+/// `v` normalized, or zero for a zero or non-finite `v`. A vector whose squared length
+/// overflows (|v| ≳ 1e19) or underflows (|v| ≲ 1e-19) is first scaled by its largest
+/// component; other vectors take the plain path, bit for bit, so the images of ordinary scenes
+/// do not change.
+pub(crate) fn unit(v: Vec3) -> Vec3 {
+    let n = v.normalize_or_zero();
+    if n != Vec3::ZERO {
+        return n;
+    }
+    let largest = v.abs().max_element();
+    if largest > 0.0 && largest.is_finite() {
+        (v / largest).normalize_or_zero()
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// `e1 × e2` normalized (a triangle's unit normal from two of its edges), zero only when the
+/// edges are parallel or not finite: edges 1e-15 long, or 1e20, still give the normal (they are
+/// scaled by their largest components first when the cross product would underflow or
+/// overflow).
+pub(crate) fn unit_cross(e1: Vec3, e2: Vec3) -> Vec3 {
+    let n = unit(e1.cross(e2));
+    if n != Vec3::ZERO {
+        return n;
+    }
+    let (s1, s2) = (e1.abs().max_element(), e2.abs().max_element());
+    if s1 > 0.0 && s2 > 0.0 && s1.is_finite() && s2.is_finite() {
+        unit((e1 / s1).cross(e2 / s2))
+    } else {
+        Vec3::ZERO
+    }
+}
+
 /// Linear RGB radiance or reflectance. Channels are unbounded floats.
 pub type Rgb = Vec3;
 
@@ -149,7 +183,7 @@ impl Transform {
 
     /// A normal mapped to world space and normalized.
     pub fn normal(&self, n: Vec3) -> Vec3 {
-        (self.normal_from_object * n).normalize_or_zero()
+        unit(self.normal_from_object * n)
     }
 
     /// True when the linear part cannot be inverted (a zero scale), so normals are undefined.
@@ -192,6 +226,39 @@ mod tests {
         let n = t.normal(Vec3::new(1.0, 1.0, 0.0));
         let tangent = t.point(Vec3::new(1.0, -1.0, 0.0));
         assert!(n.dot(tangent).abs() < 1e-5);
+    }
+
+    #[test]
+    fn normals_of_tiny_and_huge_triangles_are_unit_vectors() {
+        for scale in [1e-15, 1e-20, 1e-30, 1.0, 1e15, 1e20, 1e30] {
+            let (e1, e2) = (Vec3::new(scale, 0.0, 0.0), Vec3::new(0.0, scale, 0.0));
+            assert_eq!(unit_cross(e1, e2), Vec3::Z, "edges of length {scale}");
+        }
+        // A sliver 1e-15 wide and 1 long.
+        let n = unit_cross(Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.5, 1e-15, 0.0));
+        assert_eq!(n, Vec3::Z);
+        // Degenerate and non-finite edges have no normal.
+        assert_eq!(unit_cross(Vec3::X, 2.0 * Vec3::X), Vec3::ZERO);
+        assert_eq!(unit_cross(Vec3::ZERO, Vec3::Y), Vec3::ZERO);
+        assert_eq!(unit_cross(Vec3::NAN, Vec3::Y), Vec3::ZERO);
+        assert_eq!(unit(Vec3::new(f32::INFINITY, 0.0, 0.0)), Vec3::ZERO);
+    }
+
+    #[test]
+    fn ordinary_vectors_normalize_bit_for_bit_as_glam_does() {
+        let mut state = 12345u32;
+        for _ in 0..10_000 {
+            let mut next = || {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (state >> 8) as f32 / (1 << 24) as f32 * 20.0 - 10.0
+            };
+            let (a, b) = (
+                Vec3::new(next(), next(), next()),
+                Vec3::new(next(), next(), next()),
+            );
+            assert_eq!(unit(a), a.normalize_or_zero());
+            assert_eq!(unit_cross(a, b), a.cross(b).normalize_or_zero());
+        }
     }
 
     #[test]

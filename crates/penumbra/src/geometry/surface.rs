@@ -4,6 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{Geometry, Hit};
+use crate::math::unit_cross;
 
 /// The surface at a ray hit, in world space. Normals are as the triangle defines them, not
 /// turned toward the ray: callers that shade face-forward them, callers that cast rays (like
@@ -67,7 +68,7 @@ impl Surface {
             geometry.positions[i2],
         );
         let b0 = 1.0 - hit.b1 - hit.b2;
-        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let geometric_normal = unit_cross(p1 - p0, p2 - p0);
         let shading_normal = if tri.smooth {
             let ns = b0 * geometry.normals[i0]
                 + hit.b1 * geometry.normals[i1]

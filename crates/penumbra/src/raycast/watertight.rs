@@ -23,6 +23,8 @@
 
 use glam::{Vec3, Vec3A, Vec3Swizzles};
 
+use crate::math::unit_cross;
+
 /// How a ray exactly on a triangle's edge or vertex counts; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum EdgeRule {
@@ -215,5 +217,5 @@ fn owned(ex: f32, ey: f32, flip: bool) -> bool {
 /// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle (zero for a degenerate one).
 pub(crate) fn unit_normal(tri: &Corners) -> Vec3 {
     let [a, b, c] = tri.map(Vec3::from);
-    (b - a).cross(c - a).normalize_or_zero()
+    unit_cross(b - a, c - a)
 }
