@@ -35,8 +35,8 @@ use failure::note;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Render(args) => render::run(args),
-        Command::Check(args) => check::run(args),
+        Command::Render(args) => simd_env().and_then(|()| render::run(args)),
+        Command::Check(args) => simd_env().and_then(|()| check::run(args)),
         Command::Completions { shell } => completions::run(*shell),
     };
     match result {
@@ -49,4 +49,12 @@ fn main() -> ExitCode {
             ExitCode::from(f.code)
         }
     }
+}
+
+/// A `PENUMBRA_SIMD` that the run cannot honour (a typo, or a path this CPU lacks) is invalid
+/// input, not something to ignore by picking another path.
+fn simd_env() -> Result<(), failure::Failure> {
+    penumbra::forced_simd_path()
+        .map(|_| ())
+        .map_err(failure::invalid)
 }

@@ -1009,13 +1009,12 @@ fn the_summary_says_thread_or_threads() {
 #[test]
 fn images_do_not_depend_on_the_simd_path() {
     // PENUMBRA_SIMD picks the kernels' instruction set; every path must give the same bits.
-    // A path this CPU lacks falls back to the best it has, which then compares to itself.
     let sb = TempDir::new("simd");
     let noisy = sb.write("noisy.toml", noisy_scene(48, 36));
     let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
     for (name, scene) in [("noisy", noisy.as_path()), ("room", room.as_path())] {
         let mut images = Vec::new();
-        for path in ["avx512", "avx2", "portable"] {
+        for path in penumbra::supported_paths().iter().map(|p| p.name()) {
             let out = sb.join(format!("{name}-{path}.pfm"));
             let status = command()
                 .args([
@@ -1033,7 +1032,50 @@ fn images_do_not_depend_on_the_simd_path() {
             images.push((path, std::fs::read(&out).unwrap()));
         }
         for (path, bytes) in &images[1..] {
-            assert!(*bytes == images[0].1, "{name}: {path} differs from avx512");
+            assert!(
+                *bytes == images[0].1,
+                "{name}: {path} differs from {}",
+                images[0].0
+            );
+        }
+    }
+}
+
+#[test]
+fn a_simd_path_that_cannot_be_honoured_is_refused() {
+    let sb = TempDir::new("simd-typo");
+    let scene = sb.write("s.toml", noisy_scene(8, 6));
+    let lacking = ["avx512", "avx2"].into_iter().find(|name| {
+        !penumbra::supported_paths()
+            .iter()
+            .any(|p| p.name() == *name)
+    });
+    for (value, says) in [
+        ("avx-2", "not one of avx512, avx2, portable"),
+        ("AVX2", "not one of avx512, avx2, portable"),
+    ]
+    .into_iter()
+    .chain(lacking.map(|name| (name, "this CPU does not support")))
+    {
+        let out = sb.join("x.png");
+        for sub in ["render", "check"] {
+            let mut args = vec![sub.as_ref(), scene.as_os_str()];
+            if sub == "render" {
+                args.extend(["-o".as_ref(), out.as_os_str()]);
+            }
+            let r = command()
+                .args(args)
+                .env("PENUMBRA_SIMD", value)
+                .stdin(Stdio::null())
+                .output()
+                .expect("run the penumbra binary");
+            let stderr = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(2), "{sub} with {value}: {stderr}");
+            assert!(
+                stderr.contains("PENUMBRA_SIMD") && stderr.contains(says),
+                "{stderr}"
+            );
+            assert!(!out.exists());
         }
     }
 }
