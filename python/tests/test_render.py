@@ -178,6 +178,9 @@ def test_bad_arguments_are_refused(cornell):
         cornell.render(camera=5)
     with pytest.raises(ValueError, match="degenerate"):
         penumbra.Camera((0, 0, 0), (0, 0, 0), (0, 1, 0), 40)
+    for nan_or_inf in (float("nan"), float("inf"), 1e39):
+        with pytest.raises(ValueError, match="must be finite"):
+            penumbra.Camera((nan_or_inf, 0, 1), (0, 0, 0), (0, 1, 0), 40)
     with pytest.raises(ValueError, match="fov"):
         penumbra.Camera((0, 0, 1), (0, 0, 0), (0, 1, 0), 180)
     with pytest.raises(ValueError, match="3 numbers"):

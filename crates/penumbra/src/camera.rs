@@ -19,6 +19,8 @@ pub struct Camera {
 /// Why a camera cannot be made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CameraError {
+    /// `position`, `look_at` or `up` has a NaN or infinite coordinate.
+    NotFinite,
     /// `look_at` equals `position`, or the view direction is parallel to `up`.
     Degenerate,
     /// The field of view is not inside (0, 180) degrees.
@@ -28,6 +30,7 @@ pub enum CameraError {
 impl std::fmt::Display for CameraError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
+            CameraError::NotFinite => "camera position, look_at and up must be finite numbers",
             CameraError::Degenerate => {
                 "degenerate camera: look_at equals position or the view direction is parallel to up"
             }
@@ -64,6 +67,9 @@ impl Camera {
     ) -> Result<Self, CameraError> {
         if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
             return Err(CameraError::FovOutOfRange);
+        }
+        if !(position.is_finite() && look_at.is_finite() && up.is_finite()) {
+            return Err(CameraError::NotFinite);
         }
         frame(position, look_at, up).ok_or(CameraError::Degenerate)?;
         Ok(Self {
@@ -152,6 +158,26 @@ mod tests {
     fn cam(w: u32, h: u32) -> PinholeCamera {
         let c = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0).unwrap();
         PinholeCamera::new(&c, w, h)
+    }
+
+    #[test]
+    fn a_nan_or_infinite_pose_is_not_called_degenerate() {
+        for bad in [f32::NAN, f32::INFINITY] {
+            let v = Vec3::new(bad, 0.0, 0.0);
+            for (p, l, u) in [
+                (v, Vec3::ZERO, Vec3::Y),
+                (Vec3::Z, v, Vec3::Y),
+                (Vec3::Z, Vec3::ZERO, v),
+            ] {
+                let e = Camera::new(p, l, u, 45.0).unwrap_err();
+                assert_eq!(e, CameraError::NotFinite);
+                assert!(e.to_string().contains("finite"), "{e}");
+            }
+        }
+        assert_eq!(
+            Camera::new(Vec3::Y, Vec3::ZERO, Vec3::Y, 45.0),
+            Err(CameraError::Degenerate)
+        );
     }
 
     #[test]

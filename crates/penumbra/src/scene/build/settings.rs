@@ -109,6 +109,16 @@ impl Builder<'_> {
                         format!("fov must be between 0 and 180 degrees, not {}", c.fov.0),
                     ),
                     CameraError::Degenerate => self.bad(&path.key("look_at"), e.to_string()),
+                    CameraError::NotFinite => {
+                        let key = [
+                            ("position", c.position.vec3()),
+                            ("look_at", c.look_at.vec3()),
+                        ]
+                        .into_iter()
+                        .find(|(_, v)| !v.is_finite())
+                        .map_or("up", |(key, _)| key);
+                        self.bad(&path.key(key), e.to_string())
+                    }
                 })?;
             // Names are table keys, unique by construction.
             self.world
