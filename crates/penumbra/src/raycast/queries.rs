@@ -127,11 +127,11 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let n = rays.len();
         let mut out = CastRays {
-            t_hit: filled(&pool, n, f32::INFINITY),
-            geometry_ids: filled(&pool, n, INVALID_ID),
-            primitive_ids: filled(&pool, n, INVALID_ID),
-            primitive_uvs: filled(&pool, n, [0.0; 2]),
-            primitive_normals: filled(&pool, n, [0.0; 3]),
+            t_hit: filled(&pool, options, n, f32::INFINITY)?,
+            geometry_ids: filled(&pool, options, n, INVALID_ID)?,
+            primitive_ids: filled(&pool, options, n, INVALID_ID)?,
+            primitive_uvs: filled(&pool, options, n, [0.0; 2])?,
+            primitive_normals: filled(&pool, options, n, [0.0; 3])?,
         };
         let chunk = row_length.map_or(CHUNK, |w| TILE * w);
         let items = (
@@ -274,11 +274,11 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let n = points.len();
         let mut out = ClosestPoints {
-            points: filled(&pool, n, [f32::NAN; 3]),
-            geometry_ids: filled(&pool, n, INVALID_ID),
-            primitive_ids: filled(&pool, n, INVALID_ID),
-            primitive_uvs: filled(&pool, n, [0.0; 2]),
-            primitive_normals: filled(&pool, n, [0.0; 3]),
+            points: filled(&pool, options, n, [f32::NAN; 3])?,
+            geometry_ids: filled(&pool, options, n, INVALID_ID)?,
+            primitive_ids: filled(&pool, options, n, INVALID_ID)?,
+            primitive_uvs: filled(&pool, options, n, [0.0; 2])?,
+            primitive_normals: filled(&pool, options, n, [0.0; 3])?,
         };
         let items = (
             points.par_chunks(CHUNK),
