@@ -26,14 +26,17 @@ row 0 at the top: the numbers the command line writes to EXR and PFM files.
 >>> image = scene.render(width=8, height=6, spp=1, sampler="center")
 >>> image.shape, image.dtype
 ((6, 8, 3), dtype('float32'))
+
+``penumbra.__version__`` is the package's version, the Rust workspace's.
 """
 
 from ._camera import Camera
-from ._core import MAX_THREADS, NO_ID, SceneError
+from ._core import MAX_THREADS, NO_ID, SceneError, __version__
 from ._image import to_srgb8, write_image
 from ._pack import PackedScene
 from ._raycast import INVALID_ID, RaycastingScene
 from ._scene import AOV_NAMES, Scene, load, load_dict, load_pack, loads
+from ._tensor import Tensor
 
 __all__ = [
     "AOV_NAMES",
@@ -45,6 +48,7 @@ __all__ = [
     "RaycastingScene",
     "Scene",
     "SceneError",
+    "Tensor",
     "load",
     "load_dict",
     "load_pack",

@@ -11,6 +11,7 @@ AOV_NAMES: List[str]
 NO_ID: int
 MAX_THREADS: int
 INVALID_ID: int
+__version__: str
 
 class SceneError(ValueError):
     """A mistake in a scene, located by ``file``, ``line``, ``column`` and ``key``."""

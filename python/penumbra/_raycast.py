@@ -1,11 +1,13 @@
 """Ray casting against triangle meshes with the names and semantics of Open3D's
 ``open3d.t.geometry.RaycastingScene``: code written for it runs by changing the import.
 
-Differences from Open3D: results are numpy arrays (no ``.numpy()`` needed, though a plain
-``np.asarray`` of them works either way), dicts of them for the queries that return several;
-float64 (or integer) rays and points are converted to float32 rather than refused; an index
-out of range in ``add_triangles`` is a ``ValueError``; and the ray test is watertight: a ray
-aimed exactly at an edge shared by two triangles, or at a vertex, hits the surface.
+Results are :class:`penumbra.Tensor` arrays (dicts of them for the queries that return
+several): numpy arrays that also have Open3D's ``.numpy()``, ``.cpu()``, ``.isfinite()``,
+``.isinf()`` and ``.isnan()``, so ``ans["t_hit"].numpy()`` works as with Open3D. Inputs may be
+numpy arrays, lists or Open3D tensors. Differences from Open3D: float64 (or integer) rays
+and points are converted to float32 rather than refused; an index out of range in
+``add_triangles`` is a ``ValueError``; and the ray test is watertight: a ray aimed exactly at
+an edge shared by two triangles, or at a vertex, hits the surface.
 
 >>> import numpy as np, penumbra
 >>> scene = penumbra.RaycastingScene()
@@ -13,8 +15,10 @@ aimed exactly at an edge shared by two triangles, or at a vertex, hits the surfa
 >>> scene.add_triangles(square, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32))
 0
 >>> ans = scene.cast_rays(np.array([[0.5, 0.5, 2, 0, 0, -1], [3, 3, 2, 0, 0, -1]]))
->>> ans["t_hit"].tolist(), ans["geometry_ids"].tolist() == [0, penumbra.INVALID_ID]
-([2.0, inf], True)
+>>> ans["t_hit"].numpy().tolist(), ans["t_hit"].isfinite().tolist()
+([2.0, inf], [True, False])
+>>> ans["geometry_ids"].tolist() == [0, penumbra.INVALID_ID]
+True
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from typing import Any, Dict, Tuple
 import numpy as np
 
 from . import _core
+from ._tensor import Tensor, tensor
 
 #: The geometry and primitive id of a miss (Open3D's ``RaycastingScene.INVALID_ID``).
 INVALID_ID: int = _core.INVALID_ID
@@ -32,10 +37,32 @@ INVALID_ID: int = _core.INVALID_ID
 
 def _numpy(value: Any) -> np.ndarray:
     """``value`` as a numpy array; Open3D tensors (anything with a ``numpy()`` method that is
-    not an array) are converted through it."""
+    not an array) are converted through it, after ``cpu()`` when they have one."""
     if not isinstance(value, np.ndarray) and callable(getattr(value, "numpy", None)):
+        if callable(getattr(value, "cpu", None)):
+            value = value.cpu()
         value = value.numpy()
     return np.asarray(value)
+
+
+#: Values converted between two chances for Ctrl-C to stop a conversion: about 10 ms.
+_PIECE = 1 << 22
+
+
+def _copy(dst: np.ndarray, src: np.ndarray) -> None:
+    """``dst[...] = src`` (converting the dtype), a piece of about :data:`_PIECE` values at a
+    time: a KeyboardInterrupt is raised between two pieces, not only after hundreds of
+    megabytes of rays are converted."""
+    if src.size <= _PIECE or src.ndim == 1:
+        dst[...] = src
+        return
+    per = src.size // src.shape[0]
+    step = max(1, _PIECE // max(per, 1))
+    for i in range(0, src.shape[0], step):
+        if step == 1:
+            _copy(dst[i], src[i])
+        else:
+            dst[i : i + step] = src[i : i + step]
 
 
 def _rows(value: Any, width: int, name: str) -> Tuple[np.ndarray, Tuple[int, ...]]:
@@ -46,13 +73,17 @@ def _rows(value: Any, width: int, name: str) -> Tuple[np.ndarray, Tuple[int, ...
     if array.ndim == 0 or array.shape[-1] != width:
         raise ValueError(f"{name} must have shape (..., {width}), not {array.shape}")
     lead = array.shape[:-1]
-    rows = np.ascontiguousarray(array, dtype=np.float32).reshape(-1, width)
-    return rows, lead
+    if array.dtype != np.float32 or not array.flags.c_contiguous:
+        converted = np.empty(array.shape, np.float32)
+        _copy(converted, array)
+        array = converted
+    return array.reshape(-1, width), lead
 
 
-def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, np.ndarray]:
-    """Each array of ``result`` with its first axis reshaped to ``lead``."""
-    return {k: v.reshape(lead + v.shape[1:]) for k, v in result.items()}
+def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, Tensor]:
+    """Each array of ``result`` as a :class:`Tensor` with its first axis reshaped to
+    ``lead``."""
+    return {k: tensor(v.reshape(lead + v.shape[1:])) for k, v in result.items()}
 
 
 def _threads(nthreads: int) -> int:
@@ -69,7 +100,9 @@ class RaycastingScene:
     scene's own (never a global one), and stop within about 0.1 s on Ctrl-C with
     ``KeyboardInterrupt``. Rays are ``(..., 6)`` arrays ``[ox, oy, oz, dx, dy, dz]`` and
     points ``(..., 3)`` arrays, of any leading shape, which the results keep; float64 or
-    integer arrays are converted to float32, non-contiguous ones copied.
+    integer arrays are converted to float32, non-contiguous ones copied. Results are
+    :class:`penumbra.Tensor` arrays: numpy arrays with Open3D's ``.numpy()``, ``.cpu()``,
+    ``.isfinite()``, ``.isinf()`` and ``.isnan()``.
     """
 
     __slots__ = ("_core",)
@@ -123,8 +156,9 @@ class RaycastingScene:
         indices = np.ascontiguousarray(indices, dtype=np.uint32)
         return self._core.add_triangles(vertices, indices)
 
-    def cast_rays(self, rays: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
-        """The closest hit (t >= 0) of each ray: a dict of ``t_hit`` (...) float32 in units of
+    def cast_rays(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
+        """The closest hit (t >= 0) of each ray: a dict of :class:`Tensor` arrays, ``t_hit``
+        (...) float32 in units of
         the direction's length, inf on a miss; ``geometry_ids`` and ``primitive_ids`` (...)
         uint32, ``INVALID_ID`` on a miss; ``primitive_uvs`` (..., 2) float32, the weights of
         the triangle's vertices 1 and 2; ``primitive_normals`` (..., 3) float32, the unit
@@ -138,64 +172,65 @@ class RaycastingScene:
 
     def test_occlusions(
         self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0
-    ) -> np.ndarray:
+    ) -> Tensor:
         """Whether each ray meets a triangle with ``tnear <= t <= tfar``: a (...) bool
         array."""
         r, lead = _rows(rays, 6, "rays")
         hit = self._core.test_occlusions(r, float(tnear), float(tfar), _threads(nthreads))
-        return hit.reshape(lead)
+        return tensor(hit.reshape(lead))
 
-    def count_intersections(self, rays: Any, nthreads: int = 0) -> np.ndarray:
+    def count_intersections(self, rays: Any, nthreads: int = 0) -> Tensor:
         """How many times each ray crosses the surface (t >= 0): a (...) int32 array. A ray
         through an edge shared by two triangles, or through a vertex, crosses once; from
         outside a closed mesh the count is even."""
         r, lead = _rows(rays, 6, "rays")
-        return self._core.count_intersections(r, _threads(nthreads)).reshape(lead)
+        return tensor(self._core.count_intersections(r, _threads(nthreads)).reshape(lead))
 
-    def list_intersections(self, rays: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
+    def list_intersections(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """Every crossing of every ray, as ``count_intersections`` counts them, sorted by t
         within each ray, as Open3D lists them: ``ray_splits`` (n + 1,) uint32 (the hits of
         ray i are ``ray_splits[i]:ray_splits[i + 1]``, rays numbered in C order of the
         leading shape), and per hit ``ray_ids``, ``t_hit``, ``geometry_ids``,
         ``primitive_ids`` and ``primitive_uvs`` (k, 2)."""
         r, _ = _rows(rays, 6, "rays")
-        return self._core.list_intersections(r, _threads(nthreads))
+        listed = self._core.list_intersections(r, _threads(nthreads))
+        return {k: tensor(v) for k, v in listed.items()}
 
-    def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> Dict[str, np.ndarray]:
+    def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """The closest surface point of each query point: a dict of ``points`` (..., 3),
         ``geometry_ids``, ``primitive_ids`` (...) uint32, ``primitive_uvs`` (..., 2) and
         ``primitive_normals`` (..., 3). An empty scene gives NaN points and INVALID_ID."""
         p, lead = _rows(query_points, 3, "query_points")
         return _shaped(self._core.compute_closest_points(p, _threads(nthreads)), lead)
 
-    def compute_distance(self, query_points: Any, nthreads: int = 0) -> np.ndarray:
+    def compute_distance(self, query_points: Any, nthreads: int = 0) -> Tensor:
         """The distance of each query point to the surface: (...) float32 (inf for an empty
         scene)."""
         p, lead = _rows(query_points, 3, "query_points")
-        return self._core.compute_distance(p, _threads(nthreads)).reshape(lead)
+        return tensor(self._core.compute_distance(p, _threads(nthreads)).reshape(lead))
 
     def compute_signed_distance(
         self, query_points: Any, nthreads: int = 0, nsamples: int = 1
-    ) -> np.ndarray:
+    ) -> Tensor:
         """The distance to the surface, negative inside (as ``compute_occupancy`` decides,
         with ``nsamples`` rays): (...) float32. Meaningful for closed meshes."""
         p, lead = _rows(query_points, 3, "query_points")
         d = self._core.compute_signed_distance(p, _threads(nthreads), int(nsamples))
-        return d.reshape(lead)
+        return tensor(d.reshape(lead))
 
     def compute_occupancy(
         self, query_points: Any, nthreads: int = 0, nsamples: int = 1
-    ) -> np.ndarray:
+    ) -> Tensor:
         """1.0 for points inside the closed surface, 0.0 outside: (...) float32, as Open3D.
         A point is inside when most of ``nsamples`` (odd) rays from it cross the surface an
         odd number of times; crossings are counted exactly, so 1 is enough for a closed
         mesh."""
         p, lead = _rows(query_points, 3, "query_points")
         occ = self._core.compute_occupancy(p, _threads(nthreads), int(nsamples))
-        return occ.reshape(lead)
+        return tensor(occ.reshape(lead))
 
     @staticmethod
-    def create_rays_pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
+    def create_rays_pinhole(*args: Any, **kwargs: Any) -> Tensor:
         """The rays of a pinhole camera, one per pixel center: (height_px, width_px, 6)
         float32, as Open3D makes them, in either of its forms::
 
@@ -208,7 +243,7 @@ class RaycastingScene:
         the optical axis is 1, so ``t_hit`` is the depth). In the second form the camera at
         ``eye`` looks at ``center`` with a horizontal field of view of ``fov_deg`` degrees
         and the row index grows toward ``up``."""
-        return _pinhole(*args, **kwargs)
+        return tensor(_pinhole(*args, **kwargs))
 
 
 def _pinhole(*args: Any, **kwargs: Any) -> np.ndarray:

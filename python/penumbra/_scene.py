@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from typing import (
     Any,
     Callable,
@@ -30,15 +31,33 @@ PathLike = Union[str, "os.PathLike[str]"]
 Progress = Union[None, bool, Callable[[int, int], Any]]
 
 
+#: What ``progress=True`` says when tqdm is missing.
+NO_TQDM = (
+    "progress=True needs tqdm, which is not installed: `pip install tqdm` (or install "
+    "penumbra with its extra, `pip install .[progress]`); no progress bar is shown"
+)
+
+
+def tqdm_class(stacklevel: int) -> Any:
+    """tqdm's bar class, or None with a warning naming the install command when tqdm is
+    missing (``progress=True`` then shows no bar, and says so). The warning points at the
+    caller ``stacklevel`` frames up from the caller of this function."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        warnings.warn(NO_TQDM, RuntimeWarning, stacklevel=stacklevel + 1)
+        return None
+    return tqdm
+
+
 class _Bar:
-    """A tqdm progress bar fed with (pixels done, pixels in all), when tqdm is installed."""
+    """A tqdm progress bar fed with (pixels done, pixels in all); nothing (after a warning)
+    when tqdm is not installed."""
 
     def __init__(self) -> None:
-        try:
-            from tqdm.auto import tqdm
-        except ImportError:
-            self._bar = None
-        else:
+        tqdm = tqdm_class(stacklevel=3)  # _Bar() <- Scene.render <- the caller's line
+        self._bar = None
+        if tqdm is not None:
             self._bar = tqdm(total=0, unit="px", unit_scale=True, desc="render", leave=False)
 
     def __call__(self, done: int, total: int) -> None:
@@ -140,8 +159,9 @@ class Scene:
           film; the result has the region's size and its pixels equal the full image's.
         - ``threads``: worker threads of a pool of the render's own (0: one per core).
           The image does not depend on it.
-        - ``progress``: ``True`` for a tqdm bar on stderr (when tqdm is installed), or a
-          callable receiving (pixels done, pixels in all), called from this thread.
+        - ``progress``: ``True`` for a tqdm bar on stderr (tqdm is an optional dependency:
+          ``pip install tqdm``; without it, a ``RuntimeWarning`` says so and no bar shows),
+          or a callable receiving (pixels done, pixels in all), called from this thread.
         - ``aovs``: names from :data:`AOV_NAMES`. When given, the result is a tuple
           ``(image, {name: array})`` instead of the image alone; see the Python docs for what
           each AOV holds and how it is filtered.

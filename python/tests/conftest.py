@@ -1,10 +1,13 @@
-"""Shared helpers: the repository's paths, the command-line binary and a PFM reader."""
+"""Shared helpers: the repository's paths, the command-line binary, a PFM reader, and the
+fixture that makes Ctrl-C raise KeyboardInterrupt whoever started the tests."""
 
 from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -56,3 +59,29 @@ def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and bool(
         np.array_equal(a.view(np.uint32), np.ascontiguousarray(b, np.float32).view(np.uint32))
     )
+
+
+@pytest.fixture
+def sigint_raises():
+    """Python's own SIGINT handler (KeyboardInterrupt) for the test's duration. A Python
+    started with SIGINT ignored (from a non-interactive script, as a background job `cmd &`,
+    under nohup) keeps ignoring it and never raises KeyboardInterrupt, so a test that sends
+    SIGINT to itself needs this."""
+    before = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def python_with_sigint(*args: str) -> list:
+    """The command that runs ``python -m ARGS`` with Python's own SIGINT handler installed
+    first, for a child that the test interrupts: a child inherits an ignored SIGINT from a
+    test run started in the background, and would not stop."""
+    module, *rest = args
+    code = (
+        "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+        f"sys.argv = [{module!r}] + sys.argv[1:]; runpy.run_module({module!r}, run_name='__main__')"
+    )
+    return [sys.executable, "-c", code, *rest]

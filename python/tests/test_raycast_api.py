@@ -1,6 +1,6 @@
 """penumbra.RaycastingScene's interface: input conversion and errors, Open3D's argument forms
 (tensors with .numpy(), a mesh object, both create_rays_pinhole forms with Open3D's ray
-layout), Scene.raycasting_scene(), the GIL and Ctrl-C."""
+layout), results as penumbra.Tensor, Scene.raycasting_scene(), the GIL and Ctrl-C."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import penumbra
+from penumbra import _raycast
 from raycast_ref import cube, icosphere, random_rays
 from test_threads import interrupt_after
 
@@ -69,6 +70,80 @@ def test_open3d_style_tensors_and_mesh_objects_are_accepted():
     assert ans["t_hit"].tolist() == [8.0, 6.0] and ans["geometry_ids"].tolist() == [0, 1]
     with pytest.raises(TypeError, match="TriangleMesh"):
         s.add_triangles(v)
+
+
+def test_real_open3d_tensors_and_meshes_are_accepted():
+    o3d = pytest.importorskip("open3d", reason="open3d is not installed (pip install open3d)")
+    v, t = cube()
+    mesh = o3d.t.geometry.TriangleMesh()
+    mesh.vertex.positions = o3d.core.Tensor(v)
+    mesh.triangle.indices = o3d.core.Tensor(t.astype(np.int64))
+    s = penumbra.RaycastingScene()
+    assert s.add_triangles(mesh) == 0
+    assert s.add_triangles(o3d.core.Tensor(v + 2), o3d.core.Tensor(t)) == 1
+    rays = o3d.core.Tensor([[0.5, 0.5, 9, 0, 0, -1], [2.5, 2.5, 9, 0, 0, -1]], o3d.core.float64)
+    ans = s.cast_rays(rays)
+    assert ans["t_hit"].numpy().tolist() == [8.0, 6.0]
+    assert s.compute_distance(o3d.core.Tensor([[0.5, 0.5, 3.0]])).tolist() == [2.0]
+
+
+def test_every_result_is_a_tensor_an_ndarray_with_open3ds_methods(sphere):
+    rays = np.array([[0, 0, 5, 0, 0, -1], [3, 3, 5, 0, 0, -1], [0, 0, 0, 0, 0, 0]], np.float32)
+    points = np.array([[0, 0, 3], [0.1, 0.2, 0.3]], np.float32)
+    pinhole = penumbra.RaycastingScene.create_rays_pinhole(
+        fov_deg=60, center=[0, 0, 0], eye=[0, 0, 4], up=[0, 1, 0], width_px=8, height_px=6)
+    results = {
+        "create_rays_pinhole": pinhole,
+        "test_occlusions": sphere.test_occlusions(rays),
+        "count_intersections": sphere.count_intersections(rays),
+        "compute_distance": sphere.compute_distance(points),
+        "compute_signed_distance": sphere.compute_signed_distance(points),
+        "compute_occupancy": sphere.compute_occupancy(points),
+    }
+    for query, answer in [("cast_rays", sphere.cast_rays(rays)),
+                          ("list_intersections", sphere.list_intersections(rays)),
+                          ("compute_closest_points", sphere.compute_closest_points(points))]:
+        results.update({f"{query}[{k!r}]": v for k, v in answer.items()})
+    for what, t in results.items():
+        assert type(t) is penumbra.Tensor and isinstance(t, np.ndarray), what
+        plain = t.numpy()
+        assert type(plain) is np.ndarray and np.shares_memory(plain, t), what
+        assert t.cpu() is t and np.array_equal(plain, t), what
+    t_hit = results["cast_rays['t_hit']"]
+    assert t_hit.isfinite().tolist() == [True, False, False]
+    assert t_hit.isinf().tolist() == [False, True, True] and not t_hit.isnan().any()
+    assert type(t_hit.isfinite()) is penumbra.Tensor
+    # A whole-array reduction gives a number, as for an array; an element, a numpy scalar.
+    assert type(t_hit[t_hit.isfinite()].sum()) is np.float32 and float(t_hit.min()) == 4.0
+    assert type(t_hit[0]) is np.float32
+    # Open3D's virtual point cloud: boolean indexing of the rays by the finite hits.
+    ans = sphere.cast_rays(pinhole)
+    hit = ans["t_hit"].isfinite()
+    cloud = pinhole[hit][:, :3] + pinhole[hit][:, 3:] * ans["t_hit"][hit].reshape((-1, 1))
+    assert cloud.shape == (int(hit.sum()), 3) and hit.sum() > 10
+    np.testing.assert_allclose(np.linalg.norm(cloud.numpy(), axis=1), 1.0, atol=0.02)
+    # A Tensor goes back in as rays, and into numpy and penumbra like any array.
+    same(sphere.cast_rays(pinhole), ans)
+    assert np.asarray(t_hit).dtype == np.float32 and type(np.asarray(t_hit)) is np.ndarray
+
+
+def test_large_inputs_are_converted_piece_by_piece_to_the_same_rays(sphere, monkeypatch):
+    # Conversions go in pieces (so that Ctrl-C is seen between them); tiny pieces here, over
+    # leading shapes of one, two and three axes, strided and broadcast.
+    rays = random_rays(np.random.default_rng(11), 360)
+    want = sphere.cast_rays(rays)
+    monkeypatch.setattr(_raycast, "_PIECE", 7)
+    r64 = rays.astype(np.float64)
+    same(sphere.cast_rays(r64), want)
+    same({k: v.reshape(want[k].shape) for k, v in sphere.cast_rays(r64.reshape(12, 30, 6)).items()},
+         want)
+    same({k: v[0].reshape(want[k].shape) for k, v in
+          sphere.cast_rays(r64.reshape(1, 2, 180, 6)).items()}, want)
+    wide = np.zeros((360, 12))
+    wide[:, ::2] = rays
+    same(sphere.cast_rays(wide[:, ::2]), want)
+    one = np.broadcast_to(rays[:1], (5, 6))
+    np.testing.assert_array_equal(sphere.cast_rays(one)["t_hit"], [want["t_hit"][0]] * 5)
 
 
 def test_bad_input_raises_clear_errors(sphere):
@@ -235,6 +310,7 @@ def up_rays(n: int) -> np.ndarray:
     return np.hstack([xy, -np.ones((n, 1)), np.zeros((n, 2)), np.ones((n, 1))]).astype(np.float32)
 
 
+@pytest.mark.usefixtures("sigint_raises")
 @pytest.mark.parametrize(
     "how",
     [_thread.interrupt_main, lambda: os.kill(os.getpid(), signal.SIGINT)],
@@ -253,6 +329,31 @@ def test_ctrl_c_stops_a_huge_batch_fast(how):
     print(f"KeyboardInterrupt {1000 * latency:.0f} ms after the signal")
     assert latency < 0.25, latency
     assert s.count_intersections(rays[:3]).tolist() == [2000] * 3
+
+
+@pytest.mark.usefixtures("sigint_raises")
+@pytest.mark.parametrize("kind", ["float32", "float64 broadcast"])
+def test_ctrl_c_in_the_first_moments_of_a_huge_cast_rays_is_answered_fast(sphere, kind):
+    # 20 million rays: 640 MB of results to allocate and fill before the first ray is traced,
+    # or, for float64 rays, 480 MB of float32 rays to convert first. Either must stop on
+    # Ctrl-C as promptly as the tracing does.
+    n = 20_000_000
+    one = [0.1, 0.2, 5.0, 0.0, 0.0, -1.0]
+    if kind == "float32":
+        rays = np.empty((n, 6), np.float32)
+        rays[:] = one
+    else:
+        rays = np.broadcast_to(np.array(one), (n, 6))
+    sent = interrupt_after(0.02, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        sphere.cast_rays(rays, nthreads=2)
+    raised = time.perf_counter()
+    assert sent["at"] > start  # the signal came during the call
+    latency = raised - sent["at"]
+    print(f"KeyboardInterrupt {1000 * latency:.0f} ms after the signal, "
+          f"{1000 * (sent['at'] - start):.0f} ms into the call")
+    assert latency < 0.15, latency
 
 
 def test_the_gil_is_released_during_a_query():

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 import time
 import _thread
@@ -35,6 +36,7 @@ def interrupt_after(seconds: float, how) -> dict:
     return sent
 
 
+@pytest.mark.usefixtures("sigint_raises")
 @pytest.mark.parametrize(
     "how",
     [_thread.interrupt_main, lambda: os.kill(os.getpid(), signal.SIGINT)],
@@ -108,3 +110,14 @@ def test_progress_true_shows_a_tqdm_bar(cornell, capsys):
     image = cornell.render(width=64, height=64, spp=4, progress=True)
     assert image.shape == (64, 64, 3)
     assert "px" in capsys.readouterr().err
+
+
+def test_progress_true_without_tqdm_warns_how_to_install_it(cornell, monkeypatch):
+    # As after a plain `pip install .`: tqdm cannot be imported.
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    with pytest.warns(RuntimeWarning, match=r"pip install tqdm.*\[progress\]") as caught:
+        image = cornell.render(width=16, height=16, spp=1, progress=True)
+    assert image.shape == (16, 16, 3)
+    # The warning points at the line that asked for the bar.
+    assert caught[0].filename == __file__

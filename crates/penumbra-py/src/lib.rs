@@ -34,5 +34,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("AOV_NAMES", render::AOV_NAMES.to_vec())?;
     m.add("NO_ID", penumbra::NO_ID)?;
     m.add("MAX_THREADS", penumbra::MAX_THREADS)?;
+    // The workspace's version, which maturin also gives the Python package.
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
