@@ -31,10 +31,13 @@ A jobs file (TOML; relative paths are relative to its folder)::
     frames = 24
     height = 0.5
 
-Views whose image exists already are skipped (``--force`` renders them again). Progress goes
-to stderr; the summary (one line per view, or JSON with ``--json``) to stdout. Exit status: 0
-done, 1 a runtime failure (cluster unreachable, a task failed, a file not written), 2 a mistake
-in the jobs file or the scene, 130 interrupted.
+Views whose image exists already are skipped (``--force`` renders them again). Each view's
+line (name, image, time) is printed as soon as it is done, skipped views first, so that an
+interrupted batch has told what it finished: on stdout, or with ``--json`` on stderr while
+stdout gets the whole summary as one JSON object at the end. A mistake names its view (its
+name, else its place) with its key path in the file (``views[3]``) and the line of its
+``[[views]]`` table. Exit status: 0 done, 1 a runtime failure (cluster unreachable, a task
+failed, a file not written), 2 a mistake in the jobs file or the scene, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -42,8 +45,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 try:
     import tomllib
@@ -57,16 +61,54 @@ class JobsError(ValueError):
     """A mistake in the jobs file."""
 
 
+def _table_lines(text: str, key: str) -> List[int]:
+    """The 1-based line of each ``[[key]]`` table header of a TOML text, in order."""
+    header = re.compile(r"\s*\[\[\s*" + re.escape(key) + r"\s*\]\]\s*(#.*)?$")
+    return [n for n, line in enumerate(text.splitlines(), 1) if header.match(line)]
+
+
+def _origins(
+    jobs: Dict[str, Any], text: str, from_file: int, orbit: int
+) -> List[Tuple[str, Optional[int]]]:
+    """Where each view of the batch comes from: its key path in the jobs file (``views[i]``,
+    ``views_file[i]``, ``orbit`` frame k) and its line, when known."""
+    listed = len(jobs.get("views", []))
+    lines: List[Optional[int]] = list(_table_lines(text, "views"))
+    if len(lines) != listed:  # views written inline, or a header inside a string
+        lines = [None] * listed
+    out: List[Tuple[str, Optional[int]]] = [(f"views[{i}]", lines[i]) for i in range(listed)]
+    out += [(f"views_file[{i}]", None) for i in range(from_file)]
+    out += [(f"[orbit] frame {k}", None) for k in range(orbit)]
+    return out
+
+
+def describe(
+    path: str, origin: Tuple[str, Optional[int]], index: int, name: Optional[str]
+) -> str:
+    """A view of the jobs file at ``path`` as a message names it: ``FILE:LINE: view NAME
+    (KEY)``, with its 1-based place in the batch instead of a name when it has none."""
+    key, line = origin
+    where = f"{path}:{line}" if line is not None else path
+    who = f"view {name!r}" if name else f"view {index + 1}"
+    return f"{where}: {who} ({key})"
+
+
 def read_jobs(path: str) -> Dict[str, Any]:
     """The jobs file at ``path``, with its paths resolved against its folder and its views
     expanded (``views``, then ``views_file``'s, then the orbit's). Raises :class:`JobsError`
-    naming the file and key."""
+    naming the file, and for a mistake in a view the view, its key path and line. The result
+    has ``scene``, ``output``, ``cpus_per_task``, ``views`` (normalized) and ``origins``
+    (where each view is in the file: its key path and line, or None)."""
     from . import views as v
 
     try:
         with open(path, "rb") as f:
-            jobs = tomllib.load(f)
-    except tomllib.TOMLDecodeError as e:
+            raw = f.read()
+        text = raw.decode("utf-8")
+        jobs = tomllib.loads(text)
+    except UnicodeDecodeError as e:
+        raise JobsError(f"{path}: not UTF-8 text: {e}") from None
+    except tomllib.TOMLDecodeError as e:  # its message has the line and column
         raise JobsError(f"{path}: {e}") from None
     unknown = sorted(set(jobs) - set(JOB_KEYS))
     if unknown:
@@ -74,22 +116,31 @@ def read_jobs(path: str) -> Dict[str, Any]:
     base = os.path.dirname(os.path.abspath(path))
     if "scene" not in jobs:
         raise JobsError(f"{path}: missing key 'scene' (the scene file to render)")
+    if not isinstance(jobs.get("views", []), list):
+        raise JobsError(f"{path}: views must be a list of tables ([[views]])")
     specs: List[Any] = list(jobs.get("views", []))
+    from_file: List[Any] = []
     if "views_file" in jobs:
         try:
-            specs += v.from_json(os.path.join(base, jobs["views_file"]))
+            from_file = v.from_json(os.path.join(base, jobs["views_file"]))
         except (OSError, ValueError) as e:
             raise JobsError(f"{path}: views_file: {e}") from None
+    orbit: List[Any] = []
     if "orbit" in jobs:
         try:
-            specs += v.orbit(**jobs["orbit"])
+            orbit = v.orbit(**jobs["orbit"])
         except (TypeError, ValueError) as e:
             raise JobsError(f"{path}: orbit: {e}") from None
+    specs += from_file + orbit
     if not specs:
         raise JobsError(f"{path}: no views (give [[views]], views_file or [orbit])")
+    origins = _origins(jobs, text, len(from_file), len(orbit))
     defaults = jobs.get("defaults", {})
     try:
         views = v.views(specs, **defaults)
+    except v.ViewError as e:
+        where = describe(path, origins[e.index], e.index, e.name)
+        raise JobsError(f"{where}: {e.reason}") from None
     except (TypeError, ValueError) as e:
         raise JobsError(f"{path}: {e}") from None
     return {
@@ -97,7 +148,30 @@ def read_jobs(path: str) -> Dict[str, Any]:
         "output": os.path.normpath(os.path.join(base, jobs.get("output", "out/{name}.png"))),
         "cpus_per_task": jobs.get("cpus_per_task", 1),
         "views": views,
+        "origins": origins,
     }
+
+
+def check_cameras(path: str, jobs: Dict[str, Any], cameras: Sequence[str]) -> None:
+    """Raises :class:`JobsError` for the first view of ``jobs`` (from :func:`read_jobs` of
+    ``path``) whose camera name is not one of the scene's ``cameras``."""
+    for i, view in enumerate(jobs["views"]):
+        camera = view["camera"]
+        if isinstance(camera, str) and camera not in cameras:
+            where = describe(path, jobs["origins"][i], i, view["name"])
+            raise JobsError(
+                f"{where}: unknown camera {camera!r} (the scene's cameras: {', '.join(cameras)})"
+            )
+
+
+def view_line(r: Dict[str, Any]) -> str:
+    """A view's line of the summary: name, image path, and how it went."""
+    how = (
+        "skipped (exists)"
+        if r["skipped"]
+        else f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
+    )
+    return f"{r['name']}\t{r['path']}\t{how}"
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -117,8 +191,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--num-cpus", type=int, help="CPUs of a local instance (default: all)")
     parser.add_argument("--cpus-per-task", type=float, help="CPUs (threads) per view")
     parser.add_argument("--force", action="store_true", help="render views whose image exists")
-    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
-    parser.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the summary as one JSON object at the end (each view's line goes to stderr)",
+    )
+    parser.add_argument(
+        "--quiet", "-q", action="store_true", help="no progress bar (nor, with --json, view lines)"
+    )
     args = parser.parse_args(argv)
 
     try:
@@ -130,12 +210,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         jobs = read_jobs(args.jobs)
         scene = penumbra.load(jobs["scene"])
+        check_cameras(args.jobs, jobs, scene.cameras)
     except FileNotFoundError as e:
         print(f"penumbra.batch: {e.filename}: {e.strerror}", file=sys.stderr)
         return 2
     except ValueError as e:  # JobsError and penumbra.SceneError
         print(f"penumbra.batch: {e}", file=sys.stderr)
         return 2
+    # Each view's line as it finishes: the results on stdout, or beside --json's summary (at
+    # the end, on stdout) as progress on stderr, which --quiet silences.
+    lines = sys.stderr if args.json else sys.stdout
+
+    def finished(r: Dict[str, Any]) -> None:
+        if not (args.json and args.quiet):
+            print(view_line(r), file=lines, flush=True)
+
     try:
         distributed.connect(args.address, num_cpus=args.num_cpus)
         summary = distributed.render_views(
@@ -145,6 +234,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             num_cpus=args.cpus_per_task or jobs["cpus_per_task"],
             force=args.force,
             progress=not args.quiet and sys.stderr.isatty() or None,
+            on_view=finished,
         )
     except KeyboardInterrupt:
         print("penumbra.batch: interrupted", file=sys.stderr)
@@ -163,14 +253,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.json:
         json.dump({"views": summary}, sys.stdout, indent=1)
         print()
-    else:
-        for r in summary:
-            how = (
-                "skipped (exists)"
-                if r["skipped"]
-                else f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
-            )
-            print(f"{r['name']}\t{r['path']}\t{how}")
     return 0
 
 

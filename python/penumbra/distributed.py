@@ -31,8 +31,8 @@ import numpy as np
 import ray
 
 from ._image import write_image
-from ._scene import Scene, load_pack
-from .views import RENDER_KEYS, aov_path, output_path, views as normalize_views
+from ._scene import Scene, load_pack, tqdm_class
+from .views import RENDER_KEYS, ViewError, aov_path, output_path, views as normalize_views
 
 #: Worlds a worker process keeps built, the most recently used first.
 CACHED_WORLDS = 2
@@ -128,8 +128,9 @@ def _gather(
     progress: Any,
     unit: str,
 ) -> None:
-    """Waits for every task, calling ``on_result(index, result)`` as each finishes; cancels
-    the rest on any error or Ctrl-C."""
+    """Waits for every task, calling ``on_result(index, result)`` as each finishes (with a
+    progress bar cleared meanwhile, so that what it prints stays readable); cancels the rest
+    on any error or Ctrl-C."""
     index = {ref: i for i, ref in enumerate(refs)}
     pending = list(refs)
     bar = _bar(progress, len(refs), unit)
@@ -137,7 +138,12 @@ def _gather(
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
             for ref in done:
-                on_result(index[ref], ray.get(ref))
+                result = ray.get(ref)
+                if bar is None:
+                    on_result(index[ref], result)
+                else:
+                    with bar.external_write_mode():
+                        on_result(index[ref], result)
                 if bar is not None:
                     bar.update(1)
                 elif callable(progress):
@@ -154,9 +160,9 @@ def _gather(
 def _bar(progress: Any, total: int, unit: str) -> Any:
     if progress is not True:
         return None
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
+    # _bar <- _gather <- render_frame or render_views <- the caller's line.
+    tqdm = tqdm_class(stacklevel=4)
+    if tqdm is None:
         return None
     return tqdm(total=total, unit=unit, desc="penumbra", leave=False)
 
@@ -244,6 +250,7 @@ def render_views(
     num_cpus: float = 1,
     force: bool = False,
     progress: Any = None,
+    on_view: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> List[Dict[str, Any]]:
     """Render every view (see :mod:`penumbra.views`: camera names, :class:`penumbra.Camera`
     objects, view dicts, :func:`penumbra.views.orbit`) as one task each and write its image to
@@ -255,17 +262,16 @@ def render_views(
     interrupted batch, run again, does only what is missing. Returns one dict per view, in
     order: ``name``, ``path``, ``skipped``, and for rendered views ``seconds`` (the render's),
     ``rays_per_second``, ``node`` (Ray node id), ``pid`` and ``built`` (whether that task built
-    the world).
+    the world). ``on_view``, when given, is called with each view's dict as soon as it is
+    known: at once for a skipped view, when its image is written for the others (in the
+    order they finish), so that an interrupted batch has told what it finished.
     """
     defaults = _settings(locals())
     defaults["aovs"] = (aovs,) if isinstance(aovs, str) else tuple(aovs)
     batch = normalize_views(views, **defaults)
     for i, v in enumerate(batch):
         if isinstance(v["camera"], str) and v["camera"] not in scene.cameras:
-            raise ValueError(
-                f"view {i} ({v['name']!r}): unknown camera {v['camera']!r} "
-                f"(the scene's cameras: {', '.join(scene.cameras)})"
-            )
+            raise ViewError(i, v["name"], unknown_camera(scene, v["camera"]))
     paths = [output_path(output, v, i) for i, v in enumerate(batch)]
     if len(set(paths)) != len(paths):
         raise ValueError(f"output pattern {output!r} gives two views the same file")
@@ -277,6 +283,10 @@ def render_views(
         for i, (v, p) in enumerate(zip(batch, paths))
         if force or not _complete(p, bool(v["aovs"]))
     ]
+    if on_view is not None:
+        skipped = set(range(len(batch))) - set(todo)
+        for i in sorted(skipped):
+            on_view(summary[i])
     if not todo:
         return summary
     digest, boxed = _ship(scene)
@@ -304,9 +314,16 @@ def render_views(
             pid=result["pid"],
             built=result["built"],
         )
+        if on_view is not None:
+            on_view(summary[i])
 
     _gather(refs, save, progress, "view")
     return summary
+
+
+def unknown_camera(scene: Scene, camera: str) -> str:
+    """What is wrong with a view of ``camera``, a name ``scene`` does not have."""
+    return f"unknown camera {camera!r} (the scene's cameras: {', '.join(scene.cameras)})"
 
 
 def _complete(path: str, with_aovs: bool) -> bool:

@@ -1,10 +1,11 @@
 """Views for batch rendering: what one image of a batch is (a camera, optional settings and
 AOVs, a name), and generators of many: an orbit around a point, a list of poses from JSON.
 
-A view is a dict with these keys, all optional except that a view needs a name (or gets
-``view0000``, ``view0001``, ... by its index):
+A view is a dict with these keys, all optional:
 
-- ``name``: used in output file names (``output="out/{name}.png"``);
+- ``name``: used in output file names (``output="out/{name}.png"``); without one, a view
+  of a named camera is called by the camera's name (``"front"`` gives ``out/front.png``),
+  any other ``view0000``, ``view0001``, ... by its index;
 - the camera: ``camera`` (a camera name of the scene, or a :class:`penumbra.Camera`), or
   ``position``, ``look_at``, ``up`` (default ``[0, 1, 0]``) and ``fov`` (degrees, default 45)
   of an explicit pinhole camera; neither means the scene's default camera;
@@ -17,6 +18,8 @@ A view is a dict with these keys, all optional except that a view needs a name (
 ['orbit0000', 'orbit0001', 'orbit0002', 'orbit0003']
 >>> [round(c, 6) for c in views[1]["camera"].position]
 [4.0, 2.5, 0.0]
+>>> view("front")["name"]
+'front'
 """
 
 from __future__ import annotations
@@ -48,30 +51,40 @@ VIEW_KEYS = (
 RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height")
 
 
+class ViewError(ValueError):
+    """A mistake in a view of a batch: ``index`` (its place in the batch, from 0), ``name``
+    (the name it was given, else None) and ``reason``. The message names it as
+    ``views[INDEX]``, with its name when it has one."""
+
+    def __init__(self, index: int, name: Union[str, None], reason: str) -> None:
+        self.index, self.name, self.reason = index, name, reason
+        label = f"views[{index}]" + (f" ({name!r})" if name else "")
+        super().__init__(f"{label}: {reason}")
+
+
 def view(
     spec: Union[str, Camera, Mapping[str, Any]], index: int = 0, **defaults: Any
 ) -> Dict[str, Any]:
     """The normalized view of ``spec`` (a view dict, a camera name, or a
     :class:`penumbra.Camera`) at position ``index`` of its batch, with ``defaults`` for the
     keys it leaves out. The result has every key of :data:`VIEW_KEYS` but the pose keys: the
-    camera is a name, a :class:`Camera` or None. Raises ``ValueError`` naming the view and key
-    for a mistake."""
+    camera is a name, a :class:`Camera` or None. Raises :class:`ViewError` (a ``ValueError``)
+    naming the view and key for a mistake."""
     if isinstance(spec, (str, Camera)):
         spec = {"camera": spec}
     if not isinstance(spec, Mapping):
-        raise ValueError(f"view {index}: a view is a dict, a camera name or a penumbra.Camera")
+        raise ViewError(index, None, "a view is a dict, a camera name or a penumbra.Camera")
+    given = spec.get("name")
     unknown = sorted(set(spec) - set(VIEW_KEYS))
     if unknown:
-        raise ValueError(
-            f"view {index}: unknown key {unknown[0]!r} (known: {', '.join(VIEW_KEYS)})"
+        raise ViewError(
+            index, given, f"unknown key {unknown[0]!r} (known: {', '.join(VIEW_KEYS)})"
         )
     merged = {**{k: v for k, v in defaults.items() if v is not None}, **spec}
-    name = str(merged.get("name") or f"view{index:04d}")
-    where = f"view {index} ({name!r})"
     camera = merged.get("camera")
     if "position" in merged or "look_at" in merged:
         if camera is not None:
-            raise ValueError(f"{where}: give either camera or position/look_at, not both")
+            raise ViewError(index, given, "give either camera or position/look_at, not both")
         try:
             camera = Camera(
                 position=merged["position"],
@@ -80,11 +93,14 @@ def view(
                 fov=merged.get("fov", 45.0),
             )
         except KeyError as e:
-            raise ValueError(f"{where}: an explicit camera needs {e.args[0]!r}") from None
+            raise ViewError(index, given, f"an explicit camera needs {e.args[0]!r}") from None
         except ValueError as e:
-            raise ValueError(f"{where}: {e}") from None
+            raise ViewError(index, given, str(e)) from None
     elif camera is not None and not isinstance(camera, (str, Camera)):
-        raise ValueError(f"{where}: camera must be a camera name or a penumbra.Camera")
+        raise ViewError(index, given, "camera must be a camera name or a penumbra.Camera")
+    # A camera's name as it is in a file name, as the command line's {camera}.
+    default_name = camera.replace("/", "_") if isinstance(camera, str) else f"view{index:04d}"
+    name = str(merged.get("name") or default_name)
     aovs = merged.get("aovs") or ()
     if isinstance(aovs, str):
         aovs = (aovs,)
@@ -97,12 +113,15 @@ def view(
 def views(
     specs: Iterable[Union[str, Camera, Mapping[str, Any]]], **defaults: Any
 ) -> List[Dict[str, Any]]:
-    """Every view of ``specs`` normalized by :func:`view`; names must be unique."""
+    """Every view of ``specs`` normalized by :func:`view`; names must be unique (two views
+    of one camera need names of their own). Raises :class:`ViewError`."""
     out = [view(s, i, **defaults) for i, s in enumerate(specs)]
     seen: Dict[str, int] = {}
     for i, v in enumerate(out):
         if v["name"] in seen:
-            raise ValueError(f"views {seen[v['name']]} and {i} are both named {v['name']!r}")
+            raise ViewError(
+                i, v["name"], f"views[{seen[v['name']]}] has this name too (names must be unique)"
+            )
         seen[v["name"]] = i
     return out
 

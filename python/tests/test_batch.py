@@ -17,7 +17,7 @@ import ray_env  # noqa: F401  (sets Ray's environment; skips without Ray)
 import penumbra
 from penumbra import batch, views
 
-from conftest import SCENES
+from conftest import SCENES, python_with_sigint
 
 
 def run_batch(*args: object, timeout: float = 300) -> subprocess.CompletedProcess:
@@ -55,6 +55,9 @@ def test_the_example_jobs_file_end_to_end(tmp_path):
     spec = batch.read_jobs(str(jobs))
     assert [r["name"] for r in summary] == [v["name"] for v in spec["views"]]
     assert len(summary) == 3 + 8 and not any(r["skipped"] for r in summary)
+    # With --json, each view's line went to stderr as it finished (stdout is the JSON).
+    told = [line.split("\t")[0] for line in out.stderr.splitlines() if line.endswith("Mrays/s")]
+    assert sorted(told) == sorted(r["name"] for r in summary), out.stderr
     scene = penumbra.load(SCENES / "cornell.toml")
     for v, r in zip(spec["views"], summary):
         assert r["path"] == str(tmp_path / "out" / f"{v['name']}.png")
@@ -82,12 +85,21 @@ def test_mistakes_in_the_jobs_file_exit_2_naming_them(tmp_path):
     jobs = example_jobs(tmp_path, **{"frames = 8": "frames = 0"})
     out = run_batch(jobs)
     assert out.returncode == 2 and "orbit" in out.stderr and "at least one frame" in out.stderr
+    # A view is named by its name (else its place from 1), its key path and its line; the
+    # scene's cameras are checked before Ray starts.
     jobs = example_jobs(tmp_path, **{'camera = "high"': 'camera = "nowhere"'})
     out = run_batch(jobs, "--num-cpus", 1)
-    assert (
-        out.returncode == 2 and "view 1 ('high'): unknown camera 'nowhere'" in out.stderr
-    ), out.stderr
-    assert "Traceback" not in out.stderr
+    assert out.returncode == 2, out.stderr
+    assert f"{jobs}:15: view 'high' (views[1]): unknown camera 'nowhere'" in out.stderr
+    assert "Traceback" not in out.stderr and "Ray" not in out.stderr
+    jobs = example_jobs(tmp_path, **{'name = "corner"': 'named = "corner"'})
+    out = run_batch(jobs)
+    assert out.returncode == 2
+    assert f"{jobs}:19: view 3 (views[2]): unknown key 'named'" in out.stderr, out.stderr
+    jobs = example_jobs(tmp_path, **{'name = "high"': 'name = "front"'})
+    out = run_batch(jobs)
+    assert out.returncode == 2
+    assert f"{jobs}:15: view 'front' (views[1]): views[0] has this name too" in out.stderr
     out = run_batch(tmp_path / "missing.toml")
     assert out.returncode == 2 and "missing.toml" in out.stderr
 
@@ -105,7 +117,7 @@ def test_an_unreachable_cluster_fails_fast_with_a_clear_message(tmp_path):
 def test_ctrl_c_exits_130_and_leaves_no_partial_image(tmp_path):
     jobs = example_jobs(tmp_path, **{"spp = 4": "spp = 64", "frames = 8": "frames = 40"})
     proc = subprocess.Popen(
-        [sys.executable, "-m", "penumbra.batch", str(jobs), "--num-cpus", "2"],
+        python_with_sigint("penumbra.batch", str(jobs), "--num-cpus", "2"),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -124,3 +136,7 @@ def test_ctrl_c_exits_130_and_leaves_no_partial_image(tmp_path):
     assert 0 < len(written) < 43 and all(n.endswith(".png") for n in written), written
     for name in written:
         assert (out_dir / name).read_bytes().endswith(b"IEND\xaeB`\x82"), name
+    # Each finished view was printed as it finished, before the interruption (the last
+    # may have been written just as the signal came, before its line).
+    told = [line.split("\t")[0] + ".png" for line in stdout.splitlines()]
+    assert set(told) <= set(written) and len(told) >= len(written) - 1, (stdout, written)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 import time
 from pathlib import Path
@@ -56,6 +57,15 @@ def test_a_frame_over_tiles_is_the_single_process_render(cluster, showcase, tile
         assert np.array_equal(passes[name].view(np.uint32), ref_passes[name].view(np.uint32)), name
 
 
+def test_progress_true_without_tqdm_warns_how_to_install_it(cluster, monkeypatch):
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    scene = penumbra.load(SCENES / "cornell.toml")
+    with pytest.warns(RuntimeWarning, match="pip install tqdm") as caught:
+        image = distributed.render_frame(scene, tiles=2, width=8, height=6, progress=True)
+    assert image.shape == (6, 8, 3) and caught[0].filename == __file__
+
+
 def test_tiles_cover_the_frame_once():
     for w, h, tiles in [(57, 41, 5), (57, 41, (3, 2)), (4, 3, (9, 9)), (1, 1, 7)]:
         cover = np.zeros((h, w), int)
@@ -78,7 +88,8 @@ def test_views_are_their_one_by_one_renders_and_worlds_are_built_once_per_worker
     summary = distributed.render_views(
         scene, batch, output=str(tmp_path / "{index}-{name}.png"), width=40, height=30, spp=4
     )
-    assert [r["name"] for r in summary] == ["view0000", "high", "pose"] + [
+    # A view given as a camera name is called by it ("front" -> {name} = front).
+    assert [r["name"] for r in summary] == ["front", "high", "pose"] + [
         f"orbit{k:04d}" for k in range(5)
     ]
     for i, (spec, r) in enumerate(zip(batch, summary)):
@@ -107,13 +118,24 @@ def test_a_second_run_skips_complete_views_and_force_renders_them(cluster, tmp_p
     batch = ["front", "left", {"name": "hi", "camera": "high", "aovs": ["depth", "object_id"]}]
     first = distributed.render_views(scene, batch, output=out, width=16, height=12)
     assert not any(r["skipped"] for r in first)
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["front.png", "hi.png", "left.png"]
     npz = np.load(tmp_path / "hi.aovs.npz")
     assert sorted(npz.files) == ["depth", "object_id"] and npz["depth"].shape == (12, 16)
-    (tmp_path / "view0001.png").unlink()
-    stamp = (tmp_path / "view0000.png").stat().st_mtime_ns
-    second = distributed.render_views(scene, batch, output=out, width=16, height=12)
+    (tmp_path / "left.png").unlink()
+    stamp = (tmp_path / "front.png").stat().st_mtime_ns
+    told: list = []
+
+    def heard(r):  # what on_view is told, and whether the image is there by then
+        told.append((r["name"], r["skipped"], "seconds" in r, Path(r["path"]).is_file()))
+
+    second = distributed.render_views(
+        scene, batch, output=out, width=16, height=12, on_view=heard
+    )
     assert [r["skipped"] for r in second] == [True, False, True]
-    assert (tmp_path / "view0000.png").stat().st_mtime_ns == stamp
+    assert (tmp_path / "front.png").stat().st_mtime_ns == stamp
+    # Every view once, the skipped ones first; a rendered one after its image is written.
+    assert told == [("front", True, False, True), ("hi", True, False, True),
+                    ("left", False, True, True)]
     third = distributed.render_views(scene, batch, output=out, width=16, height=12, force=True)
     assert not any(r["skipped"] for r in third)
 

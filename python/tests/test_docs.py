@@ -5,13 +5,17 @@ from __future__ import annotations
 
 import doctest
 import inspect
+import re
+from importlib.metadata import version
 
 import pytest
 
 import penumbra
-from penumbra import _camera, _image, _pack, _raycast, _scene, views
+from penumbra import _camera, _image, _pack, _raycast, _scene, _tensor, views
 
-MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, views]
+from conftest import ROOT
+
+MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, _tensor, views]
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
@@ -55,3 +59,15 @@ def test_the_batch_modules_are_documented():
 
     assert public_undocumented(views) == [] and public_undocumented(batch) == []
     assert set(penumbra.__all__) >= {"load", "loads", "load_dict", "Scene", "Camera", "SceneError", "RaycastingScene", "INVALID_ID"}
+
+
+def test_the_version_is_the_cargo_workspaces():
+    workspace = (ROOT / "Cargo.toml").read_text().split("[workspace.package]", 1)[1]
+    cargo = re.search(r'^version = "([^"]+)"', workspace, re.M).group(1)
+    assert penumbra.__version__ == cargo == version("penumbra")
+
+
+def test_the_jobs_file_in_the_docs_is_the_example_file():
+    doc = (ROOT / "docs" / "distributed.md").read_text()
+    shown = doc.split("(../scenes/batch/orbit.toml), whole:\n\n```toml\n", 1)[1].split("```", 1)[0]
+    assert shown == (ROOT / "scenes" / "batch" / "orbit.toml").read_text()
