@@ -343,6 +343,9 @@ fn table() -> Vec<Case> {
         toml("TOML: nesting too deep",
              edit(BASE, "fov = 45", &format!("fov = {}{}", "[".repeat(200), "]".repeat(200))))
             .parse_error(Syntax, line_only("fov = [[["), Some("camera.fov"), &["nested too deeply"]),
+        // A table header 200 keys deep: the parser says only "recursion limit".
+        toml("TOML: table header nested too deep", format!("{BASE}\n[deep.{}x]\ny = 1\n", "a.".repeat(200)))
+            .parse_error(Syntax, at("[deep."), Some(format!("deep.{}x", "a.".repeat(200)).leak()), &["nested too deeply"]),
 
         // --- Files the scene loads (building), written next to it: at the `file` key ---
         toml("missing mesh file", with_mesh("meshes/nosuch.obj"))

@@ -47,6 +47,18 @@ fn overrides_change_the_description() {
 }
 
 #[test]
+fn seeds_beyond_tomls_integers_are_taken_as_the_seed_flag_takes_them() {
+    let max = toml(&["render.seed=18446744073709551615"]).unwrap();
+    assert_eq!(max.desc.render.seed, Some(u64::MAX));
+    let quoted = toml(&["render.seed=\"42\""]).unwrap();
+    assert_eq!(quoted.desc.render.seed, Some(42));
+    for bad in ["18446744073709551616", "-1", "1.5", "\"12a\"", "\"\""] {
+        let e = toml(&[&format!("render.seed={bad}")]).unwrap_err();
+        assert!(e.to_string().contains("non-negative integer"), "{bad}: {e}");
+    }
+}
+
+#[test]
 fn a_later_override_wins_and_tables_are_created() {
     let file = toml(&["film.width=64", "film.width=32", "render.ambient=0.5"]).unwrap();
     assert_eq!(file.desc.film.width, 32);

@@ -95,6 +95,25 @@ pub(crate) fn toml_path_at(text: &str, offset: usize) -> KeyPath {
     }
 }
 
+/// The byte offset of the TOML line whose header or key is dotted deepest (the first such), for
+/// a nesting-depth error that the deserializer reports without a place.
+pub(crate) fn deepest_toml_line(text: &str) -> Option<usize> {
+    let mut best: Option<(usize, usize)> = None;
+    let mut start = 0;
+    for line in text.split('\n') {
+        let name = toml_header(line).map(|(name, _)| name).or_else(|| {
+            let (key, _) = line.split_once('=')?;
+            (!key.contains(['[', '{', ',', '"', '\''])).then_some(key)
+        });
+        let depth = name.map_or(0, |n| split_dotted(n).len());
+        if depth > best.map_or(0, |(d, _)| d) {
+            best = Some((depth, start));
+        }
+        start += line.len() + 1;
+    }
+    best.map(|(_, offset)| offset)
+}
+
 /// The name in a `[name]` or `[[name]]` header line, and whether it is an array of tables.
 fn toml_header(line: &str) -> Option<(&str, bool)> {
     let t = line.trim();

@@ -103,8 +103,15 @@ impl Source {
         match self.format {
             SceneFormat::Toml => {
                 let de = toml::Deserializer::parse(&self.text).map_err(|e| {
-                    let offset = e.span().map(|s| s.start);
                     let message = e.message();
+                    // A nesting limit comes without a place: the line dotted deepest is the one
+                    // that went past it.
+                    let offset = e.span().map(|s| s.start).or_else(|| {
+                        message
+                            .contains("recurs")
+                            .then(|| locate::deepest_toml_line(&self.text))
+                            .flatten()
+                    });
                     // A duplicate or a nesting too deep is about a key, which the parser does
                     // not name: find it from the text, as JSON's errors name theirs.
                     let about_a_key =

@@ -125,7 +125,9 @@ pub struct RenderDesc {
     pub ambient: Option<ColorDesc>,
     /// Radiance of camera rays that miss (default 0).
     pub background: Option<ColorDesc>,
-    /// Seed of every random choice (default 0).
+    /// Seed of every random choice (default 0): an integer, or a string of decimal digits for
+    /// seeds above TOML's largest integer (2^63 − 1), up to 2^64 − 1 as `--seed` takes them.
+    #[serde(default, deserialize_with = "values::seed")]
     pub seed: Option<u64>,
 }
 

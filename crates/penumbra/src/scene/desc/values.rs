@@ -30,6 +30,35 @@ impl<'de> Deserialize<'de> for Num {
     }
 }
 
+/// A seed: a non-negative integer, or (beyond TOML's and JSON's signed 64-bit integers) a
+/// string of decimal digits up to 2^64 − 1.
+pub(super) fn seed<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    struct SeedVisitor;
+    impl Visitor<'_> for SeedVisitor {
+        type Value = u64;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str(
+                "a non-negative integer up to 18446744073709551615 (a string of digits above \
+                 9223372036854775807)",
+            )
+        }
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<u64, E> {
+            Ok(v)
+        }
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<u64, E> {
+            u64::try_from(v).map_err(|_| E::invalid_value(de::Unexpected::Signed(v), &self))
+        }
+        fn visit_str<E: de::Error>(self, v: &str) -> Result<u64, E> {
+            let digits = !v.is_empty() && v.bytes().all(|b| b.is_ascii_digit());
+            digits
+                .then(|| v.parse().ok())
+                .flatten()
+                .ok_or_else(|| E::invalid_value(de::Unexpected::Str(v), &self))
+        }
+    }
+    d.deserialize_any(SeedVisitor).map(Some)
+}
+
 /// A vector `[x, y, z]` of finite numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vec3Desc(pub [f64; 3]);
