@@ -12,18 +12,17 @@
 //!   `out.object_id.exr`, `out.primitive_id.exr` (a single 32-bit unsigned integer channel `Y`:
 //!   every id is exact, which a float file could not promise above 2^24).
 //!
-//! On a miss: depth is `+inf`, the others zero, both ids `4294967295` (`u32::MAX`). Every file
-//! appears complete or not at all (a temporary file renamed into place).
+//! On a miss: depth is `+inf`, the others zero, both ids `4294967295` (`u32::MAX`). The image
+//! and its pass files appear together or not at all: each is staged under a temporary name
+//! ([`StagedFile`]) and all are renamed into place once every one is written.
 
-use std::fs::File;
-use std::io::{Cursor, Write};
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
 
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage,
 };
-use penumbra::{AovFilm, AovPixel, Film, ImageError};
+use penumbra::{check_finite, AovFilm, AovPixel, Film, OutputFormat, StagedFile};
 
 use crate::failure::{invalid, runtime, Failure};
 use crate::signals::Interrupt;
@@ -132,26 +131,14 @@ pub fn pass_path(image: &Path, p: Pass) -> PathBuf {
     image.with_file_name(format!("{stem}.{}.{ext}", p.name()))
 }
 
-/// Writes the colour and `passes` into one multi-layer EXR at `path`.
-pub fn write_exr(
+/// Stages the colour and `passes` as one multi-layer EXR for `path`.
+pub fn stage_exr(
     path: &Path,
     film: &Film,
     aovs: &AovFilm,
     passes: &Passes,
-    interrupt: &Interrupt,
-) -> Result<(), Failure> {
-    if let Some((i, value)) = film.pixels.iter().enumerate().find_map(|(i, p)| {
-        let v = p.to_array().into_iter().find(|c| !c.is_finite())?;
-        Some((i, v))
-    }) {
-        let width = film.width.max(1) as usize;
-        return Err(invalid(ImageError::NonFinite {
-            path: path.to_owned(),
-            x: (i % width) as u32,
-            y: (i / width) as u32,
-            value,
-        }));
-    }
+) -> Result<StagedFile, Failure> {
+    check_finite(film, path, OutputFormat::Exr).map_err(invalid)?;
     let mut channels = Vec::new();
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         let v = film.pixels.iter().map(|p| p[c]).collect();
@@ -169,18 +156,18 @@ pub fn write_exr(
         }
     }
     let bytes = exr_bytes(film.width, film.height, channels).map_err(runtime)?;
-    write_atomic(path, &bytes, interrupt)
+    StagedFile::write_bytes(path, &bytes).map_err(runtime)
 }
 
-/// Writes each of `passes` to its own file beside `image` (see [`pass_path`]); returns the
-/// files written, in the order of `passes`.
-pub fn write_files(
+/// Stages each of `passes` as its own file beside `image` (see [`pass_path`]), in the order
+/// of `passes`. A signal stops the staging between files.
+pub fn stage_files(
     image: &Path,
     aovs: &AovFilm,
     passes: &Passes,
     interrupt: &Interrupt,
-) -> Result<Vec<PathBuf>, Failure> {
-    let mut written = Vec::with_capacity(passes.0.len());
+) -> Result<Vec<StagedFile>, Failure> {
+    let mut staged = Vec::with_capacity(passes.0.len());
     for &p in &passes.0 {
         let bytes = if p.is_id() {
             let v = aovs.pixels.iter().map(|px| id_of(px, p)).collect();
@@ -195,11 +182,10 @@ pub fn write_files(
                 .collect();
             pfm_bytes(aovs.width, aovs.height, n, &v)
         };
-        let path = pass_path(image, p);
-        write_atomic(&path, &bytes, interrupt)?;
-        written.push(path);
+        interrupt.check()?;
+        staged.push(StagedFile::write_bytes(&pass_path(image, p), &bytes).map_err(runtime)?);
     }
-    Ok(written)
+    Ok(staged)
 }
 
 /// An EXR of one layer holding `channels` (sorted by name, as the format wants), losslessly
@@ -236,30 +222,6 @@ fn pfm_bytes(width: u32, height: u32, channels: usize, values: &[f32]) -> Vec<u8
         }
     }
     out
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same folder, renamed into place
-/// unless a signal arrived meanwhile.
-fn write_atomic(path: &Path, bytes: &[u8], interrupt: &Interrupt) -> Result<(), Failure> {
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = File::create(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
-        .map_err(|e| e.to_string())
-        .and_then(|()| {
-            if interrupt.flag().load(Ordering::SeqCst) {
-                return Err("interrupted".to_owned());
-            }
-            std::fs::rename(&tmp, path).map_err(|e| e.to_string())
-        });
-    result.map_err(|message| {
-        let _ = std::fs::remove_file(&tmp);
-        if interrupt.flag().load(Ordering::SeqCst) {
-            interrupt.failure()
-        } else {
-            runtime(format!("{}: cannot write image: {message}", path.display()))
-        }
-    })
 }
 
 #[cfg(test)]

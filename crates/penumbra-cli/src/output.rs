@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use penumbra::{encode_image, write_image_unless, Film, ImageError, OutputFormat};
+use penumbra::{commit_all, encode_image, stage_image, Film, ImageError, OutputFormat, StagedFile};
 
 use crate::args::FormatArg;
 use crate::failure::{invalid, runtime, Failure};
@@ -166,21 +166,29 @@ impl Output {
         }
     }
 
-    /// Writes the image: a file appears complete or not at all (a signal during the write
-    /// leaves the old file, or none); standard output gets the encoded bytes at once.
+    /// Writes the image with `extra` files (its AOVs): files appear complete and together or
+    /// not at all (a signal or a failed write leaves the old files, or none); standard output
+    /// gets the encoded bytes at once.
     pub fn write(
         &self,
         film: &Film,
         gamma: Option<f32>,
+        extra: Vec<StagedFile>,
         interrupt: &Interrupt,
     ) -> Result<(), Failure> {
         match &self.target {
-            Target::File(path) => match write_image_unless(film, path, gamma, interrupt.flag()) {
-                Ok(()) => Ok(()),
-                Err(ImageError::Cancelled) => Err(interrupt.failure()),
-                Err(e @ ImageError::NonFinite { .. }) => Err(invalid(e)),
-                Err(e) => Err(runtime(e)),
-            },
+            Target::File(path) => {
+                let image =
+                    stage_image(film, path, gamma, interrupt.flag()).map_err(|e| match e {
+                        ImageError::Cancelled => interrupt.failure(),
+                        e @ ImageError::NonFinite { .. } => invalid(e),
+                        e => runtime(e),
+                    })?;
+                // The image last: it stays as it was if any rename before it fails.
+                let mut files = extra;
+                files.push(image);
+                commit(files, interrupt)
+            }
             Target::Stdout => {
                 let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
                 let mut out = std::io::stdout().lock();
@@ -190,6 +198,13 @@ impl Output {
             }
         }
     }
+}
+
+/// Renames staged `files` into place together, unless a signal arrived while they were
+/// written (then they are removed and the old files stay).
+pub fn commit(files: Vec<StagedFile>, interrupt: &Interrupt) -> Result<(), Failure> {
+    interrupt.check()?;
+    commit_all(files).map_err(runtime)
 }
 
 /// The scene's stem for `{scene}` and default names.

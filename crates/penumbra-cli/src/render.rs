@@ -16,7 +16,7 @@ use crate::args::RenderArgs;
 use crate::cameras;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
-use crate::output::{expand, names_camera, scene_stem, Fields, Output, Target};
+use crate::output::{self, expand, names_camera, scene_stem, Fields, Output, Target};
 use crate::settings::{flag_of, region, settings};
 use crate::signals::Interrupt;
 use crate::summary::Report;
@@ -81,18 +81,23 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         })?;
         interrupt.check()?;
         // The files written beside the image, one per pass (none for an EXR, which holds them).
+        // The image and its pass files are staged, then renamed into place together.
         let aov_files = match (&args.aov, &aovs, &job.output.target) {
             (Some(passes), Some(aovs), Target::File(path)) => {
                 if job.output.format == OutputFormat::Exr {
-                    aov::write_exr(path, &film, aovs, passes, &interrupt)?;
+                    let exr = aov::stage_exr(path, &film, aovs, passes)?;
+                    output::commit(vec![exr], &interrupt)?;
                     Vec::new()
                 } else {
-                    job.output.write(&film, scene.gamma, &interrupt)?;
-                    aov::write_files(path, aovs, passes, &interrupt)?
+                    let files = aov::stage_files(path, aovs, passes, &interrupt)?;
+                    let paths = files.iter().map(|f| f.path().to_owned()).collect();
+                    job.output.write(&film, scene.gamma, files, &interrupt)?;
+                    paths
                 }
             }
             _ => {
-                job.output.write(&film, scene.gamma, &interrupt)?;
+                job.output
+                    .write(&film, scene.gamma, Vec::new(), &interrupt)?;
                 Vec::new()
             }
         };

@@ -372,3 +372,44 @@ fn the_summary_names_every_file_written() {
     let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     assert_eq!(summary["aovs"], serde_json::json!([]));
 }
+
+#[test]
+fn the_image_and_its_passes_are_written_together_or_not_at_all() {
+    let dir = TempDir::new("aov-together");
+    dir.write("quad.toml", SCENE);
+    dir.write("q.png", "old image");
+    dir.write("q.depth.pfm", "old depth");
+    // The normal pass cannot be written: a folder has its name.
+    std::fs::create_dir(dir.join("q.normal.pfm")).unwrap();
+    let args = [
+        "render",
+        "quad.toml",
+        "-o",
+        "q.png",
+        "--aov",
+        "depth,normal,albedo",
+    ];
+    let r = run_in(dir.path(), args);
+    let e = error_line(&r, 1);
+    assert!(e.contains("q.normal.pfm"), "{e}");
+    let mut left: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["q.depth.pfm", "q.normal.pfm", "q.png", "quad.toml"]);
+    assert_eq!(std::fs::read(dir.join("q.png")).unwrap(), b"old image");
+    assert_eq!(
+        std::fs::read(dir.join("q.depth.pfm")).unwrap(),
+        b"old depth"
+    );
+
+    std::fs::remove_dir(dir.join("q.normal.pfm")).unwrap();
+    ok(run_in(dir.path(), args));
+    for f in ["q.png", "q.depth.pfm", "q.normal.pfm", "q.albedo.pfm"] {
+        assert!(
+            std::fs::read(dir.join(f)).unwrap().len() > 20,
+            "{f} written"
+        );
+    }
+}

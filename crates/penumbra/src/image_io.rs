@@ -4,7 +4,7 @@
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
@@ -12,6 +12,7 @@ use thiserror::Error;
 
 use crate::encode8::encode_all;
 use crate::film::Film;
+use crate::staged::StagedFile;
 
 /// Output file formats, chosen by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,63 +108,63 @@ pub fn write_image_unless(
     gamma: Option<f32>,
     cancel: &AtomicBool,
 ) -> Result<(), ImageError> {
-    let format = OutputFormat::from_path(path).ok_or_else(|| ImageError::UnknownFormat {
-        path: path.to_owned(),
-    })?;
-    let write_err = |message: String| ImageError::Write {
-        path: path.to_owned(),
-        message,
-    };
-    if matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
-        // SPEC §7 writes floats unclamped: an infinite or NaN value would be a lie.
-        let bad = film.pixels.iter().enumerate().find_map(|(i, p)| {
-            let value = p.to_array().into_iter().find(|c| !c.is_finite())?;
-            Some((i, value))
-        });
-        if let Some((i, value)) = bad {
+    let staged = stage_image(film, path, gamma, cancel)?;
+    if cancel.load(Ordering::SeqCst) {
+        return Err(ImageError::Cancelled);
+    }
+    staged.commit()
+}
+
+/// An error naming the first pixel of `film` that is infinite or NaN, for a float format
+/// (EXR, PFM: SPEC §7 writes floats unclamped, so such a value would be a lie); `Ok` for the
+/// 8-bit formats, which clamp.
+pub fn check_finite(film: &Film, path: &Path, format: OutputFormat) -> Result<(), ImageError> {
+    if !matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
+        return Ok(());
+    }
+    let bad = film.pixels.iter().enumerate().find_map(|(i, p)| {
+        let value = p.to_array().into_iter().find(|c| !c.is_finite())?;
+        Some((i, value))
+    });
+    match bad {
+        None => Ok(()),
+        Some((i, value)) => {
             let width = film.width.max(1) as usize;
-            return Err(ImageError::NonFinite {
+            Err(ImageError::NonFinite {
                 path: path.to_owned(),
                 x: (i % width) as u32,
                 y: (i / width) as u32,
                 value,
-            });
-        }
-    }
-    let name = path
-        .file_name()
-        .ok_or_else(|| write_err("not a file name".into()))?;
-    // Unique per process and per call, so concurrent writers never share a temporary file.
-    static WRITES: AtomicU64 = AtomicU64::new(0);
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        WRITES.fetch_add(1, Ordering::Relaxed)
-    ));
-    let cancelled = || cancel.load(Ordering::SeqCst);
-    let result = write_to(film, &tmp, format, gamma, cancel).and_then(|()| {
-        if cancelled() {
-            return Err("interrupted".into());
-        }
-        std::fs::rename(&tmp, path).map_err(|e| e.to_string())
-    });
-    match result {
-        Ok(()) => Ok(()),
-        Err(message) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(if cancelled() {
-                ImageError::Cancelled
-            } else {
-                write_err(message)
             })
         }
     }
 }
 
+/// [`write_image_unless`] without the final rename: the image written beside `path` under a
+/// temporary name, to be renamed into place with other files (an image and its AOVs) by
+/// [`commit_all`](crate::commit_all), or removed when dropped.
+pub fn stage_image(
+    film: &Film,
+    path: &Path,
+    gamma: Option<f32>,
+    cancel: &AtomicBool,
+) -> Result<StagedFile, ImageError> {
+    let format = OutputFormat::from_path(path).ok_or_else(|| ImageError::UnknownFormat {
+        path: path.to_owned(),
+    })?;
+    check_finite(film, path, format)?;
+    StagedFile::write_with(path, |file| write_to(film, file, format, gamma, cancel)).map_err(|e| {
+        if cancel.load(Ordering::SeqCst) {
+            ImageError::Cancelled
+        } else {
+            e
+        }
+    })
+}
+
 /// A file whose writes fail once `cancel` is set, so that an encoder stops at its next write.
 struct Unless<'a> {
-    file: File,
+    file: &'a mut File,
     cancel: &'a AtomicBool,
 }
 
@@ -248,19 +249,16 @@ pub fn encode_image(
 
 fn write_to(
     film: &Film,
-    path: &Path,
+    file: &mut File,
     format: OutputFormat,
     gamma: Option<f32>,
     cancel: &AtomicBool,
 ) -> Result<(), String> {
     let interrupted = || "interrupted".to_owned();
-    // Converted before the file is created, so that a cancelled write leaves nothing at all.
     let prepared = prepare(film, format, gamma, cancel)?.ok_or_else(interrupted)?;
-    let file = File::create(path).map_err(|e| e.to_string())?;
     let mut w = BufWriter::new(Unless { file, cancel });
     encode(film, &prepared, format, &mut w)?;
-    let Unless { file, .. } = w.into_inner().map_err(|e| e.to_string())?;
-    file.sync_all().map_err(|e| e.to_string())
+    w.flush().map_err(|e| e.to_string())
 }
 
 /// Writes the prepared film to `w` in `format`.

@@ -64,6 +64,7 @@ mod render;
 mod sampling;
 mod scene;
 mod simd;
+mod staged;
 mod texture;
 mod texture_file;
 mod world;
@@ -79,7 +80,10 @@ pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
-pub use image_io::{encode_image, write_image, write_image_unless, ImageError, OutputFormat};
+pub use image_io::{
+    check_finite, encode_image, stage_image, write_image, write_image_unless, ImageError,
+    OutputFormat,
+};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
@@ -101,6 +105,7 @@ pub use scene::{
     SceneFormat, ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
+pub use staged::{commit_all, StagedFile};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use texture_file::decode_texture_image;
 pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};
