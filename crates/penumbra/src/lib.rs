@@ -62,6 +62,7 @@ mod pool;
 mod raycast;
 mod render;
 mod sampling;
+mod scale;
 mod scene;
 mod simd;
 mod staged;
@@ -99,6 +100,7 @@ pub use render::{
     NO_ID,
 };
 pub use sampling::{Rng, Sampler};
+pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};
 pub use scene::{
     desc, escape_controls, inspect_mtl, inspect_obj, inspect_obj_bytes, AssetKind, ErrorKind,
     Location, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile,

@@ -32,6 +32,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Ray, Transform};
 use crate::pool::thread_pool;
+use crate::scale;
 use crate::texture::Texture;
 
 /// Most triangles in a world: about 100 bytes each with the BVH, so 2^27 need some 13 GiB.
@@ -57,6 +58,12 @@ pub enum WorldError {
     /// A position is not finite, or is beyond f32's range once transformed.
     #[error("the transformed object has coordinates beyond the range of 32-bit floats")]
     NotFinite,
+    /// A vertex is finite but beyond [`MAX_COORDINATE`](crate::MAX_COORDINATE).
+    #[error(
+        "the object has a coordinate of {0:e}; penumbra renders coordinates within ±1e12 \
+         (beyond, its 32-bit ray-triangle products overflow): scale the scene down"
+    )]
+    OutOfRange(f32),
     /// A material index past the world's materials.
     #[error("material {index} does not exist (the world has {materials})")]
     UnknownMaterial {
@@ -291,6 +298,11 @@ impl WorldBuilder {
             self.geometry.truncate(first_vertex, first_triangle);
             return Err(WorldError::NotFinite);
         }
+        let largest = scale::largest_coordinate(&self.geometry.positions[first_vertex..]);
+        if largest > scale::MAX_COORDINATE {
+            self.geometry.truncate(first_vertex, first_triangle);
+            return Err(WorldError::OutOfRange(largest));
+        }
         self.objects += 1;
         Ok(object)
     }
@@ -309,6 +321,35 @@ impl WorldBuilder {
             ..Mesh::default()
         };
         self.add_mesh(&mesh, &Transform::IDENTITY, &[material])
+    }
+
+    /// Where the world leaves the scales it renders exactly (see [`scale`]): the first
+    /// camera (by name) or light (by index) too far from the triangles for their size, or an
+    /// extent too small. `None` when all is well, or without triangles.
+    pub(crate) fn scale_problem(&self) -> Option<scale::Problem> {
+        if self.geometry.is_empty() {
+            return None;
+        }
+        let reach = scale::Reach::of(&self.geometry);
+        let camera = self.cameras.iter().find_map(|(name, c)| {
+            let product = reach.product(c.position());
+            (product > scale::MAX_REACH).then(|| scale::Problem::Camera(name.clone(), product))
+        });
+        let light = || {
+            self.lights.iter().enumerate().find_map(|(i, l)| {
+                let product = scale::light_points(l)
+                    .map(|p| reach.product(p))
+                    .fold(0.0, f32::max);
+                (product > scale::MAX_REACH).then_some(scale::Problem::Light(i, product))
+            })
+        };
+        let extent = || {
+            let cameras = self.cameras.iter().map(|(_, c)| c.position());
+            let bounds = cameras.fold(reach.bounds, Aabb::grow);
+            let extent = (bounds.max - bounds.min).max_element();
+            (extent < scale::MIN_EXTENT).then_some(scale::Problem::Tiny(extent))
+        };
+        camera.or_else(light).or_else(extent)
     }
 
     /// Builds the acceleration structure with `threads` workers (0: all cores) and returns

@@ -62,7 +62,7 @@ pub struct ShadingSettings {
 }
 
 /// Smallest camera-ray distance that counts as a hit, in scene units.
-pub const CAMERA_T_MIN: f32 = 1e-4;
+pub const CAMERA_T_MIN: f32 = 0.0;
 /// Shadow rays start this many times the bound on the hit point's rounding error off the
 /// surface (see [`Surface::error`]): enough to clear it whatever the scene's scale and distance
 /// from the origin, and no more.

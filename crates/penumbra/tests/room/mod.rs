@@ -1,11 +1,11 @@
 //! The seed's room (`scenes/cornell.toml`) mapped by a scale and an offset, rendered, and
 //! compared by PSNR: shared by `scale.rs` (fixed factors) and `random_scenes.rs` (random ones).
 
-use penumbra::{render, Film, RenderOptions, SceneFile, SceneFormat};
+use penumbra::{render, Film, RenderOptions, Scene, SceneError, SceneFile, SceneFormat};
 
 /// The seed's room (`scenes/cornell.toml`) with every point mapped to `s·p + t` (t on all three
 /// axes), at 96×96 with 4 samples per pixel.
-fn room(s: f32, t: f32) -> String {
+pub fn room(s: f32, t: f32) -> String {
     let p = |x: f32, y: f32, z: f32| format!("[{}, {}, {}]", s * x + t, s * y + t, s * z + t);
     let v = |x: f32, y: f32, z: f32| format!("[{}, {}, {}]", s * x, s * y, s * z);
     let quad = |material: &str, corner: String, u: String, w: String| {
@@ -46,11 +46,16 @@ fn room(s: f32, t: f32) -> String {
     .join("\n")
 }
 
+/// The room of [`room`] loaded and built, or why not.
+pub fn build_room(text: &str) -> Result<Scene, SceneError> {
+    SceneFile::from_str(text, SceneFormat::Toml, "room.toml", ".")?.build(2)
+}
+
 pub fn render_room(s: f32, t: f32) -> Film {
-    let scene = SceneFile::from_str(&room(s, t), SceneFormat::Toml, "room.toml", ".")
-        .unwrap()
-        .build(2)
-        .unwrap();
+    render_scene(&build_room(&room(s, t)).unwrap())
+}
+
+pub fn render_scene(scene: &Scene) -> Film {
     let options = RenderOptions {
         threads: 2,
         ..RenderOptions::default()

@@ -21,6 +21,7 @@ use super::error::{ErrorKind, KeyPath, SceneError};
 use super::{Scene, SceneFile};
 use crate::integrator::LightModel;
 use crate::pool::thread_pool;
+use crate::scale::Problem;
 use crate::texture::Image;
 use crate::world::WorldBuilder;
 
@@ -118,6 +119,17 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     }
     for (i, o) in desc.objects.iter().enumerate() {
         b.object(&KeyPath::root("objects").index(i), o)?;
+    }
+    if let Some(problem) = b.world.scale_problem() {
+        let path = match &problem {
+            Problem::Camera(_, _) if desc.camera.is_some() => {
+                KeyPath::root("camera").key("position")
+            }
+            Problem::Camera(name, _) => KeyPath::root("cameras").key(name).key("position"),
+            Problem::Light(i, _) => KeyPath::root("lights").index(*i),
+            Problem::Tiny(_) => KeyPath::root("objects"),
+        };
+        return Err(b.bad(&path, problem.to_string()));
     }
     let load_time = start.elapsed();
     let world = b.world.build_on(b.pool.as_ref());
