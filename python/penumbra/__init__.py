@@ -30,8 +30,10 @@ row 0 at the top: the numbers the command line writes to EXR and PFM files.
 ``penumbra.__version__`` is the package's version, the Rust workspace's.
 """
 
+import warnings as _warnings
+
 from ._camera import Camera
-from ._core import MAX_THREADS, NO_ID, SceneError, __version__
+from ._core import MAX_THREADS, NO_ID, SIMD_ENV_PROBLEM, SceneError, __version__
 from ._image import to_srgb8, write_image
 from ._pack import PackedScene
 from ._raycast import INVALID_ID, RaycastingScene
@@ -56,3 +58,11 @@ __all__ = [
     "to_srgb8",
     "write_image",
 ]
+
+if SIMD_ENV_PROBLEM is not None:
+    # The command line refuses to run; a library import only warns, loudly, once.
+    _warnings.warn(
+        f"{SIMD_ENV_PROBLEM}: using the best instruction set this CPU has instead",
+        RuntimeWarning,
+        stacklevel=2,
+    )

@@ -12,6 +12,7 @@ NO_ID: int
 MAX_THREADS: int
 INVALID_ID: int
 __version__: str
+SIMD_ENV_PROBLEM: Optional[str]
 
 class SceneError(ValueError):
     """A mistake in a scene, located by ``file``, ``line``, ``column`` and ``key``."""

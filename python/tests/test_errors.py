@@ -4,6 +4,9 @@ OSError, as Python users expect."""
 from __future__ import annotations
 
 import errno
+import os
+import subprocess
+import sys
 
 import pytest
 
@@ -108,3 +111,19 @@ def test_errors_in_files_and_dicts_name_them(tmp_path):
 def test_the_scene_files_of_the_repository_load():
     for path in sorted(SCENES.glob("*.toml")):
         assert penumbra.load(path).stats["triangles"] > 0, path
+
+
+@pytest.mark.parametrize("value", ["avx-2", "AVX2", "sse"])
+def test_a_simd_path_that_cannot_be_honoured_warns_on_import(value):
+    env = {**os.environ, "PENUMBRA_SIMD": value}
+    code = "import warnings; warnings.simplefilter('always'); import penumbra"
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "RuntimeWarning" in done.stderr and f'PENUMBRA_SIMD="{value}"' in done.stderr
+    quiet = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "PENUMBRA_SIMD": "portable"},
+        capture_output=True,
+        text=True,
+    )
+    assert quiet.returncode == 0 and "PENUMBRA_SIMD" not in quiet.stderr

@@ -36,5 +36,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_THREADS", penumbra::MAX_THREADS)?;
     // The workspace's version, which maturin also gives the Python package.
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // Why PENUMBRA_SIMD cannot be honoured (a typo, or a path this CPU lacks), or None: the
+    // package warns on import, since the library then runs the best path it has.
+    let simd_problem = penumbra::forced_simd_path().err().map(|e| e.to_string());
+    m.add("SIMD_ENV_PROBLEM", simd_problem)?;
     Ok(())
 }
