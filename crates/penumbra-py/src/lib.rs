@@ -19,6 +19,10 @@ mod scene;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // numpy's C API is looked up on first use, which runs Python code: done lazily, a Ctrl-C
+    // arriving during that first lookup (say, the first image a batch writes) made the numpy
+    // crate panic instead of raising KeyboardInterrupt. Look it up now, at import.
+    numpy::PyArray1::<f32>::zeros(py, 0, false);
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add_class::<scene::CoreScene>()?;
     m.add_class::<raycast::CoreRaycastingScene>()?;
