@@ -3,15 +3,15 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
-use thiserror::Error;
 
 use crate::encode8::encode_all;
 use crate::film::Film;
+use crate::image_error::ImageError;
 use crate::staged::StagedFile;
 
 /// Output file formats, chosen by extension.
@@ -49,48 +49,6 @@ impl OutputFormat {
             },
         )
     }
-}
-
-/// Why an image could not be written or read.
-#[derive(Debug, Error)]
-pub enum ImageError {
-    /// The extension is not one of .png, .jpg, .jpeg, .exr, .pfm.
-    #[error("{}: unknown image format (use .png, .jpg, .exr or .pfm)", path.display())]
-    UnknownFormat {
-        /// The path.
-        path: PathBuf,
-    },
-    /// Encoding in memory failed.
-    #[error("cannot encode image: {message}")]
-    Encode {
-        /// The cause.
-        message: String,
-    },
-    /// Writing failed.
-    #[error("{}: cannot write image: {message}", path.display())]
-    Write {
-        /// The path.
-        path: PathBuf,
-        /// The cause.
-        message: String,
-    },
-    /// A float image (EXR, PFM) would hold an infinite or NaN value: radiance beyond the f32
-    /// range, such as the physical light model's inverse-square falloff right next to a
-    /// very bright light. Nothing is written.
-    #[error("{}: pixel ({x}, {y}) is {value}, beyond the range of 32-bit floats: the scene's lights or materials are too bright", path.display())]
-    NonFinite {
-        /// The path.
-        path: PathBuf,
-        /// Column of the first such pixel.
-        x: u32,
-        /// Row of the first such pixel, from the top.
-        y: u32,
-        /// Its first non-finite channel.
-        value: f32,
-    },
-    /// The cancel flag was set before the image was complete; the file is as it was.
-    #[error("interrupted")]
-    Cancelled,
 }
 
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not

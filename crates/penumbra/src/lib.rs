@@ -52,6 +52,7 @@ mod encode8;
 mod files;
 mod film;
 mod geometry;
+mod image_error;
 mod image_io;
 mod integrator;
 mod light;
@@ -81,9 +82,9 @@ pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
+pub use image_error::ImageError;
 pub use image_io::{
-    check_finite, encode_image, stage_image, write_image, write_image_unless, ImageError,
-    OutputFormat,
+    check_finite, encode_image, stage_image, write_image, write_image_unless, OutputFormat,
 };
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};

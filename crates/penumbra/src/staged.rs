@@ -23,7 +23,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::image_io::ImageError;
+use crate::image_error::ImageError;
 
 /// A file written beside its destination under a temporary name, not yet in place. Dropping
 /// it without [`commit`](StagedFile::commit) removes the temporary file.
