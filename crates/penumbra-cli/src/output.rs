@@ -4,7 +4,10 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use penumbra::{commit_all, encode_image, stage_image, Film, ImageError, OutputFormat, StagedFile};
+use penumbra::{
+    commit_all, encode_image, file_name_part, stage_image, Film, ImageError, OutputFormat,
+    StagedFile,
+};
 
 use crate::args::FormatArg;
 use crate::failure::{invalid, runtime, Failure};
@@ -12,7 +15,7 @@ use crate::signals::Interrupt;
 
 /// The values a pattern's fields take for one render.
 pub struct Fields<'a> {
-    /// The camera's name (path separators become `_`).
+    /// The camera's name (made one file name by [`file_name_part`]).
     pub camera: &'a str,
     /// The scene file's stem (`stdin` for standard input).
     pub scene: &'a str,
@@ -44,7 +47,7 @@ pub fn expand(pattern: &str, f: &Fields) -> Result<String, String> {
             .find('}')
             .ok_or_else(|| format!("an unclosed `{{` in `{pattern}` (write {{{{ for a brace)"))?;
         let value = match &tail[1..end] {
-            "camera" => f.camera.replace(['/', '\\'], "_"),
+            "camera" => file_name_part(f.camera),
             "scene" => f.scene.to_owned(),
             "spp" => f.spp.to_string(),
             "seed" => f.seed.to_string(),

@@ -198,3 +198,32 @@ fn camera_and_pattern_mistakes_are_input_errors() {
         assert!(pngs.is_empty(), "{args:?} wrote {pngs:?}");
     }
 }
+
+#[test]
+fn camera_names_with_path_syntax_stay_inside_the_output_folder() {
+    // Each name as a scene file may spell it (a TOML basic string), and the file it gives in
+    // `o/{camera}/image.png`: one folder of its own under `o`, never `o/..` or deeper.
+    let cases = [
+        ("..", "_."),
+        (".", "_"),
+        ("../../up", "_._.._up"),
+        ("a/b", "a_b"),
+        ("back\\\\slash", "back_slash"),
+        ("-dash", "_dash"),
+        ("tab\\there", "tab_here"),
+    ];
+    for (spelled, folder) in cases {
+        let dir = TempDir::new("cams-path-syntax");
+        let scene = BASE_TOML.replace("[camera]\n", &format!("[cameras.\"{spelled}\"]\n"));
+        dir.write("in/room.toml", scene);
+        ok(run_in(
+            &dir.join("in"),
+            ["render", "room.toml", "-o", "o/{camera}/image.png", "-q"],
+        ));
+        assert_eq!(files(&dir, "in/o"), [folder], "{spelled}");
+        assert!(dir.join("in/o").join(folder).join("image.png").is_file());
+        // Nothing beside the scene's folder, nor beside the output folder.
+        assert_eq!(files(&dir, "."), ["in"], "{spelled}");
+        assert_eq!(files(&dir, "in"), ["o", "room.toml"], "{spelled}");
+    }
+}

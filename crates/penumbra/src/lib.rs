@@ -49,6 +49,7 @@
 mod accel;
 mod camera;
 mod encode8;
+mod file_name;
 mod files;
 mod film;
 mod geometry;
@@ -79,6 +80,7 @@ pub mod shapes {
 pub use accel::{intersect_brute_force, occluded_brute_force, Bvh, Pairs, Segments};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
+pub use file_name::file_name_part;
 pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
