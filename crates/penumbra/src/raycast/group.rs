@@ -13,6 +13,7 @@
 
 use glam::Vec3A;
 
+use super::boundary::Boundary;
 use super::watertight::{Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::simd::Isa;
 
@@ -33,6 +34,9 @@ pub(crate) struct TriangleGroup {
     /// is done, from a group still in the caches: read from a separate array indexed by
     /// slot, they were a cache miss at the end of each incoherent ray.
     ids: [[u32; 2]; GROUP],
+    /// Each lane's part of the surface's border, for the one-triangle test of a lane on an
+    /// edge (it fits in the padding of the sixth cache line).
+    boundary: [Boundary; GROUP],
 }
 
 /// What a group test finds: the lanes hit (bit `i` for lane `i`) and each lane's crossing
@@ -58,15 +62,17 @@ impl GroupHits {
 
 impl TriangleGroup {
     /// The group of leaf slots `first .. first + count` (`1 <= count <= 8`) of `tris`, whose
-    /// geometry and primitive ids are `ids`.
+    /// geometry and primitive ids are `ids` and parts of the border `boundary`.
     pub fn new(
         tris: &[SoaTriangle],
         ids: &[[u32; 2]],
+        boundary: &[Boundary],
         first: usize,
         count: usize,
     ) -> TriangleGroup {
         let mut v = [[[0.0; GROUP]; 3]; 3];
         let ids = std::array::from_fn(|lane| ids[first + lane.min(count - 1)]);
+        let boundary = std::array::from_fn(|lane| boundary[first + lane.min(count - 1)]);
         for lane in 0..GROUP {
             let corners = tris[first + lane.min(count - 1)].corners();
             for (corner, c) in corners.iter().enumerate() {
@@ -79,6 +85,7 @@ impl TriangleGroup {
             v,
             first: first as u32,
             ids,
+            boundary,
         }
     }
 
@@ -158,7 +165,7 @@ impl PreparedRay {
             let lane = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let slot = group.first as usize + lane;
-            if let Some(c) = self.hit(&tris[slot], t_min, t_max, rule) {
+            if let Some(c) = self.hit(&tris[slot], group.boundary[lane], t_min, t_max, rule) {
                 hits.mask |= 1 << lane;
                 (hits.t[lane], hits.b1[lane], hits.b2[lane]) = (c.t, c.b1, c.b2);
             }
@@ -214,11 +221,18 @@ mod tests {
     }
 
     #[test]
+    fn a_group_is_six_cache_lines() {
+        assert_eq!(std::mem::size_of::<TriangleGroup>(), 6 * 64);
+    }
+
+    #[test]
     fn every_lane_answers_as_the_one_triangle_test() {
         let mut rng = Rng::new(7, &[]);
         let tris: Vec<SoaTriangle> = (0..64)
             .map(|_| SoaTriangle::new(&[0; 3].map(|_| Vec3A::from(point(&mut rng)))))
             .collect();
+        let corners: Vec<Corners> = tris.iter().map(SoaTriangle::corners).collect();
+        let boundary = super::super::boundary::boundaries(&corners, None);
         let (mut hits, mut exact) = (0, 0);
         for _ in 0..4000 {
             let (o, target) = (point(&mut rng), point(&mut rng));
@@ -229,7 +243,7 @@ mod tests {
                 for first in (0..tris.len()).step_by(3) {
                     let count = (tris.len() - first).min(GROUP);
                     let ids: Vec<[u32; 2]> = (0..tris.len() as u32).map(|i| [0, i]).collect();
-                    let group = TriangleGroup::new(&tris, &ids, first, count);
+                    let group = TriangleGroup::new(&tris, &ids, &boundary, first, count);
                     for lane in 0..count {
                         assert_eq!(group.ids(lane), [0, (first + lane) as u32]);
                     }
@@ -245,7 +259,8 @@ mod tests {
                         };
                         let got = dispatch(path, test);
                         for lane in 0..count {
-                            let want = ray.hit(&tris[first + lane], 0.0, 10.0, rule);
+                            let slot = first + lane;
+                            let want = ray.hit(&tris[slot], boundary[slot], 0.0, 10.0, rule);
                             let bits = want.map(|c| [c.t, c.b1, c.b2].map(f32::to_bits));
                             let mine = (got.mask >> lane & 1 == 1).then(|| {
                                 [got.t[lane], got.b1[lane], got.b2[lane]].map(f32::to_bits)

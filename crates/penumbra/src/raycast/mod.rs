@@ -39,9 +39,13 @@
 //! two triangles, or through a vertex, crossing from one side to the other, counts one hit
 //! (Open3D merges equal distances within a geometry to the same end); where the ray only
 //! touches the surface at a fold (a silhouette edge) it counts 0 or 2, so the parity stays
-//! right. See `watertight` for the rule.
+//! right. On the border of an open mesh (an edge that only one triangle has, a vertex of such
+//! an edge: all of a lone triangle's) a ray counts once, as in Open3D, so every ray that the
+//! closest-hit query finds there is counted and listed too. See `watertight` and `boundary`
+//! for the rule.
 
 mod batch;
+mod boundary;
 mod closest;
 mod group;
 mod packet;
@@ -54,6 +58,8 @@ mod wide;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_border;
 #[cfg(test)]
 mod tests_edges;
 #[cfg(test)]

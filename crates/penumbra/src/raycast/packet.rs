@@ -14,6 +14,7 @@
 //! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
 //! visit.
 
+use super::boundary::Boundary;
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
 use super::watertight::{Crossing, EdgeRule, PreparedRay};
 use super::wide::WIDTH;
@@ -270,6 +271,7 @@ fn triangle<const N: usize, I: Isa>(
         let Some(ray) = &lanes.rays[i] else { continue };
         if let Some(c) = ray.hit(
             accel.slot(slot as usize),
+            Boundary::default(),
             0.0,
             best.t[i],
             EdgeRule::Inclusive,

@@ -8,6 +8,7 @@ use std::sync::atomic::AtomicBool;
 use glam::{DVec3, Vec3};
 use proptest::prelude::*;
 
+use super::boundary::{boundaries, Boundary};
 use super::closest::closest_on_triangle;
 use super::tests_meshes::MeshData;
 use super::watertight::{EdgeRule, PreparedRay, SoaTriangle};
@@ -66,6 +67,7 @@ fn closest_brute(s: &RaycastingScene, ray: &[f32; 6]) -> Option<(f32, u32, u32)>
     for (g, p, tri) in all_triangles(s) {
         if let Some(c) = r.hit(
             &SoaTriangle::new(&tri),
+            Boundary::default(),
             0.0,
             f32::INFINITY,
             EdgeRule::Inclusive,
@@ -83,11 +85,21 @@ fn crossings_brute(s: &RaycastingScene, ray: &[f32; 6]) -> Vec<(f32, u32, u32)> 
     let Some(r) = PreparedRay::new(Vec3::from_slice(&ray[..3]), Vec3::from_slice(&ray[3..])) else {
         return Vec::new();
     };
-    let mut v: Vec<_> = all_triangles(s)
+    let tris = all_triangles(s);
+    let corners: Vec<_> = tris.iter().map(|t| t.2).collect();
+    let border = boundaries(&corners, None);
+    let mut v: Vec<_> = tris
         .into_iter()
-        .filter_map(|(g, p, tri)| {
-            r.hit(&SoaTriangle::new(&tri), 0.0, f32::INFINITY, EdgeRule::Owned)
-                .map(|c| (c.t, g, p))
+        .zip(border)
+        .filter_map(|((g, p, tri), b)| {
+            r.hit(
+                &SoaTriangle::new(&tri),
+                b,
+                0.0,
+                f32::INFINITY,
+                EdgeRule::Owned,
+            )
+            .map(|c| (c.t, g, p))
         })
         .collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
@@ -126,6 +138,7 @@ fn check_rays(s: &RaycastingScene, rays: &[[f32; 6]]) {
                         PreparedRay::new(Vec3::from_slice(&ray[..3]), Vec3::from_slice(&ray[3..]));
                     let c = r.unwrap().hit(
                         &SoaTriangle::new(&hit_tri.2),
+                        Boundary::default(),
                         0.0,
                         f32::INFINITY,
                         EdgeRule::Inclusive,

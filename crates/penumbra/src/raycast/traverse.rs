@@ -16,6 +16,7 @@
 
 use glam::Vec3A;
 
+use super::boundary::boundaries;
 use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use super::wide::{collapse, WideNode, WIDTH};
@@ -113,6 +114,12 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
+        // The border of the surface, its vertices owned by the first triangle added.
+        let corners: Vec<_> = (0..geometry.len())
+            .map(|i| geometry.corners(i).map(Vec3A::from))
+            .collect();
+        let by_triangle = boundaries(&corners, pool);
+        let boundary: Vec<_> = slots.iter().map(|&i| by_triangle[i as usize]).collect();
         // Each leaf's triangles as groups (one, at most eight triangles), the leaf child's
         // index its first group.
         let mut groups = Vec::new();
@@ -120,7 +127,13 @@ impl Accel {
             let index = groups.len() as u32;
             for start in (first..first + count).step_by(GROUP) {
                 let n = (first + count - start).min(GROUP as u32);
-                groups.push(TriangleGroup::new(&tris, &ids, start as usize, n as usize));
+                groups.push(TriangleGroup::new(
+                    &tris,
+                    &ids,
+                    &boundary,
+                    start as usize,
+                    n as usize,
+                ));
             }
             index
         });

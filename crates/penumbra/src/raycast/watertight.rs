@@ -16,13 +16,16 @@
 //!   hit, occlusion: never a miss).
 //! - [`EdgeRule::Owned`]: a ray on an edge or vertex hits exactly one of the triangles that
 //!   meet there when the surface crosses the ray (and none or two where it only touches it, at
-//!   a silhouette fold), so that counting hits gives the crossing parity. Each boundary point
-//!   is given to the triangle that holds it after an infinitesimal displacement of the ray by
-//!   `(ε, ε²)` in the sheared frame (a simulation of simplicity), which is the top-left rule of
-//!   rasterization.
+//!   a silhouette fold), so that counting hits gives the crossing parity. Each point shared by
+//!   triangles is given to the triangle that holds it after an infinitesimal displacement of
+//!   the ray by `(ε, ε²)` in the sheared frame (a simulation of simplicity), which is the
+//!   top-left rule of rasterization. On the border of the surface, where the displaced ray
+//!   may leave it, the triangle owns its boundary edges, and one triangle owns each vertex of
+//!   the border (see `boundary`): a ray there hits the surface once.
 
 use glam::{Vec3, Vec3A, Vec3Swizzles};
 
+use super::boundary::Boundary;
 use crate::math::unit_cross;
 
 /// How a ray exactly on a triangle's edge or vertex counts; see the module docs.
@@ -130,12 +133,14 @@ impl PreparedRay {
         self.inv_dz
     }
 
-    /// Intersects the triangle `tri` for `t` in `[t_min, t_max]` under `rule`. Two-sided;
+    /// Intersects the triangle `tri`, whose part of the surface's border is `boundary` (used
+    /// by [`EdgeRule::Owned`] only), for `t` in `[t_min, t_max]` under `rule`. Two-sided;
     /// degenerate triangles and triangles seen exactly edge-on are missed.
     #[inline(always)]
     pub fn hit(
         &self,
         tri: &SoaTriangle,
+        boundary: Boundary,
         t_min: f32,
         t_max: f32,
         rule: EdgeRule,
@@ -172,7 +177,8 @@ impl PreparedRay {
             let zero = uvw.cmpeq(Vec3A::ZERO);
             if zero.any() {
                 let (ex, ey, flip) = (x2 - x1, y2 - y1, det < 0.0);
-                if (0..3).any(|k| zero.test(k) && !owned(ex[k], ey[k], flip)) {
+                let zeros = [0, 1, 2].map(|k| zero.test(k));
+                if !owns(zeros, boundary, |k| owned(ex[k], ey[k], flip)) {
                     return None;
                 }
             }
@@ -201,6 +207,25 @@ fn edge_f64(a: f32, b: f32, c: f32, d: f32) -> f32 {
         f32::MIN_POSITIVE.copysign(e.signum() as f32)
     } else {
         r
+    }
+}
+
+/// Whether a triangle whose edge functions are zero where `zeros` says (one: the ray is on
+/// that edge; two: on the vertex they share) counts the hit: the border's own rule on its
+/// edges and vertices (see `boundary`), else the displaced ray's, `top_left(k)` for edge `k`.
+#[inline(never)]
+fn owns(zeros: [bool; 3], boundary: Boundary, top_left: impl Fn(usize) -> bool) -> bool {
+    let all_top_left = || (0..3).all(|k| !zeros[k] || top_left(k));
+    match zeros {
+        // On a vertex: the two zero edges share the corner opposite the third edge.
+        [true, true, false] | [true, false, true] | [false, true, true] => {
+            let corner = zeros.iter().position(|z| !z).unwrap_or(0);
+            boundary.vertex(corner).unwrap_or_else(all_top_left)
+        }
+        _ => match zeros.iter().position(|&z| z) {
+            Some(k) if boundary.edge(k) => true,
+            _ => all_top_left(),
+        },
     }
 }
 

@@ -1,0 +1,165 @@
+//! Which edges and vertices of each triangle lie on the boundary of the surface, for the
+//! counting rule [`EdgeRule::Owned`](super::watertight::EdgeRule::Owned).
+//!
+//! Inside the surface, a ray through an edge or a vertex is given to one of the triangles
+//! that meet there by a simulated displacement of the ray (see `watertight`). That needs a
+//! triangle on each side: on an edge that only one triangle has (the border of an open mesh,
+//! a lone triangle) the displaced ray may fall outside and the crossing would not be counted,
+//! and around a vertex of the border the triangles do not close the circle. So:
+//! - a triangle owns its boundary edges (an edge no other triangle has), and
+//! - a vertex on a boundary edge is owned by one triangle: the first one added that has that
+//!   vertex.
+//!
+//! Edges and vertices are matched by their exact coordinates, not by index, as the
+//! watertight test matches them: two triangles that share corner positions share the edge,
+//! whichever geometry or vertex array they come from. Degenerate triangles (zero area, which
+//! rays never hit) take no part.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::watertight::Corners;
+
+/// A triangle's part of the surface's boundary: bit `k` (0–2) when its edge `k` (the edge
+/// opposite corner `k`: B→C, C→A, A→B) is a boundary edge, bit `3 + c` when its corner `c` is
+/// a vertex of the boundary, bit `6 + c` when it is, in addition, the triangle that owns that
+/// vertex. Zero for a triangle inside a closed surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Boundary(u16);
+
+impl Boundary {
+    /// True when edge `k` (opposite corner `k`) has no other triangle.
+    #[inline]
+    pub fn edge(self, k: usize) -> bool {
+        self.0 >> k & 1 == 1
+    }
+
+    /// `Some(owned)` when corner `c` is a vertex of the boundary (owned by this triangle or
+    /// not); `None` inside the surface.
+    #[inline]
+    pub fn vertex(self, c: usize) -> Option<bool> {
+        (self.0 >> (3 + c) & 1 == 1).then_some(self.0 >> (6 + c) & 1 == 1)
+    }
+}
+
+/// A vertex position as an exact key (`-0` and `0` are one point).
+type Key = [u32; 3];
+
+fn key(p: glam::Vec3A) -> Key {
+    p.to_array().map(|c| (c + 0.0).to_bits())
+}
+
+/// True when the triangle has zero area, exactly: the cross product of its edges in `f64`,
+/// where the differences of `f32` coordinates and their products are exact.
+fn degenerate(c: &Corners) -> bool {
+    let [a, b, c] = c.map(|p| DVec3::new(p.x as f64, p.y as f64, p.z as f64));
+    (b - a).cross(c - a) == DVec3::ZERO
+}
+
+/// The [`Boundary`] of each triangle of `tris` (in that order; a vertex of the boundary is
+/// owned by its first triangle in this order), sorting the edges on `pool`.
+pub(crate) fn boundaries(tris: &[Corners], pool: Option<&rayon::ThreadPool>) -> Vec<Boundary> {
+    // Every edge of every proper triangle as (its two corners in order, triangle, edge).
+    let mut edges: Vec<(Key, Key, u32, u8)> = tris
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| !degenerate(c))
+        .flat_map(|(i, c)| {
+            (0..3u8).map(move |k| {
+                let (p, q) = (key(c[(k as usize + 1) % 3]), key(c[(k as usize + 2) % 3]));
+                (p.min(q), p.max(q), i as u32, k)
+            })
+        })
+        .collect();
+    let sort = |e: &mut Vec<(Key, Key, u32, u8)>| e.par_sort_unstable();
+    match pool {
+        Some(pool) => pool.install(|| sort(&mut edges)),
+        None => sort(&mut edges),
+    }
+    let mut out = vec![Boundary::default(); tris.len()];
+    // Vertices of the boundary, each with the first triangle that has it.
+    let mut vertices: Vec<Key> = Vec::new();
+    for run in edges.chunk_by(|a, b| (a.0, a.1) == (b.0, b.1)) {
+        if let [(p, q, i, k)] = run {
+            out[*i as usize].0 |= 1 << k;
+            vertices.extend([*p, *q]);
+        }
+    }
+    vertices.sort_unstable();
+    vertices.dedup();
+    if vertices.is_empty() {
+        return out;
+    }
+    let mut owner: Vec<Option<u32>> = vec![None; vertices.len()];
+    for (i, c) in tris.iter().enumerate().filter(|(_, c)| !degenerate(c)) {
+        for (corner, p) in c.iter().enumerate() {
+            let Ok(v) = vertices.binary_search(&key(*p)) else {
+                continue;
+            };
+            let first = *owner[v].get_or_insert(i as u32);
+            out[i].0 |= 1 << (3 + corner);
+            if first == i as u32 {
+                out[i].0 |= 1 << (6 + corner);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3A;
+
+    fn corners(p: [[f32; 3]; 3]) -> Corners {
+        p.map(Vec3A::from)
+    }
+
+    #[test]
+    fn edges_and_vertices_of_the_border_are_marked() {
+        let (a, b, c, d) = (
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        );
+        // A lone triangle owns all its edges and corners.
+        let lone = boundaries(&[corners([a, b, c])], None);
+        assert!((0..3).all(|k| lone[0].edge(k) && lone[0].vertex(k) == Some(true)));
+        // A square of two triangles sharing the diagonal a–c (edge 1 of the first, C→A; edge
+        // 2 of the second, A→B): the diagonal is inside, its ends are on the border and
+        // belong to the first triangle.
+        let square = boundaries(&[corners([a, b, c]), corners([a, c, d])], None);
+        assert_eq!([0, 1, 2].map(|k| square[0].edge(k)), [true, false, true]);
+        assert_eq!([0, 1, 2].map(|k| square[1].edge(k)), [true, true, false]);
+        assert_eq!(square[0].vertex(0), Some(true));
+        assert_eq!(square[1].vertex(0), Some(false));
+        assert_eq!(square[1].vertex(2), Some(true));
+        // -0 is 0; a degenerate triangle neither shares nor owns anything.
+        let minus = corners([[-0.0, 0.0, 0.0], c, d]);
+        let flat = corners([a, b, [2.0, 0.0, 0.0]]);
+        let shared = boundaries(&[flat, corners([a, b, c]), minus], None);
+        assert_eq!(shared[0], Boundary::default());
+        assert!(!shared[1].edge(1) && !shared[2].edge(2));
+        assert_eq!(shared[1].vertex(0), Some(true));
+        assert_eq!(shared[2].vertex(0), Some(false));
+    }
+
+    #[test]
+    fn a_closed_surface_has_no_boundary() {
+        // A tetrahedron.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let tris: Vec<Corners> = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]
+            .iter()
+            .map(|t: &[usize; 3]| corners(t.map(|i| p[i])))
+            .collect();
+        assert!(boundaries(&tris, None)
+            .iter()
+            .all(|b| *b == Boundary::default()));
+    }
+}
