@@ -30,6 +30,11 @@ position = [0, 50, 50]
 /// Runs `penumbra render SCENE -o OUT` with at most `kib` KiB of address space; its exit
 /// code and stderr.
 fn render_limited(scene: &Path, out: &Path, kib: u64) -> (Option<i32>, String) {
+    render_limited_with(scene, out, kib, &[])
+}
+
+/// [`render_limited`] with more arguments.
+fn render_limited_with(scene: &Path, out: &Path, kib: u64, args: &[&str]) -> (Option<i32>, String) {
     let run = Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
@@ -39,6 +44,7 @@ fn render_limited(scene: &Path, out: &Path, kib: u64) -> (Option<i32>, String) {
         .arg("-o")
         .arg(out)
         .arg("--quiet")
+        .args(args)
         .env_remove("RUST_BACKTRACE")
         .stdin(Stdio::null())
         .output()
@@ -115,4 +121,34 @@ fn small_pngs_declaring_huge_images_beyond_the_memory_limit_are_refused_at_a_tex
     let out = sb.join("out.png");
     let got = render_limited(&scene, &out, 3_000_000);
     assert_refused("four 8192² PNGs", got, ": textures.t", &out);
+}
+
+/// Issue 30, class 1: a 7000 × 7000 film fits in 1 GiB, but the render kept a second copy of
+/// every pixel (its tiles' values) until the end, and aborted. Under 1 GiB, films from 6000²
+/// (which fits) to 9000² (which never does) either render and write their image or end with
+/// one line about memory, exit 1, and no file; never an abort.
+#[test]
+fn large_films_under_one_gib_render_or_are_refused_in_one_line() {
+    let sb = TempDir::new("memory-film");
+    let text = format!("{HEAD}\n[[objects]]\ntype = \"cube\"\ncenter = [0, 0, 0]\nsize = 1\n");
+    let scene = sb.write("film.toml", text);
+    for side in ["6000", "7000", "8000", "9000"] {
+        let out = sb.join(&format!("out{side}.png"));
+        let args = ["--width", side, "--height", side, "--spp", "1"];
+        let (code, stderr) = render_limited_with(&scene, &out, 1 << 20, &args);
+        match code {
+            Some(0) => assert!(out.exists(), "{side}: no image"),
+            Some(1) => {
+                assert_eq!(stderr.lines().count(), 1, "{side}: {stderr}");
+                assert!(stderr.contains("memory"), "{side}: {stderr}");
+                assert!(
+                    stderr.contains(&format!("{side}x{side}")),
+                    "{side}: {stderr}"
+                );
+                assert!(!out.exists(), "{side}: an image was written");
+            }
+            other => panic!("{side}: exit {other:?}: {stderr}"),
+        }
+        let _ = std::fs::remove_file(&out);
+    }
 }

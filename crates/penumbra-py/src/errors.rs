@@ -77,14 +77,18 @@ pub(crate) fn render_error(e: RenderError) -> PyErr {
     }
 }
 
-/// An image error as Python sees it: an unknown extension or an image that cannot be encoded
-/// (non-finite values in a float format included) is a `ValueError`, a failed write an
-/// `OSError`, a cancelled one `KeyboardInterrupt`.
+/// An image error as Python sees it: an unknown extension, a bad gamma or an image that cannot
+/// be encoded (too large for its format, non-finite values in a float format) is a
+/// `ValueError`, one beyond the memory available a `MemoryError`, a failed write an `OSError`,
+/// a cancelled one `KeyboardInterrupt`.
 pub(crate) fn image_error(e: ImageError) -> PyErr {
     match e {
         ImageError::UnknownFormat { .. }
         | ImageError::Encode { .. }
+        | ImageError::BadGamma(_)
+        | ImageError::TooLarge { .. }
         | ImageError::NonFinite { .. } => PyValueError::new_err(e.to_string()),
+        ImageError::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
         ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
         ImageError::Cancelled => PyKeyboardInterrupt::new_err(e.to_string()),
     }

@@ -37,6 +37,33 @@ impl OutputFormat {
         }
     }
 
+    /// Its name in messages: "PNG", "JPEG", "EXR" or "PFM".
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputFormat::Png => "PNG",
+            OutputFormat::Jpeg => "JPEG",
+            OutputFormat::Exr => "EXR",
+            OutputFormat::Pfm => "PFM",
+        }
+    }
+
+    /// Memory that writing one pixel takes beyond the film, at most: the 8-bit codes (PNG,
+    /// JPEG) and the compressed copy PNG's encoder keeps whole until it writes, or the float
+    /// copy EXR's encoder reads; plus the encoded bytes when they are kept `in_memory`.
+    fn bytes_per_pixel(self, in_memory: bool) -> u64 {
+        let working = match self {
+            OutputFormat::Png => 3 + 4,
+            OutputFormat::Jpeg => 3,
+            OutputFormat::Exr => 12,
+            OutputFormat::Pfm => 0,
+        };
+        let encoded = match self {
+            OutputFormat::Png | OutputFormat::Jpeg => 4,
+            OutputFormat::Exr | OutputFormat::Pfm => 13,
+        };
+        working + if in_memory { encoded } else { 0 }
+    }
+
     /// The format named by `path`'s extension (case-insensitive).
     pub fn from_path(path: &Path) -> Option<OutputFormat> {
         Some(
@@ -98,6 +125,42 @@ pub fn check_finite(film: &Film, path: &Path, format: OutputFormat) -> Result<()
     }
 }
 
+/// Refuses to encode `film` as `format` (for `path`; its bytes kept `in_memory` or not) when
+/// `gamma` is not one, the format cannot store the film's size, or the encoding would need
+/// more than the `available` memory: before anything is converted or written.
+fn check_encodable(
+    film: &Film,
+    format: OutputFormat,
+    gamma: Option<f32>,
+    path: &Path,
+    in_memory: bool,
+    available: Option<u64>,
+) -> Result<(), ImageError> {
+    ImageError::check_gamma(gamma)?;
+    let (width, height) = (film.width, film.height);
+    if let Some(limit) = format.max_dimension().filter(|&l| width.max(height) > l) {
+        return Err(ImageError::TooLarge {
+            path: path.to_owned(),
+            width,
+            height,
+            format: format.name(),
+            limit,
+        });
+    }
+    let need = film.pixels.len() as u64 * format.bytes_per_pixel(in_memory);
+    match available {
+        Some(available) if need > available => Err(ImageError::OutOfMemory {
+            path: path.to_owned(),
+            width,
+            height,
+            format: format.name(),
+            need,
+            available,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// [`write_image_unless`] without the final rename: the image written beside `path` under a
 /// temporary name, to be renamed into place with other files (an image and its AOVs) by
 /// [`commit_all`](crate::commit_all), or removed when dropped.
@@ -110,6 +173,7 @@ pub fn stage_image(
     let format = OutputFormat::from_path(path).ok_or_else(|| ImageError::UnknownFormat {
         path: path.to_owned(),
     })?;
+    check_encodable(film, format, gamma, path, false, crate::memory::available())?;
     check_finite(film, path, format)?;
     StagedFile::write_with(path, |file| write_to(film, file, format, gamma, cancel)).map_err(|e| {
         if cancel.load(Ordering::SeqCst) {
@@ -176,7 +240,10 @@ fn prepare(
             Prepared::Rgb8(RgbImage::from_raw(width, height, bytes).ok_or("bad film size")?)
         }
         OutputFormat::Exr => {
-            let mut floats = Vec::with_capacity(film.pixels.len() * 3);
+            let mut floats = Vec::new();
+            floats
+                .try_reserve_exact(film.pixels.len() * 3)
+                .map_err(|_| format!("not enough memory for a {width}x{height} image"))?;
             for row in rows {
                 if cancelled() {
                     return Ok(None);
@@ -189,12 +256,15 @@ fn prepare(
     }))
 }
 
-/// `film` encoded in `format`, as the bytes [`write_image`] would write (for a pipe, say).
+/// `film` encoded in `format`, as the bytes [`write_image`] would write (for a pipe, say:
+/// errors name the path "standard output").
 pub fn encode_image(
     film: &Film,
     format: OutputFormat,
     gamma: Option<f32>,
 ) -> Result<Vec<u8>, ImageError> {
+    let path = Path::new("standard output");
+    check_encodable(film, format, gamma, path, true, crate::memory::available())?;
     let encode_err = |message: String| ImageError::Encode { message };
     let never = AtomicBool::new(false);
     let prepared = prepare(film, format, gamma, &never)
@@ -309,6 +379,76 @@ mod tests {
             }
             // 8-bit formats clamp (NaN to 0), as SPEC §7 says.
             write_image(&film, &dir.join("out.png"), None).unwrap();
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// What cannot be encoded is refused before anything is converted or written: a gamma
+    /// that is not one, a JPEG wider or higher than 65535 pixels, an encoding beyond the
+    /// memory available.
+    #[test]
+    fn unencodable_images_are_refused_up_front() {
+        let dir = std::env::temp_dir().join(format!("penumbra-refused-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let film = |width: u32, height: u32| Film {
+            width,
+            height,
+            pixels: vec![glam::Vec3::splat(0.5); (width * height) as usize],
+        };
+        let small = film(2, 2);
+        let bad_gammas = [
+            0.0,
+            -0.0,
+            -2.2,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            1e-40,
+        ];
+        for g in bad_gammas {
+            for name in ["g.png", "g.jpg"] {
+                let got = write_image(&small, &dir.join(name), Some(g));
+                assert!(matches!(got, Err(ImageError::BadGamma(_))), "{g}: {got:?}");
+                assert!(!dir.join(name).exists(), "{g}: {name} written");
+            }
+            let got = encode_image(&small, OutputFormat::Png, Some(g));
+            assert!(matches!(got, Err(ImageError::BadGamma(_))), "{g}: {got:?}");
+        }
+        for (width, height) in [(65_536, 1), (1, 65_536)] {
+            let wide = film(width, height);
+            let got = write_image(&wide, &dir.join("w.jpg"), None).unwrap_err();
+            assert!(matches!(got, ImageError::TooLarge { .. }), "{got:?}");
+            assert!(got.to_string().contains("65535"), "{got}");
+            assert!(!dir.join("w.jpg").exists());
+            let got = encode_image(&wide, OutputFormat::Jpeg, None).unwrap_err();
+            assert!(matches!(got, ImageError::TooLarge { .. }), "{got:?}");
+        }
+        write_image(&film(65_535, 1), &dir.join("w.jpg"), Some(2.2)).unwrap();
+        // 1000 × 1000 pixels as a PNG need about 7 MB beyond the film.
+        let big = film(1000, 1000);
+        let path = Path::new("big.png");
+        let cases = [
+            (OutputFormat::Png, false, Some(1 << 20), false),
+            (OutputFormat::Png, false, Some(100 << 20), true),
+            (OutputFormat::Png, false, None, true),
+            (OutputFormat::Exr, false, Some(10 << 20), false),
+            (OutputFormat::Pfm, false, Some(0), true),
+            (OutputFormat::Pfm, true, Some(10 << 20), false),
+        ];
+        for (format, in_memory, available, fits) in cases {
+            let got = check_encodable(&big, format, None, path, in_memory, available);
+            assert_eq!(
+                got.is_ok(),
+                fits,
+                "{format:?} {in_memory} {available:?}: {got:?}"
+            );
+            if let Err(e) = got {
+                let text = e.to_string();
+                assert!(
+                    text.contains("1000x1000") && text.contains("memory"),
+                    "{text}"
+                );
+            }
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -9,6 +9,7 @@ mod job;
 mod settings;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
@@ -103,13 +104,16 @@ pub enum RenderError {
         /// Film height.
         height: u32,
     },
-    /// The image does not fit in memory.
-    #[error("not enough memory for a {width}x{height} image")]
+    /// The image (with its AOVs) does not fit in memory.
+    #[error("not enough memory for a {width}x{height} image{}", memory_detail(*need))]
     OutOfMemory {
         /// Width.
         width: u32,
         /// Height.
         height: u32,
+        /// The bytes it needs and the bytes available, when the refusal came from comparing
+        /// them (`None`: an allocation failed).
+        need: Option<(u64, u64)>,
     },
     /// The worker threads could not be started.
     #[error("cannot start {threads} render threads: {message}")]
@@ -119,6 +123,17 @@ pub enum RenderError {
         /// The system's reason.
         message: String,
     },
+}
+
+/// How much memory [`RenderError::OutOfMemory`] says was needed, when known.
+fn memory_detail(need: Option<(u64, u64)>) -> String {
+    need.map_or_else(String::new, |(need, available)| {
+        format!(
+            ": it needs about {}, more than the {} available",
+            crate::memory::human(need),
+            crate::memory::human(available)
+        )
+    })
 }
 
 const TILE: u32 = 16;
@@ -150,6 +165,35 @@ pub fn render_with_aovs(
     Ok((film, aovs, stats))
 }
 
+/// Memory a pixel of the film takes while it renders: its colour, and its AOVs when asked
+/// for.
+fn bytes_per_pixel(with_aovs: bool) -> u64 {
+    let aovs = if with_aovs {
+        std::mem::size_of::<AovPixel>()
+    } else {
+        0
+    };
+    (std::mem::size_of::<Rgb>() + aovs) as u64
+}
+
+/// Refuses a `width × height` film (with its AOVs) that would not fit in the memory the
+/// process may still take, before anything is allocated.
+fn check_memory(
+    (width, height): (u32, u32),
+    with_aovs: bool,
+    available: Option<u64>,
+) -> Result<(), RenderError> {
+    let need = width as u64 * height as u64 * bytes_per_pixel(with_aovs);
+    match available {
+        Some(available) if need > available => Err(RenderError::OutOfMemory {
+            width,
+            height,
+            need: Some((need, available)),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// A buffer of `len` values, or the error that the image does not fit in memory.
 fn buffer<T: Clone>(
     len: usize,
@@ -158,14 +202,27 @@ fn buffer<T: Clone>(
 ) -> Result<Vec<T>, RenderError> {
     let mut v: Vec<T> = Vec::new();
     v.try_reserve_exact(len)
-        .map_err(|_| RenderError::OutOfMemory { width, height })?;
+        .map_err(|_| RenderError::OutOfMemory {
+            width,
+            height,
+            need: None,
+        })?;
     v.resize(len, value);
     Ok(v)
 }
 
-/// What a tile's worker returns: its colours, its AOVs (empty unless asked for) and the shadow
-/// rays it traced.
-type TileOut = (Vec<Rgb>, Vec<AovPixel>, u64);
+/// The film's pixels and AOVs (empty unless asked for), filled in by the workers as their
+/// tiles finish.
+type Pixels = (Vec<Rgb>, Vec<AovPixel>);
+
+/// What one worker keeps from one tile to the next: its scratch buffers and the values of
+/// the tile it is working on.
+#[derive(Default)]
+struct Worker {
+    buffers: Buffers,
+    values: Vec<Rgb>,
+    aovs: Vec<AovPixel>,
+}
 
 /// [`render`], with the AOVs of every pixel when `with_aovs` (else an empty vector).
 fn render_impl(
@@ -194,9 +251,10 @@ fn render_impl(
         });
     }
     let (rw, rh) = (region.x1 - region.x0, region.y1 - region.y0);
+    check_memory((rw, rh), with_aovs, crate::memory::available())?;
     let len = rw as usize * rh as usize;
-    let mut pixels = buffer(len, Rgb::ZERO, (rw, rh))?;
-    let mut aov_pixels = buffer(if with_aovs { len } else { 0 }, AovPixel::MISS, (rw, rh))?;
+    let pixels = buffer(len, Rgb::ZERO, (rw, rh))?;
+    let aov_pixels = buffer(if with_aovs { len } else { 0 }, AovPixel::MISS, (rw, rh))?;
 
     let (pool, threads) = thread_pool(options.threads).map_err(|e| RenderError::Threads {
         threads: options.threads,
@@ -212,73 +270,66 @@ fn render_impl(
         cancel: options.cancel,
     };
 
-    let tiles: Vec<PixelBounds> = (region.y0..region.y1)
-        .step_by(TILE as usize)
-        .flat_map(|y0| {
-            (region.x0..region.x1)
-                .step_by(TILE as usize)
-                .map(move |x0| PixelBounds {
-                    x0,
-                    x1: (x0 + TILE).min(region.x1),
-                    y0,
-                    y1: (y0 + TILE).min(region.y1),
-                })
-        })
-        .collect();
+    // Tiles are numbered row by row; none is stored, so the render's memory is the film's.
+    let columns = rw.div_ceil(TILE) as u64;
+    let tile_count = columns * rh.div_ceil(TILE) as u64;
+    let tile = |i: u64| {
+        let x0 = region.x0 + (i % columns) as u32 * TILE;
+        let y0 = region.y0 + (i / columns) as u32 * TILE;
+        PixelBounds {
+            x0,
+            x1: (x0 + TILE).min(region.x1),
+            y0,
+            y1: (y0 + TILE).min(region.y1),
+        }
+    };
     let total = rw as u64 * rh as u64;
     let done = AtomicU64::new(0);
+    let shadow_rays = AtomicU64::new(0);
     let start = Instant::now();
     let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    let film = Mutex::new((pixels, aov_pixels));
 
-    let results: Vec<Option<TileOut>> = pool.install(|| {
+    pool.install(|| {
         // Scratch buffers are made once per rayon job, not per tile: a tile's worth of
         // work is small, and filling fresh buffers cost allocations and page faults.
-        tiles
-            .par_iter()
-            .map_init(Buffers::default, |buffers, tile| {
+        (0..tile_count)
+            .into_par_iter()
+            .for_each_init(Worker::default, |worker, i| {
                 if cancelled() {
-                    return None;
+                    return;
                 }
-                let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
-                let mut out = Vec::with_capacity(n);
-                let mut aovs = Vec::with_capacity(if with_aovs { n } else { 0 });
+                let tile = tile(i);
+                let Worker {
+                    buffers,
+                    values,
+                    aovs,
+                } = worker;
+                values.clear();
+                aovs.clear();
                 let mut shadow = 0;
                 for y in tile.y0..tile.y1 {
-                    shadow += job.row(y, tile.x0..tile.x1, buffers, &mut out, &mut aovs)?;
+                    match job.row(y, tile.x0..tile.x1, buffers, values, aovs) {
+                        Some(s) => shadow += s,
+                        None => return,
+                    }
                 }
-                let n = out.len() as u64;
+                shadow_rays.fetch_add(shadow, Ordering::Relaxed);
+                store(&film, region, &tile, values, aovs);
+                let n = values.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;
                 if let Some(progress) = options.progress {
                     progress(d, total);
                 }
-                Some((out, aovs, shadow))
             })
-            .collect()
     });
-    if cancelled() {
+    if cancelled() || done.load(Ordering::Relaxed) != total {
         return Err(RenderError::Cancelled);
     }
-
-    let mut shadow_rays = 0;
-    for (tile, result) in tiles.iter().zip(results) {
-        let (values, aovs, shadow) = result.ok_or(RenderError::Cancelled)?;
-        shadow_rays += shadow;
-        let tw = (tile.x1 - tile.x0) as usize;
-        for (row, chunk) in values.chunks(tw).enumerate() {
-            let y = (tile.y0 - region.y0) as usize + row;
-            let x = (tile.x0 - region.x0) as usize;
-            let at = y * rw as usize + x;
-            pixels[at..at + tw].copy_from_slice(chunk);
-        }
-        for (row, chunk) in aovs.chunks(tw).enumerate() {
-            let y = (tile.y0 - region.y0) as usize + row;
-            let at = y * rw as usize + (tile.x0 - region.x0) as usize;
-            aov_pixels[at..at + tw].copy_from_slice(chunk);
-        }
-    }
+    let (pixels, aov_pixels) = film.into_inner().unwrap_or_else(|e| e.into_inner());
     let stats = RenderStats {
         camera_rays: total * settings.spp as u64,
-        shadow_rays,
+        shadow_rays: shadow_rays.into_inner(),
         time: start.elapsed(),
         threads,
     };
@@ -288,4 +339,56 @@ fn render_impl(
         pixels,
     };
     Ok((film, aov_pixels, stats))
+}
+
+/// Copies the finished `tile`'s values (and AOVs, when computed) into the film of `region`.
+fn store(
+    film: &Mutex<Pixels>,
+    region: PixelBounds,
+    tile: &PixelBounds,
+    values: &[Rgb],
+    aovs: &[AovPixel],
+) {
+    let rw = (region.x1 - region.x0) as usize;
+    let tw = (tile.x1 - tile.x0) as usize;
+    let at =
+        |row: usize| ((tile.y0 - region.y0) as usize + row) * rw + (tile.x0 - region.x0) as usize;
+    // A worker that panicked while holding the lock left whole tiles: the film is still good.
+    let mut film = film.lock().unwrap_or_else(|e| e.into_inner());
+    let (pixels, aov_pixels) = &mut *film;
+    for (row, chunk) in values.chunks(tw).enumerate() {
+        pixels[at(row)..at(row) + tw].copy_from_slice(chunk);
+    }
+    for (row, chunk) in aovs.chunks(tw).enumerate() {
+        aov_pixels[at(row)..at(row) + tw].copy_from_slice(chunk);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A film is refused before anything is allocated when it (with its AOVs) needs more than
+    /// the memory available.
+    #[test]
+    fn films_beyond_the_memory_available_are_refused() {
+        const GIB: u64 = 1 << 30;
+        let cases = [
+            ((9000, 9000), false, Some(900 << 20), false),
+            ((7000, 7000), false, Some(GIB / 2), false),
+            ((7000, 7000), false, Some(GIB), true),
+            ((6000, 6000), false, Some(GIB), true),
+            ((6000, 6000), true, Some(GIB), false),
+            ((16384, 16384), true, None, true),
+        ];
+        for (size, with_aovs, available, fits) in cases {
+            let got = check_memory(size, with_aovs, available);
+            assert_eq!(got.is_ok(), fits, "{size:?} {with_aovs}: {got:?}");
+            if let Err(e) = got {
+                let text = e.to_string();
+                let name = format!("{}x{}", size.0, size.1);
+                assert!(text.contains(&name) && text.contains("more than"), "{text}");
+            }
+        }
+    }
 }
