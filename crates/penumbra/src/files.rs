@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Where the files a scene names (meshes, material libraries, images) are read from: the file
 /// system, or a set of files carried in memory, each under the path the scene resolves it to
@@ -16,7 +16,13 @@ use std::sync::Arc;
 #[derive(Clone, Debug, Default)]
 pub struct Files {
     packed: Option<Arc<BTreeMap<PathBuf, Vec<u8>>>>,
+    /// When set, a copy of every file read from disk, by the path it was read under: the
+    /// bytes a build read, so that a pack of it holds them whatever the files hold later.
+    kept: Option<Arc<Mutex<ByPath>>>,
 }
+
+/// Files' bytes by path.
+type ByPath = BTreeMap<PathBuf, Vec<u8>>;
 
 impl Files {
     /// The file system.
@@ -28,6 +34,32 @@ impl Files {
     pub fn packed(files: BTreeMap<PathBuf, Vec<u8>>) -> Files {
         Files {
             packed: Some(Arc::new(files)),
+            kept: None,
+        }
+    }
+
+    /// The same files, keeping a copy of every file read from disk from now on (see
+    /// [`Files::kept`]): a scene built from them is a snapshot, whose pack holds the bytes its
+    /// build read even after the files change on disk. The copies cost memory as large as
+    /// the files, for as long as the `Files` (or a clone) lives. Packed files are kept already.
+    pub fn keeping(self) -> Files {
+        match self.packed {
+            Some(_) => self,
+            None => Files {
+                packed: None,
+                kept: Some(Arc::default()),
+            },
+        }
+    }
+
+    /// The bytes `path` had when it was read: from the pack, or the copy kept when it was read
+    /// from disk (see [`Files::keeping`]). `None` for a file not read, or read from disk
+    /// without keeping.
+    pub fn kept(&self, path: &Path) -> Option<Vec<u8>> {
+        match (&self.packed, &self.kept) {
+            (Some(files), _) => files.get(path).cloned(),
+            (None, Some(kept)) => lock(kept).get(path).cloned(),
+            (None, None) => None,
         }
     }
 
@@ -39,7 +71,13 @@ impl Files {
     /// The bytes of the regular file `path`, at most `limit` of them (see [`read_bounded`]).
     pub(crate) fn read(&self, path: &Path, limit: u64) -> io::Result<Vec<u8>> {
         match &self.packed {
-            None => read_bounded(path, limit),
+            None => {
+                let bytes = read_bounded(path, limit)?;
+                if let Some(kept) = &self.kept {
+                    lock(kept).insert(path.to_owned(), bytes.clone());
+                }
+                Ok(bytes)
+            }
             Some(files) => {
                 let bytes = packed_file(files, path)?;
                 if bytes.len() as u64 > limit {
@@ -74,6 +112,12 @@ impl Files {
             Some(_) => path.to_owned(),
         }
     }
+}
+
+/// The kept files, even after a panic elsewhere while they were locked (a map of whole
+/// entries cannot be left half-changed by one).
+fn lock(kept: &Mutex<ByPath>) -> std::sync::MutexGuard<'_, ByPath> {
+    kept.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 fn packed_file<'a>(files: &'a BTreeMap<PathBuf, Vec<u8>>, path: &Path) -> io::Result<&'a Vec<u8>> {

@@ -113,3 +113,61 @@ fn overrides_travel_with_the_pack() {
     assert_eq!(pack.overrides, ["film.width=7"]);
     assert_eq!(pack.load().unwrap().build(1).unwrap().settings.width, 7);
 }
+
+#[test]
+fn a_scene_keeping_its_files_packs_the_bytes_its_build_read() {
+    let dir = TempDir::new("pack-snapshot");
+    let path = write_scene(&dir);
+    let file = SceneFile::load(&path).unwrap().keeping_files();
+    let scene = file.build(1).unwrap();
+    let original = small(&file);
+    let obj = dir.join("scenes/../meshes/tri.obj");
+    let read = std::fs::read(&obj).unwrap();
+    // The mesh edited on disk after the build: two triangles, elsewhere.
+    dir.write(
+        "meshes/tri.obj",
+        "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nv 2 2 0\nf 1 2 3\nf 2 4 3\n",
+    );
+    let pack = file.pack(&scene.files).unwrap();
+    assert_eq!(pack.files[&obj], read, "the pack holds what the build read");
+    let unpacked = pack.load().unwrap();
+    let rebuilt = unpacked.build(1).unwrap();
+    assert_eq!(
+        rebuilt.world.stats().triangles,
+        scene.world.stats().triangles
+    );
+    assert_eq!(
+        small(&unpacked),
+        original,
+        "the pack renders the scene as loaded"
+    );
+    // A file read without keeping is read again: the edited mesh.
+    let plain = SceneFile::load(&path).unwrap();
+    let now = plain.pack(&scene.files).unwrap();
+    assert_ne!(now.files[&obj], read);
+}
+
+#[test]
+fn a_pack_with_a_bad_override_is_a_scene_error_naming_it() {
+    let dir = TempDir::new("pack-bad-override");
+    let path = write_scene(&dir);
+    let file = SceneFile::load(&path).unwrap();
+    let scene = file.build(1).unwrap();
+    for (bad, why) in [
+        ("film.width", "no `=`"),
+        ("=3", "an empty key"),
+        ("\"film.width=3", "an unclosed quote"),
+    ] {
+        let mut pack = file.pack(&scene.files).unwrap();
+        pack.overrides = vec!["film.height=5".to_owned(), bad.to_owned()];
+        let e = pack.load().unwrap_err();
+        assert_eq!(e.kind(), penumbra::ErrorKind::Syntax, "{bad}: {e}");
+        let location = e.location().expect("located");
+        assert_eq!(location.set_by.as_deref(), Some(bad));
+        let message = e.to_string();
+        assert!(
+            message.contains(why) && message.contains("room.toml") && !message.contains('\n'),
+            "{bad}: {message}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use thiserror::Error;
 
-use super::{Override, SceneError, SceneFile, SceneFormat};
+use super::{ErrorKind, Location, Override, SceneError, SceneFile, SceneFormat};
 use crate::files::Files;
 
 /// A scene file and the bytes of every file its build reads (meshes, material libraries,
@@ -41,20 +41,32 @@ pub struct PackError {
 }
 
 impl SceneFile {
+    /// This file, keeping a copy of every file its builds read (see [`Files::keeping`]), so
+    /// that [`SceneFile::pack`] holds the bytes the build read: a snapshot, which a change to
+    /// the files on disk after the build does not reach.
+    pub fn keeping_files(self) -> SceneFile {
+        let files = self.files.clone().keeping();
+        self.with_files(files)
+    }
+
     /// Packs this file with the files `read`, the [`Scene::files`](super::Scene::files) of its
-    /// build, read again from where this file reads them (so the files must not have
+    /// build: the bytes its build read when it keeps them (see [`SceneFile::keeping_files`],
+    /// and a packed file's own), else read again from disk now (so the files must not have
     /// changed since the build for the pack to build the same world).
     pub fn pack(&self, read: &[PathBuf]) -> Result<ScenePack, PackError> {
         let files = read
             .iter()
             .map(|path| {
-                let bytes = self
-                    .files
-                    .read(path, u64::MAX)
-                    .map_err(|source| PackError {
-                        path: path.clone(),
-                        source,
-                    })?;
+                let bytes = match self.files.kept(path) {
+                    Some(bytes) => bytes,
+                    None => self
+                        .files
+                        .read(path, u64::MAX)
+                        .map_err(|source| PackError {
+                            path: path.clone(),
+                            source,
+                        })?,
+                };
                 Ok((path.clone(), bytes))
             })
             .collect::<Result<_, PackError>>()?;
@@ -75,16 +87,27 @@ impl ScenePack {
         self.files.values().map(Vec::len).sum()
     }
 
-    /// Parses the packed file; building it reads only the packed files.
+    /// Parses the packed file; building it reads only the packed files. An override that is
+    /// not `KEY.PATH=VALUE` is a syntax error naming it, as a bad one in the file would be.
     pub fn load(self) -> Result<SceneFile, SceneError> {
         let overrides = self
             .overrides
             .iter()
             .map(|text| Override::parse(text))
             .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| SceneError::Read {
-                path: self.name.clone(),
-                source: io::Error::new(io::ErrorKind::InvalidData, e),
+            .map_err(|e| SceneError::Invalid {
+                kind: ErrorKind::Syntax,
+                location: Box::new(Location {
+                    file: self.name.clone(),
+                    line: None,
+                    column: None,
+                    key: None,
+                    set_by: Some(e.text.clone()),
+                }),
+                message: format!(
+                    "{} in this override (expected KEY.PATH=VALUE, such as film.width=640)",
+                    e.reason
+                ),
             })?;
         let file = SceneFile::from_str_with(
             &self.text,
