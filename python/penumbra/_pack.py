@@ -15,7 +15,8 @@ class PackedScene:
     and machines (``ray.put`` it once for a cluster). A :class:`Scene` pickles as its pack.
 
     ``digest`` identifies the scene by content (the SHA-256 of the text, format, base folder,
-    overrides and every file's path and bytes): workers keep one built world per digest.
+    overrides and every file's path and bytes, each framed by its length and each list by its
+    count): workers keep one built world per digest.
     """
 
     __slots__ = ("_data", "_digest")
@@ -30,8 +31,14 @@ class PackedScene:
         if self._digest is None:
             h = hashlib.sha256()
             d = self._data
-            for value in (d["format"], d["name"], d["base_dir"], d["text"], *d["overrides"]):
+            # Every value framed by its length and every list by its count, so that no two
+            # different packs give the same stream (an override cannot pass for a file).
+            for value in (d["format"], d["name"], d["base_dir"], d["text"]):
                 _update(h, os.fsencode(value))
+            h.update(len(d["overrides"]).to_bytes(8, "little"))
+            for value in d["overrides"]:
+                _update(h, os.fsencode(value))
+            h.update(len(d["files"]).to_bytes(8, "little"))
             for path in sorted(d["files"]):
                 _update(h, os.fsencode(path))
                 _update(h, d["files"][path])

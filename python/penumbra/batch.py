@@ -43,18 +43,31 @@ failed, a file not written), 2 a mistake in the jobs file or the scene, 130 inte
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import re
 import sys
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, TextIO, Tuple
 
 try:
     import tomllib
 except ImportError:  # Python < 3.11
     import tomli as tomllib  # type: ignore[no-redef]
 
-JOB_KEYS = ("scene", "output", "cpus_per_task", "views_file", "defaults", "views", "orbit")
+#: The keys of a jobs file, with the type each value must have, as messages name it.
+JOB_TYPES: Dict[str, Tuple[Any, str]] = {
+    "scene": (str, "a file name"),
+    "output": (str, "a file name pattern"),
+    "cpus_per_task": ((int, float), "a number of CPUs"),
+    "views_file": (str, "a file name"),
+    "defaults": (dict, "a table ([defaults])"),
+    "views": (list, "a list of tables ([[views]])"),
+    "orbit": (dict, "a table ([orbit])"),
+}
+JOB_KEYS = tuple(JOB_TYPES)
+#: The keys of ``[orbit]``: the arguments of :func:`penumbra.views.orbit`, and settings.
+ORBIT_KEYS = ("center", "radius", "frames", "height", "fov", "up", "start_degrees", "name")
 
 
 class JobsError(ValueError):
@@ -93,6 +106,38 @@ def describe(
     return f"{where}: {who} ({key})"
 
 
+def _check_keys(path: str, jobs: Dict[str, Any]) -> None:
+    """Raises :class:`JobsError` for an unknown key anywhere outside ``[[views]]`` (whose
+    views :func:`penumbra.views.view` checks), a value of the wrong type, or no scene."""
+
+    def unknown(table: str, keys: Iterable[str], known: Sequence[str]) -> None:
+        extra = sorted(set(keys) - set(known))
+        if extra:
+            raise JobsError(
+                f"{path}: {table}unknown key {extra[0]!r} (known: {', '.join(known)})"
+            )
+
+    unknown("", jobs, JOB_KEYS)
+    if "scene" not in jobs:
+        raise JobsError(f"{path}: missing key 'scene' (the scene file to render)")
+    for key, value in jobs.items():
+        kind, what = JOB_TYPES[key]
+        if not isinstance(value, kind) or isinstance(value, bool):
+            raise JobsError(f"{path}: {key} must be {what}, not {value!r}")
+    cpus = jobs.get("cpus_per_task", 1)
+    if not 0 < cpus < float("inf"):
+        raise JobsError(f"{path}: cpus_per_task must be a positive number of CPUs, not {cpus!r}")
+    from .views import SETTING_KEYS, setting_problem
+
+    defaults = jobs.get("defaults", {})
+    unknown("[defaults]: ", defaults, SETTING_KEYS)
+    for key, value in defaults.items():
+        problem = setting_problem(key, value)
+        if problem:
+            raise JobsError(f"{path}: [defaults]: {problem}")
+    unknown("[orbit]: ", jobs.get("orbit", {}), ORBIT_KEYS + SETTING_KEYS)
+
+
 def read_jobs(path: str) -> Dict[str, Any]:
     """The jobs file at ``path``, with its paths resolved against its folder and its views
     expanded (``views``, then ``views_file``'s, then the orbit's). Raises :class:`JobsError`
@@ -110,14 +155,8 @@ def read_jobs(path: str) -> Dict[str, Any]:
         raise JobsError(f"{path}: not UTF-8 text: {e}") from None
     except tomllib.TOMLDecodeError as e:  # its message has the line and column
         raise JobsError(f"{path}: {e}") from None
-    unknown = sorted(set(jobs) - set(JOB_KEYS))
-    if unknown:
-        raise JobsError(f"{path}: unknown key {unknown[0]!r} (known: {', '.join(JOB_KEYS)})")
+    _check_keys(path, jobs)
     base = os.path.dirname(os.path.abspath(path))
-    if "scene" not in jobs:
-        raise JobsError(f"{path}: missing key 'scene' (the scene file to render)")
-    if not isinstance(jobs.get("views", []), list):
-        raise JobsError(f"{path}: views must be a list of tables ([[views]])")
     specs: List[Any] = list(jobs.get("views", []))
     from_file: List[Any] = []
     if "views_file" in jobs:
@@ -152,16 +191,18 @@ def read_jobs(path: str) -> Dict[str, Any]:
     }
 
 
-def check_cameras(path: str, jobs: Dict[str, Any], cameras: Sequence[str]) -> None:
+def check_views(path: str, jobs: Dict[str, Any], scene: Any) -> None:
     """Raises :class:`JobsError` for the first view of ``jobs`` (from :func:`read_jobs` of
-    ``path``) whose camera name is not one of the scene's ``cameras``."""
-    for i, view in enumerate(jobs["views"]):
-        camera = view["camera"]
-        if isinstance(camera, str) and camera not in cameras:
-            where = describe(path, jobs["origins"][i], i, view["name"])
-            raise JobsError(
-                f"{where}: unknown camera {camera!r} (the scene's cameras: {', '.join(cameras)})"
-            )
+    ``path``) that ``scene`` cannot render (an unknown camera, settings the render refuses:
+    see :func:`penumbra.distributed.check_views`), naming it in the file."""
+    from .distributed import check_views as check
+    from .views import ViewError
+
+    try:
+        check(scene, jobs["views"])
+    except ViewError as e:
+        where = describe(path, jobs["origins"][e.index], e.index, e.name)
+        raise JobsError(f"{where}: {e.reason}") from None
 
 
 def view_line(r: Dict[str, Any]) -> str:
@@ -203,20 +244,55 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     try:
         import penumbra
-        from penumbra import distributed
+        import penumbra.distributed  # noqa: F401  (Ray, needed below)
     except ImportError as e:
         print(f"penumbra.batch: {e} (install Ray with `pip install .[ray]`)", file=sys.stderr)
         return 1
     try:
         jobs = read_jobs(args.jobs)
         scene = penumbra.load(jobs["scene"])
-        check_cameras(args.jobs, jobs, scene.cameras)
-    except FileNotFoundError as e:
-        print(f"penumbra.batch: {e.filename}: {e.strerror}", file=sys.stderr)
+        check_views(args.jobs, jobs, scene)
+    except OSError as e:  # the jobs file or the scene file cannot be read
+        what = f"{e.filename}: {e.strerror}" if e.filename and e.strerror else str(e)
+        print(f"penumbra.batch: {what}", file=sys.stderr)
         return 2
     except ValueError as e:  # JobsError and penumbra.SceneError
         print(f"penumbra.batch: {e}", file=sys.stderr)
         return 2
+    if args.json:
+        with _stdout_to_stderr() as out:
+            code, summary = _run(args, jobs, scene)
+            if code == 0:
+                json.dump({"views": summary}, out, indent=1)
+                print(file=out)
+        return code
+    return _run(args, jobs, scene)[0]
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr() -> Iterator[TextIO]:
+    """Standard output kept for the JSON summary alone: meanwhile file descriptor 1 is
+    standard error, so whatever else writes to it (this process, Ray's processes started now,
+    which inherit it, and worker messages such as a worker that died) goes to stderr. Yields
+    the real standard output."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        with os.fdopen(os.dup(saved), "w") as out:
+            yield out
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _run(
+    args: argparse.Namespace, jobs: Dict[str, Any], scene: Any
+) -> Tuple[int, List[Dict[str, Any]]]:
+    """Renders the batch on Ray: the exit status and the summary."""
+    from penumbra import distributed
+
     # Each view's line as it finishes: the results on stdout, or beside --json's summary (at
     # the end, on stdout) as progress on stderr, which --quiet silences.
     lines = sys.stderr if args.json else sys.stdout
@@ -225,35 +301,36 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if not (args.json and args.quiet):
             print(view_line(r), file=lines, flush=True)
 
+    cpus, what = jobs["cpus_per_task"], f"{args.jobs}: cpus_per_task"
+    if args.cpus_per_task is not None:
+        cpus, what = args.cpus_per_task, "--cpus-per-task"
     try:
         distributed.connect(args.address, num_cpus=args.num_cpus)
+        distributed.check_num_cpus(cpus, what)
         summary = distributed.render_views(
             scene,
             jobs["views"],
             output=jobs["output"],
-            num_cpus=args.cpus_per_task or jobs["cpus_per_task"],
+            num_cpus=cpus,
             force=args.force,
             progress=not args.quiet and sys.stderr.isatty() or None,
             on_view=finished,
         )
     except KeyboardInterrupt:
         print("penumbra.batch: interrupted", file=sys.stderr)
-        return 130
+        return 130, []
     except ValueError as e:
         print(f"penumbra.batch: {e}", file=sys.stderr)
-        return 2
+        return 2, []
     except Exception as e:  # the cluster, a task or a write failed
         print(f"penumbra.batch: {type(e).__name__}: {e}", file=sys.stderr)
-        return 1
+        return 1, []
     finally:
         if args.address == "local":
             import ray
 
             ray.shutdown()
-    if args.json:
-        json.dump({"views": summary}, sys.stdout, indent=1)
-        print()
-    return 0
+    return 0, summary
 
 
 if __name__ == "__main__":

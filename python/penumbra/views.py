@@ -26,9 +26,11 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 import os
 from typing import Any, Dict, Iterable, List, Mapping, Sequence, Union
 
+from . import _core
 from ._camera import Camera
 
 #: Keys a view may have.
@@ -49,6 +51,40 @@ VIEW_KEYS = (
 )
 #: Keys passed on to :meth:`penumbra.Scene.render`.
 RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height")
+#: Settings a batch's defaults (a jobs file's ``[defaults]``) may give every view.
+SETTING_KEYS = RENDER_KEYS + ("aovs",)
+#: The most frames :func:`orbit` makes (each is a view, with its image).
+MAX_FRAMES = 100_000
+
+
+def setting_problem(key: str, value: Any) -> Union[str, None]:
+    """What is wrong with ``value`` for the view setting ``key`` (one of
+    :data:`SETTING_KEYS`), as a message naming the key, or None when nothing is. Checks types
+    and the simple ranges; :meth:`penumbra.Scene.render` checks the rest (a perfect square
+    ``spp``, the largest sizes)."""
+    if key in ("spp", "light_samples", "width", "height"):
+        if not _is_int(value) or value < 1:
+            return f"{key} must be a positive integer, not {value!r}"
+    elif key == "seed":
+        if not _is_int(value) or not 0 <= value < 2**64:
+            return f"seed must be an integer from 0 to 2^64 - 1, not {value!r}"
+    elif key == "sampler":
+        if not isinstance(value, str):
+            return f"sampler must be a name such as \"rgss\", not {value!r}"
+    elif key == "aovs":
+        names = (value,) if isinstance(value, str) else value
+        if not isinstance(names, (list, tuple)):
+            return f"aovs must be a list of AOV names, not {value!r}"
+        for a in names:
+            if a not in _core.AOV_NAMES:
+                return f"unknown AOV {a!r} in aovs (the AOVs are: {', '.join(_core.AOV_NAMES)})"
+    else:
+        return f"unknown setting {key!r} (known: {', '.join(SETTING_KEYS)})"
+    return None
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 class ViewError(ValueError):
@@ -58,8 +94,13 @@ class ViewError(ValueError):
 
     def __init__(self, index: int, name: Union[str, None], reason: str) -> None:
         self.index, self.name, self.reason = index, name, reason
-        label = f"views[{index}]" + (f" ({name!r})" if name else "")
-        super().__init__(f"{label}: {reason}")
+        super().__init__(f"{label(index, name)}: {reason}")
+
+
+def label(index: int, name: Union[str, None]) -> str:
+    """How messages name the view at ``index`` of a batch: ``views[INDEX]``, with its name
+    when it has one."""
+    return f"views[{index}]" + (f" ({name!r})" if name else "")
 
 
 def view(
@@ -94,12 +135,17 @@ def view(
             )
         except KeyError as e:
             raise ViewError(index, given, f"an explicit camera needs {e.args[0]!r}") from None
-        except ValueError as e:
+        except (TypeError, ValueError) as e:
             raise ViewError(index, given, str(e)) from None
     elif camera is not None and not isinstance(camera, (str, Camera)):
         raise ViewError(index, given, "camera must be a camera name or a penumbra.Camera")
-    # A camera's name as it is in a file name, as the command line's {camera}.
-    default_name = camera.replace("/", "_") if isinstance(camera, str) else f"view{index:04d}"
+    if given is not None and not isinstance(given, str):
+        raise ViewError(index, None, f"name must be a string, not {given!r}")
+    for key in SETTING_KEYS:
+        problem = None if merged.get(key) is None else setting_problem(key, merged[key])
+        if problem:
+            raise ViewError(index, given, problem)
+    default_name = camera if isinstance(camera, str) else f"view{index:04d}"
     name = str(merged.get("name") or default_name)
     aovs = merged.get("aovs") or ()
     if isinstance(aovs, str):
@@ -143,14 +189,20 @@ def orbit(
     up: frame 0 is in front, on +z) toward the next (x): counter-clockwise seen from above.
     ``settings`` (spp, seed, width, ...) go into every view; ``name`` is formatted with
     ``index``."""
-    frames = int(frames)
-    if frames < 1:
-        raise ValueError(f"an orbit needs at least one frame, not {frames}")
+    # Checked before anything is made: a typo of 1e8 frames fails at once, in no memory.
+    if not _is_int(frames) or not 1 <= frames <= MAX_FRAMES:
+        raise ValueError(
+            f"an orbit's frames must be a whole number from 1 to {MAX_FRAMES}, not {frames!r}"
+        )
     if not radius > 0:
         raise ValueError(f"an orbit's radius must be positive, not {radius}")
     axis = [i for i, c in enumerate(up) if c != 0]
     if len(axis) != 1:
         raise ValueError(f"an orbit's up must be an axis such as (0, 1, 0), not {tuple(up)}")
+    try:
+        name.format(index=0)
+    except (AttributeError, IndexError, KeyError, ValueError) as e:
+        raise ValueError(f"an orbit's name {name!r} is a pattern of {{index}} only: {e}") from None
     a = axis[0]
     sign = 1.0 if up[a] > 0 else -1.0
     # The circle's plane: the two other axes, in right-handed order (for y up: z, then x),
@@ -189,9 +241,16 @@ def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
 
 
 def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
-    """``pattern`` formatted with the view's ``name`` and ``index``."""
+    """``pattern`` formatted with the view's ``name`` and ``index``. The name stays one file
+    name, by the rule the command line's ``{camera}`` follows: path separators, ``:`` and
+    control characters become ``_``, and so does a leading ``.`` or ``-`` (``..`` gives
+    ``_.``), so that no view writes outside the pattern's folder.
+
+    >>> output_path("out/{name}/{index}.png", {"name": "../up"}, 3)
+    'out/_._up/3.png'
+    """
     try:
-        return pattern.format(name=v["name"], index=index)
+        return pattern.format(name=_core.file_name_part(str(v["name"])), index=index)
     except (KeyError, IndexError, ValueError) as e:
         raise ValueError(
             f"output pattern {pattern!r}: {e} (it may use {{name}} and {{index}})"

@@ -84,7 +84,7 @@ def test_mistakes_in_the_jobs_file_exit_2_naming_them(tmp_path):
     assert out.returncode == 2 and "unknown key 'speed'" in out.stderr and str(jobs) in out.stderr
     jobs = example_jobs(tmp_path, **{"frames = 8": "frames = 0"})
     out = run_batch(jobs)
-    assert out.returncode == 2 and "orbit" in out.stderr and "at least one frame" in out.stderr
+    assert out.returncode == 2 and "orbit" in out.stderr and "frames must be a whole number" in out.stderr
     # A view is named by its name (else its place from 1), its key path and its line; the
     # scene's cameras are checked before Ray starts.
     jobs = example_jobs(tmp_path, **{'camera = "high"': 'camera = "nowhere"'})

@@ -10,6 +10,7 @@ mod camera;
 mod errors;
 mod image;
 mod interrupt;
+mod names;
 mod pack;
 mod raycast;
 mod render;
@@ -32,6 +33,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::loads, m)?)?;
     m.add_function(wrap_pyfunction!(pack::load_pack, m)?)?;
+    m.add_function(wrap_pyfunction!(names::file_name_part, m)?)?;
     m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;

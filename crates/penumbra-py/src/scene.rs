@@ -34,7 +34,8 @@ pub(crate) fn build(
     parse: impl FnOnce() -> Result<SceneFile, penumbra::SceneError> + Send,
 ) -> PyResult<CoreScene> {
     let built = py.detach(|| {
-        let file = parse()?;
+        // A snapshot: its pack holds the bytes this build reads, whatever the files hold later.
+        let file = parse()?.keeping_files();
         let scene = file.build(threads)?;
         Ok::<_, penumbra::SceneError>((file, scene))
     });
