@@ -22,7 +22,9 @@ Call ``ray.init(...)`` first (or let :func:`connect` do it).
 
 from __future__ import annotations
 
+import itertools
 import os
+import re
 import socket
 from collections import OrderedDict
 from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
@@ -32,7 +34,15 @@ import ray
 
 from ._image import write_image
 from ._scene import Scene, load_pack, tqdm_class
-from .views import RENDER_KEYS, ViewError, aov_path, output_path, views as normalize_views
+from .views import (
+    RENDER_KEYS,
+    ViewError,
+    aov_path,
+    label,
+    output_path,
+    setting_problem,
+    views as normalize_views,
+)
 
 #: Worlds a worker process keeps built, the most recently used first.
 CACHED_WORLDS = 2
@@ -127,10 +137,12 @@ def _gather(
     on_result: Callable[[int, Dict[str, Any]], None],
     progress: Any,
     unit: str,
+    label: Callable[[int], str],
 ) -> None:
     """Waits for every task, calling ``on_result(index, result)`` as each finishes (with a
     progress bar cleared meanwhile, so that what it prints stays readable); cancels the rest
-    on any error or Ctrl-C."""
+    on any error or Ctrl-C. A task that failed raises one line naming it by ``label(index)``
+    (see :func:`_task_failure`), not Ray's remote traceback."""
     index = {ref: i for i, ref in enumerate(refs)}
     pending = list(refs)
     bar = _bar(progress, len(refs), unit)
@@ -138,7 +150,10 @@ def _gather(
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
             for ref in done:
-                result = ray.get(ref)
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayError as e:
+                    raise _task_failure(e, label(index[ref])) from None
                 if bar is None:
                     on_result(index[ref], result)
                 else:
@@ -155,6 +170,56 @@ def _gather(
     finally:
         if bar is not None:
             bar.close()
+
+
+# Terminal escape sequences (colours) in Ray's messages.
+_ESCAPES = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]|[\x00-\x08\x0b-\x1f\x7f]")
+
+
+def _task_failure(e: "ray.exceptions.RayError", what: str) -> Exception:
+    """One line for a failed task: ``WHAT: message`` of the exception the task raised (of its
+    type when it is a ValueError, MemoryError or OSError, else a RuntimeError), or the first
+    line of Ray's own error (a worker that died more often than it was retried), without
+    Ray's remote traceback or terminal escape codes."""
+    cause = getattr(e, "cause", None)
+    err = cause if isinstance(cause, Exception) else e
+    lines = [line.strip() for line in _ESCAPES.sub("", str(err)).splitlines() if line.strip()]
+    message = f"{what}: {type(err).__name__}: {lines[0] if lines else 'failed'}"
+    kind = type(err) if isinstance(err, (ValueError, MemoryError, OSError)) else RuntimeError
+    try:
+        return kind(message)
+    except TypeError:  # a subclass with other arguments
+        return RuntimeError(message)
+
+
+def check_num_cpus(num_cpus: float, what: str = "num_cpus") -> None:
+    """Raises ``ValueError`` naming ``what`` unless ``num_cpus`` is a positive number of CPUs
+    that some live node of the cluster has: a task asking for more than any node has would
+    wait forever (Ray queues it silently)."""
+    if isinstance(num_cpus, bool) or not isinstance(num_cpus, (int, float)):
+        raise ValueError(f"{what} must be a positive number of CPUs, not {num_cpus!r}")
+    if not 0 < num_cpus < float("inf"):
+        raise ValueError(f"{what} must be a positive number of CPUs, not {num_cpus!r}")
+    most = max(
+        (n["Resources"].get("CPU", 0) for n in ray.nodes() if n.get("Alive")), default=0
+    )
+    if num_cpus > most:
+        raise ValueError(
+            f"{what} is {num_cpus:g} CPUs per task, more than any node of the cluster has "
+            f"(at most {most:g}): its tasks would wait forever"
+        )
+
+
+def _check_render(scene: Scene, camera: Any, settings: Dict[str, Any]) -> Optional[str]:
+    """What ``scene.render`` refuses in ``settings`` with ``camera`` (a perfect square spp,
+    the largest film, ...), or None: checked on this process by rendering one pixel, so that
+    a mistake is found before any task is shipped, by the checks the render itself makes."""
+    try:
+        scene.render(camera=camera, region=(0, 1, 0, 1), threads=1, **settings)
+    except (ValueError, TypeError, OverflowError) as e:
+        given = ", ".join(f"{k}={v!r}" for k, v in settings.items())
+        return f"{e}" + (f" (with {given})" if given else "")
+    return None
 
 
 def _bar(progress: Any, total: int, unit: str) -> Any:
@@ -177,6 +242,9 @@ def tile_regions(
     cols, rows = int(cols), int(rows)
     if cols < 1 or rows < 1:
         raise ValueError(f"tiles must be at least 1, not {tiles!r}")
+    for name, side in (("width", width), ("height", height)):
+        if side < 1:
+            raise ValueError(f"{name} must be at least 1 pixel, not {side}")
     cols, rows = min(cols, width), min(rows, height)
     xs = [width * i // cols for i in range(cols + 1)]
     ys = [height * j // rows for j in range(rows + 1)]
@@ -208,6 +276,15 @@ def render_frame(
     """
     aovs = (aovs,) if isinstance(aovs, str) else tuple(aovs)
     settings = _settings(locals())
+    # Every argument is checked here, before anything is shipped, each named.
+    for key, value in {**settings, "aovs": aovs}.items():
+        problem = setting_problem(key, value)
+        if problem:
+            raise ValueError(f"render_frame: {problem}")
+    check_num_cpus(num_cpus, "render_frame: num_cpus")
+    problem = _check_render(scene, camera, settings)
+    if problem:
+        raise ValueError(f"render_frame: {problem}")
     w = int(width if width is not None else scene.settings["width"])
     h = int(height if height is not None else scene.settings["height"])
     if tiles is None:
@@ -228,7 +305,7 @@ def render_frame(
                 passes[name] = np.empty((h, w) + tile.shape[2:], tile.dtype)
             passes[name][y0:y1, x0:x1] = tile
 
-    _gather(refs, place, progress, "tile")
+    _gather(refs, place, progress, "tile", lambda i: f"render_frame: tile {regions[i]}")
     return (image, passes) if aovs else image
 
 
@@ -269,9 +346,8 @@ def render_views(
     defaults = _settings(locals())
     defaults["aovs"] = (aovs,) if isinstance(aovs, str) else tuple(aovs)
     batch = normalize_views(views, **defaults)
-    for i, v in enumerate(batch):
-        if isinstance(v["camera"], str) and v["camera"] not in scene.cameras:
-            raise ViewError(i, v["name"], unknown_camera(scene, v["camera"]))
+    check_views(scene, batch)
+    check_num_cpus(num_cpus, "render_views: num_cpus")
     paths = [output_path(output, v, i) for i, v in enumerate(batch)]
     if len(set(paths)) != len(paths):
         raise ValueError(f"output pattern {output!r} gives two views the same file")
@@ -299,12 +375,7 @@ def render_views(
 
     def save(k: int, result: Dict[str, Any]) -> None:
         i = todo[k]
-        path = paths[i]
-        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        if result["aovs"]:
-            _save_npz(aov_path(path), result["aovs"])
-        # The image last: its presence marks the view complete.
-        write_image(path, result["image"])
+        _write_view(paths[i], result["image"], result["aovs"])
         st = result["stats"]
         summary[i].update(
             skipped=False,
@@ -317,8 +388,26 @@ def render_views(
         if on_view is not None:
             on_view(summary[i])
 
-    _gather(refs, save, progress, "view")
+    _gather(refs, save, progress, "view", lambda k: label(todo[k], batch[todo[k]]["name"]))
     return summary
+
+
+def check_views(scene: Scene, batch: Sequence[Mapping[str, Any]]) -> None:
+    """Raises :class:`penumbra.views.ViewError` for the first view of ``batch`` (normalized,
+    see :func:`penumbra.views.views`) that ``scene`` cannot render: an unknown camera name,
+    or settings the render refuses (checked once per distinct camera name and settings, on
+    this process, before anything is shipped)."""
+    checked: Dict[Any, Optional[str]] = {}
+    for i, v in enumerate(batch):
+        camera = v["camera"]
+        if isinstance(camera, str) and camera not in scene.cameras:
+            raise ViewError(i, v["name"], unknown_camera(scene, camera))
+        settings = {k: v[k] for k in RENDER_KEYS if v[k] is not None}
+        key = (camera if isinstance(camera, str) else None, tuple(sorted(settings.items())))
+        if key not in checked:
+            checked[key] = _check_render(scene, camera, settings)
+        if checked[key]:
+            raise ViewError(i, v["name"], checked[key])
 
 
 def unknown_camera(scene: Scene, camera: str) -> str:
@@ -330,16 +419,38 @@ def _complete(path: str, with_aovs: bool) -> bool:
     return os.path.isfile(path) and (not with_aovs or os.path.isfile(aov_path(path)))
 
 
-def _save_npz(path: str, arrays: Mapping[str, np.ndarray]) -> None:
-    """Writes ``arrays`` to ``path`` atomically: a temporary file renamed into place."""
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    tmp = f"{path}.tmp-{os.getpid()}.npz"
+_writes = itertools.count()
+
+
+def _write_view(path: str, image: np.ndarray, aovs: Mapping[str, np.ndarray]) -> None:
+    """Writes a view's image to ``path`` and its AOVs (if any) beside it, together or not at
+    all, as the command line writes an image and its AOV files: each file is written whole
+    under a temporary name in its folder first (where a full disk fails), and only then are
+    they renamed into place, the image last (a rename takes no space). A failure leaves the
+    old files as they were and no temporary file."""
+    folder, name = os.path.split(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
+    tag = f".tmp-{os.getpid()}-{next(_writes)}"
+    staged: List[Tuple[str, str]] = []
     try:
-        np.savez(tmp, **arrays)
-        os.replace(tmp, path)
+        if aovs:
+            final = aov_path(path)
+            tmp = os.path.join(folder, f".{os.path.basename(final)}{tag}")
+            staged.append((tmp, final))
+            with open(tmp, "wb") as f:
+                np.savez(f, **aovs)
+                f.flush()
+                os.fsync(f.fileno())
+        # The same extension, which names the image's format.
+        tmp = os.path.join(folder, f".{name}{tag}{os.path.splitext(name)[1]}")
+        staged.append((tmp, path))
+        write_image(tmp, image)
+        for tmp, final in staged:
+            os.replace(tmp, final)
     finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        for tmp, _ in staged:
+            if os.path.exists(tmp):
+                os.remove(tmp)
 
 
 def connect(address: str = "local", num_cpus: Optional[int] = None, timeout: float = 5.0) -> None:

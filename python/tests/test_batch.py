@@ -140,3 +140,57 @@ def test_ctrl_c_exits_130_and_leaves_no_partial_image(tmp_path):
     # may have been written just as the signal came, before its line).
     told = [line.split("\t")[0] + ".png" for line in stdout.splitlines()]
     assert set(told) <= set(written) and len(told) >= len(written) - 1, (stdout, written)
+
+
+def test_with_json_stdout_holds_the_json_alone(tmp_path):
+    # Whatever else writes to standard output while the batch runs (Ray's processes, which
+    # inherit it, and their messages such as a worker that died) goes to stderr. Ray is
+    # replaced by a stand-in that writes there as they do: from this process, from Python and
+    # from a child process.
+    jobs = example_jobs(tmp_path)
+    code = f"""
+import os, subprocess, sys
+from penumbra import batch, distributed
+def render_views(scene, views, on_view=None, **kw):
+    os.write(1, b"(raylet) A worker died or was killed while executing a task\\n")
+    print("a line from Python")
+    subprocess.run(["{sys.executable}", "-c", "print('a line from a child process')"])
+    return [{{"name": "front", "path": "x.png", "skipped": True}}]
+distributed.connect = lambda *a, **k: None
+distributed.check_num_cpus = lambda *a, **k: None
+distributed.render_views = render_views
+sys.exit(batch.main([{str(jobs)!r}, "--json", "--address", "auto"]))
+"""
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=os.environ
+    )
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout) == {"views": [{"name": "front", "path": "x.png", "skipped": True}]}
+    for line in ("A worker died", "a line from Python", "a line from a child process"):
+        assert line in out.stderr, out.stderr
+
+
+def test_view_mistakes_found_by_the_render_are_one_line_before_ray_starts(tmp_path):
+    cases = [
+        ({'fov = 60': 'fov = 60\nspp = 3'}, ":19: view 'corner' (views[2]): samples per pixel must be a perfect square"),
+        ({'fov = 60': 'fov = 60\naovs = ["depth", "dpth"]'}, ":19: view 'corner' (views[2]): unknown AOV 'dpth' in aovs"),
+        ({"spp = 4": "spp = 4\nsampler = \"center\""}, ":12: view 'front' (views[0]): the center sampler takes exactly 1 sample"),
+        ({"spp = 4": "sppp = 4"}, "[defaults]: unknown key 'sppp'"),
+        ({'output = "out/{name}.png"': "output = 3"}, "output must be a file name pattern, not 3"),
+    ]
+    for replace, words in cases:
+        jobs = example_jobs(tmp_path, **replace)
+        out = run_batch(jobs, "--address", "127.0.0.1:9")  # nothing answers there: never reached
+        assert out.returncode == 2, out.stderr
+        assert out.stderr.count("\n") == 1 and words in out.stderr, out.stderr
+        assert "Traceback" not in out.stderr and "\x1b" not in out.stderr
+        assert not (tmp_path / "out").exists()
+
+
+def test_more_cpus_per_task_than_any_node_has_exit_2_at_once(tmp_path):
+    jobs = example_jobs(tmp_path)
+    start = time.monotonic()
+    out = run_batch(jobs, "--num-cpus", 1, "--cpus-per-task", 4)
+    assert out.returncode == 2, out.stderr
+    assert "--cpus-per-task is 4 CPUs per task, more than any node of the cluster has (at most 1)" in out.stderr
+    assert time.monotonic() - start < 60 and not (tmp_path / "out").exists()

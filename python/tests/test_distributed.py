@@ -210,3 +210,79 @@ def test_a_scene_pickles_as_its_pack(showcase):
     assert again.pack().digest == pack.digest
     kw = dict(width=24, height=16, spp=1)
     assert same_bits(again.render(**kw), showcase.render(**kw))
+
+
+@pytest.mark.parametrize(
+    "kw, words",
+    [
+        (dict(width=0), "render_frame: width must be a positive integer, not 0"),
+        (dict(height=-2), "render_frame: height must be a positive integer, not -2"),
+        (dict(spp=3), "render_frame: samples per pixel must be a perfect square"),
+        (dict(aovs=("depth", "dpth")), "render_frame: unknown AOV 'dpth' in aovs"),
+        (dict(camera="nowhere"), "render_frame: no camera named"),
+        (dict(num_cpus=64), "render_frame: num_cpus is 64 CPUs per task, more than any node"),
+        (dict(num_cpus=0), "render_frame: num_cpus must be a positive number of CPUs"),
+    ],
+)
+def test_render_frame_refuses_bad_arguments_at_once_naming_them(cluster, kw, words):
+    scene = penumbra.load(SCENES / "cornell.toml")
+    start = time.monotonic()
+    with pytest.raises(ValueError) as caught:
+        distributed.render_frame(scene, tiles=2, **kw)
+    assert words in str(caught.value) and "\n" not in str(caught.value), str(caught.value)
+    assert time.monotonic() - start < 10
+
+
+@pytest.mark.parametrize(
+    "view, words",
+    [
+        ({"name": "b", "camera": "high", "spp": 3}, "views[1] ('b'): samples per pixel must be a perfect square"),
+        ({"name": "b", "camera": "high", "spp": 3.0}, "views[1] ('b'): spp must be a positive integer"),
+        ({"name": "b", "camera": "high", "aovs": ["normals"]}, "views[1] ('b'): unknown AOV 'normals'"),
+        ({"name": "b", "camera": "high", "sampler": "center", "spp": 4}, "views[1] ('b'): the center sampler"),
+        ({"name": "b", "camera": "high", "width": 10**6, "height": 10**6}, "views[1] ('b'): a 1000000x1000000 image"),
+        ({"name": "b", "camera": "high", "sampler": "random"}, "views[1] ('b'): unknown sampler \"random\""),
+    ],
+)
+def test_views_are_checked_on_this_process_before_anything_is_shipped(cluster, tmp_path, view, words):
+    scene = fresh_room("checked")
+    with pytest.raises(views.ViewError) as caught:
+        distributed.render_views(scene, ["front", view], output=str(tmp_path / "o" / "{name}.png"))
+    message = str(caught.value)
+    assert words in message and "\n" not in message and "\x1b" not in message, message
+    assert not (tmp_path / "o").exists()
+
+
+def test_more_cpus_per_task_than_any_node_has_is_refused_not_queued_forever(cluster, tmp_path):
+    scene = penumbra.load(SCENES / "cornell.toml")
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=r"num_cpus is 3 CPUs per task, more than any node .*at most 2"):
+        distributed.render_views(scene, ["front"], output=str(tmp_path / "{name}.png"), num_cpus=3)
+    assert time.monotonic() - start < 10 and not list(tmp_path.iterdir())
+    # As many as a node has is fine.
+    done = distributed.render_views(
+        scene, ["front"], output=str(tmp_path / "{name}.png"), num_cpus=2, width=8, height=6
+    )
+    assert not done[0]["skipped"]
+
+
+def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_path, monkeypatch):
+    scene = penumbra.load(SCENES / "cornell.toml")
+    out = str(tmp_path / "{name}.png")
+    batch = [{"name": "hi", "camera": "high", "aovs": ["depth"]}]
+    distributed.render_views(scene, batch, output=out, width=16, height=12)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert sorted(before) == ["hi.aovs.npz", "hi.png"]
+
+    def full_disk(path, image, gamma=None):
+        raise OSError(28, "No space left on device", str(path))
+
+    # The disk fills while the image is written, after its AOVs: nothing changes.
+    monkeypatch.setattr(distributed, "write_image", full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        distributed.render_views(scene, batch, output=out, width=8, height=6, force=True)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    # A new view: neither file, and no temporary file.
+    with pytest.raises(OSError, match="No space left"):
+        distributed.render_views(scene, [dict(batch[0], name="new")], output=out, width=16, height=12)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(before)
