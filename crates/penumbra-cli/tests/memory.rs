@@ -133,7 +133,7 @@ fn large_films_under_one_gib_render_or_are_refused_in_one_line() {
     let text = format!("{HEAD}\n[[objects]]\ntype = \"cube\"\ncenter = [0, 0, 0]\nsize = 1\n");
     let scene = sb.write("film.toml", text);
     for side in ["6000", "7000", "8000", "9000"] {
-        let out = sb.join(&format!("out{side}.png"));
+        let out = sb.join(format!("out{side}.png"));
         let args = ["--width", side, "--height", side, "--spp", "1"];
         let (code, stderr) = render_limited_with(&scene, &out, 1 << 20, &args);
         match code {
