@@ -66,7 +66,7 @@ pub(crate) fn scene_error(py: Python<'_>, e: penumbra::SceneError) -> PyErr {
 pub(crate) fn render_error(e: RenderError) -> PyErr {
     match e {
         RenderError::Cancelled => PyKeyboardInterrupt::new_err("render interrupted"),
-        RenderError::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
+        RenderError::OutOfMemory { .. } => PyMemoryError::new_err(format!("Scene.render: {e}")),
         RenderError::Settings(_) | RenderError::BadRegion { .. } => {
             PyValueError::new_err(e.to_string())
         }
@@ -80,18 +80,28 @@ pub(crate) fn render_error(e: RenderError) -> PyErr {
 /// An image error as Python sees it: an unknown extension, a bad gamma or an image that cannot
 /// be encoded (too large for its format, non-finite values in a float format) is a
 /// `ValueError`, one beyond the memory available a `MemoryError`, a failed write an `OSError`,
-/// a cancelled one `KeyboardInterrupt`.
-pub(crate) fn image_error(e: ImageError) -> PyErr {
+/// a cancelled one `KeyboardInterrupt`; its message names `call`.
+pub(crate) fn image_error(call: &str, e: ImageError) -> PyErr {
+    let message = format!("{call}: {e}");
     match e {
         ImageError::UnknownFormat { .. }
         | ImageError::Encode { .. }
         | ImageError::BadGamma(_)
         | ImageError::TooLarge { .. }
-        | ImageError::NonFinite { .. } => PyValueError::new_err(e.to_string()),
-        ImageError::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
-        ImageError::Write { .. } => PyOSError::new_err(e.to_string()),
-        ImageError::Cancelled => PyKeyboardInterrupt::new_err(e.to_string()),
+        | ImageError::NonFinite { .. } => PyValueError::new_err(message),
+        ImageError::OutOfMemory { .. } => PyMemoryError::new_err(message),
+        ImageError::Write { .. } => PyOSError::new_err(message),
+        ImageError::Cancelled => PyKeyboardInterrupt::new_err(message),
     }
+}
+
+/// A buffer for `len` values, or a `MemoryError` saying that `call` has no memory for
+/// `what`.
+pub(crate) fn buffer<T>(call: &str, what: &str, len: usize) -> PyResult<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| PyMemoryError::new_err(format!("{call}: not enough memory for {what}")))?;
+    Ok(v)
 }
 
 /// A ray-casting error as Python sees it: bad meshes, cameras or arguments are a `ValueError`,

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use numpy::ndarray::Array3;
 use numpy::{IntoPyArray, PyArray3, PyReadonlyArray3};
-use penumbra::{encode_8bit, Film, Rgb};
+use penumbra::{encode_8bit, Film, ImageError, Rgb};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::errors::image_error;
+use crate::errors::{buffer, image_error};
 
 /// The pixels of an (H, W, 3) float32 array as a film.
 fn film(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Film> {
@@ -24,14 +24,11 @@ fn film(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Film> {
         u32::try_from(w).map_err(|_| PyValueError::new_err("image too wide"))?,
         u32::try_from(h).map_err(|_| PyValueError::new_err("image too high"))?,
     );
-    let pixels = view
-        .outer_iter()
-        .flat_map(|row| {
-            row.outer_iter()
-                .map(|p| Rgb::new(p[0], p[1], p[2]))
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    let what = format!("a {width}x{height} image");
+    let mut pixels = buffer("write_image", &what, w * h)?;
+    for row in view.outer_iter() {
+        pixels.extend(row.outer_iter().map(|p| Rgb::new(p[0], p[1], p[2])));
+    }
     Ok(Film {
         width,
         height,
@@ -49,13 +46,15 @@ pub fn write_image(
     array: PyReadonlyArray3<'_, f32>,
     gamma: Option<f32>,
 ) -> PyResult<()> {
+    ImageError::check_gamma(gamma).map_err(|e| image_error("write_image", e))?;
     let film = film(&array)?;
     py.detach(|| penumbra::write_image(&film, &path, gamma))
-        .map_err(image_error)
+        .map_err(|e| image_error("write_image", e))
 }
 
 /// The 8-bit encoding of an (H, W, 3) float32 linear RGB array: clamped to [0, 1], then the
-/// sRGB curve (or `c^(1/gamma)`), rounded; the bytes the command line writes to a PNG.
+/// sRGB curve (or `c^(1/gamma)`, for a positive finite gamma), rounded; the bytes the
+/// command line writes to a PNG.
 #[pyfunction]
 #[pyo3(signature = (array, gamma = None))]
 pub fn to_srgb8<'py>(
@@ -63,10 +62,12 @@ pub fn to_srgb8<'py>(
     array: PyReadonlyArray3<'py, f32>,
     gamma: Option<f32>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    ImageError::check_gamma(gamma).map_err(|e| image_error("to_srgb8", e))?;
     let view = array.as_array();
     let dim = view.dim();
-    let values: Vec<f32> = view.iter().copied().collect();
-    let bytes: Vec<u8> = py.detach(|| values.iter().map(|&c| encode_8bit(c, gamma)).collect());
+    let what = format!("a {}x{} image", dim.1, dim.0);
+    let mut bytes = buffer("to_srgb8", &what, view.len())?;
+    py.detach(|| bytes.extend(view.iter().map(|&c| encode_8bit(c, gamma))));
     let out =
         Array3::from_shape_vec(dim, bytes).map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(out.into_pyarray(py))

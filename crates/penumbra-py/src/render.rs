@@ -17,7 +17,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::camera::camera;
-use crate::errors::render_error;
+use crate::errors::{buffer, render_error};
 
 /// How often the calling thread checks for signals and reports progress while a render runs.
 const POLL: Duration = Duration::from_millis(20);
@@ -220,10 +220,24 @@ pub fn render_scene<'py>(
     }
 }
 
+/// A `MemoryError`-checked buffer for `len` values of the render's result, an image of
+/// `w × h` pixels.
+fn result_buffer<T>(len: usize, (w, h): (usize, usize)) -> PyResult<Vec<T>> {
+    buffer("Scene.render", &format!("the {w}x{h} result arrays"), len)
+}
+
+/// The channels of `pixels` in order, in the same memory: a pixel and an `[f32; 3]` have one
+/// size and alignment, so the standard library collects them in place, and a film as large
+/// as memory allows needs no second copy to become an array.
+fn floats(pixels: Vec<penumbra::Rgb>) -> Vec<f32> {
+    let arrays: Vec<[f32; 3]> = pixels.into_iter().map(|p| p.to_array()).collect();
+    arrays.into_flattened()
+}
+
 /// An (H, W, 3) float32 array of a film's pixels, row 0 at the top.
 fn image_array(py: Python<'_>, film: Film) -> PyResult<Bound<'_, PyAny>> {
     let (w, h) = (film.width as usize, film.height as usize);
-    let data: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
+    let data = floats(film.pixels);
     let array = Array3::from_shape_vec((h, w, 3), data)
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(array.into_pyarray(py).into_any())
@@ -242,14 +256,16 @@ fn aov_dict<'py>(
     for name in names {
         let px = &aovs.pixels;
         let vec3 = |f: fn(&penumbra::AovPixel) -> glam::Vec3| -> PyResult<Bound<'py, PyAny>> {
-            let data: Vec<f32> = px.iter().flat_map(|p| f(p).to_array()).collect();
+            let mut data = result_buffer(w * h * 3, (w, h))?;
+            data.extend(px.iter().flat_map(|p| f(p).to_array()));
             Ok(Array3::from_shape_vec((h, w, 3), data)
                 .map_err(err)?
                 .into_pyarray(py)
                 .into_any())
         };
         let ids = |f: fn(&penumbra::AovPixel) -> u32| -> PyResult<Bound<'py, PyAny>> {
-            let data: Vec<u32> = px.iter().map(f).collect();
+            let mut data = result_buffer(w * h, (w, h))?;
+            data.extend(px.iter().map(f));
             Ok(Array2::from_shape_vec((h, w), data)
                 .map_err(err)?
                 .into_pyarray(py)
@@ -257,7 +273,8 @@ fn aov_dict<'py>(
         };
         let value = match name.as_str() {
             "depth" => {
-                let data: Vec<f32> = px.iter().map(|p| p.depth).collect();
+                let mut data = result_buffer(w * h, (w, h))?;
+                data.extend(px.iter().map(|p| p.depth));
                 Array2::from_shape_vec((h, w), data)
                     .map_err(err)?
                     .into_pyarray(py)
@@ -272,4 +289,21 @@ fn aov_dict<'py>(
         dict.set_item(name, value)?;
     }
     Ok(dict)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_film_becomes_floats_in_its_own_memory() {
+        let pixels: Vec<penumbra::Rgb> = (0..1000)
+            .map(|i| penumbra::Rgb::new(i as f32, 0.5, -1.0))
+            .collect();
+        let at = pixels.as_ptr() as usize;
+        let data = floats(pixels);
+        assert_eq!(data.as_ptr() as usize, at, "the pixels were copied");
+        assert_eq!(data.len(), 3000);
+        assert_eq!(&data[3..6], &[1.0, 0.5, -1.0]);
+    }
 }
