@@ -4,24 +4,19 @@ from __future__ import annotations
 
 from typing import Sequence, Tuple
 
-from . import _core
+from . import _args, _core
 
 Vector = Tuple[float, float, float]
-
-
-def _vector(name: str, value: Sequence[float]) -> Vector:
-    try:
-        x, y, z = (float(c) for c in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"camera {name} must be 3 numbers, not {value!r}") from None
-    return (x, y, z)
 
 
 class Camera:
     """A pinhole camera at ``position`` looking at ``look_at``, with ``up`` giving the vertical
     and ``fov`` the vertical field of view in degrees, inside (0, 180): the scene file's
-    ``[camera]`` table. Raises ``ValueError`` for a camera that cannot exist (``look_at`` equal
-    to ``position``, a view direction parallel to ``up``, or the fov out of range).
+    ``[camera]`` table. Each vector is a list, tuple or array of 3 numbers: anything else (a
+    set, whose order is arbitrary, a string, a dict) raises ``TypeError``, as do a fov that is
+    not a number. Raises ``ValueError`` for a camera that cannot exist (``look_at`` equal to
+    ``position``, a view direction parallel to ``up``, a NaN or infinite coordinate, or the
+    fov out of range).
 
     >>> Camera(position=(0, 1, 5), look_at=(0, 0, 0), up=(0, 1, 0), fov=45)
     Camera(position=(0.0, 1.0, 5.0), look_at=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), fov=45.0)
@@ -36,10 +31,10 @@ class Camera:
         up: Sequence[float],
         fov: float,
     ) -> None:
-        self._position = _vector("position", position)
-        self._look_at = _vector("look_at", look_at)
-        self._up = _vector("up", up)
-        self._fov = float(fov)
+        self._position = _args.vector("Camera", "position", position)
+        self._look_at = _args.vector("Camera", "look_at", look_at)
+        self._up = _args.vector("Camera", "up", up)
+        self._fov = _args.real("Camera", "fov", fov)
         _core.check_camera(self._position, self._look_at, self._up, self._fov)
 
     @property

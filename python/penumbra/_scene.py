@@ -19,10 +19,12 @@ from typing import (
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._camera import Camera
 from ._pack import PackedScene
 from ._raycast import RaycastingScene
+
+SceneError = _core.SceneError
 
 #: The AOV names ``Scene.render(aovs=...)`` takes.
 AOV_NAMES: Tuple[str, ...] = tuple(_core.AOV_NAMES)
@@ -171,6 +173,7 @@ class Scene:
         The GIL is released while rendering. Ctrl-C stops the render within about 0.1 s and
         raises ``KeyboardInterrupt``. Bad settings raise ``ValueError``.
         """
+        call = "Scene.render"
         if isinstance(aovs, str):
             aovs = (aovs,)
         names = [str(a) for a in aovs]
@@ -181,12 +184,24 @@ class Scene:
             camera_name = camera
         elif camera is not None:
             raise TypeError(
-                f"camera must be a camera name or a penumbra.Camera, not {type(camera).__name__}"
+                f"{call}: camera must be a camera name or a penumbra.Camera, "
+                f"not {type(camera).__name__}"
             )
+        if sampler is not None and not isinstance(sampler, str):
+            raise TypeError(f"{call}: sampler must be a name, not {type(sampler).__name__}")
+        u32 = _args.U32_MAX
+        spp = _args.optional_integer(call, "spp", spp, 0, u32)
+        light_samples = _args.optional_integer(call, "light_samples", light_samples, 0, u32)
+        seed = _args.optional_integer(call, "seed", seed, 0, _args.U64_MAX)
+        width = _args.optional_integer(call, "width", width, 0, u32)
+        height = _args.optional_integer(call, "height", height, 0, u32)
         if region is not None:
-            region = tuple(int(v) for v in region)
-            if len(region) != 4:
-                raise ValueError("region must be (x0, x1, y0, y1)")
+            corners = _args.sequence(call, "region (x0, x1, y0, y1)", region, 4)
+            region = tuple(
+                _args.integer(call, f"region {n}", v, 0, u32)
+                for n, v in zip(("x0", "x1", "y0", "y1"), corners)
+            )
+        threads = _args.threads(call, threads)
         bar = None
         callback = None
         if progress is True:
@@ -226,7 +241,7 @@ def load(path: PathLike, threads: int = 0) -> Scene:
     ``file``, ``line``, ``column`` and ``key``; ``OSError`` (``FileNotFoundError``, ...) when
     the file cannot be read.
     """
-    return Scene(_core.load(os.fspath(path), threads))
+    return Scene(_core.load(os.fspath(path), _args.threads("load", threads)))
 
 
 def loads(
@@ -239,6 +254,7 @@ def loads(
     Relative paths in it (meshes, textures) resolve against ``base_dir``. Errors as in
     :func:`load`, with ``file`` ``"<string>"``.
     """
+    threads = _args.threads("loads", threads)
     return Scene(_core.loads(text, format, os.fspath(base_dir), "<string>", threads))
 
 
@@ -260,6 +276,14 @@ def load_dict(
     >>> scene.stats["objects"]
     1
     """
+    threads = _args.threads("load_dict", threads)
+    bad = _args.first_non_finite(scene)
+    if bad is not None:
+        # JSON has no NaN or infinity: reported at its key, as a scene file's would be.
+        key, value = bad
+        raise _scene_error(
+            f"<dict>: {key}: {_args.float_name(value)} is not a finite number", key, "bad_value"
+        )
     text = json.dumps(scene, indent=1, default=_to_json)
     return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
 
@@ -281,7 +305,14 @@ def load_pack(pack: PackedScene, threads: int = 0) -> Scene:
     """
     if not isinstance(pack, PackedScene):
         raise TypeError(f"load_pack takes a penumbra.PackedScene, not {type(pack).__name__}")
-    return Scene(_core.load_pack(pack._data, threads))
+    return Scene(_core.load_pack(pack._data, _args.threads("load_pack", threads)))
+
+
+def _scene_error(message: str, key: str, kind: str) -> SceneError:
+    """A :class:`SceneError` about the scene dict, with the attributes the library's have."""
+    e = SceneError(message)
+    e.file, e.line, e.column, e.key, e.kind = "<dict>", None, None, key, kind
+    return e
 
 
 def _to_json(value: Any) -> Any:

@@ -8,6 +8,7 @@ use crate::camera::Camera;
 use crate::integrator::{LightModel, Shading, ShadingSettings};
 use crate::math::Rgb;
 use crate::sampling::{perfect_square_root, Sampler};
+use crate::scene::escape_controls;
 use crate::world::World;
 
 /// Largest film: 2^28 pixels (16384 × 16384), 3 GiB of float RGB.
@@ -107,7 +108,11 @@ pub enum SettingsError {
         height: u32,
     },
     /// No camera of that name.
-    #[error("no camera named \"{name}\" (the scene has: {known})")]
+    #[error(
+        "no camera named \"{}\" (the scene has: {})",
+        escape_controls(name),
+        escape_controls(known)
+    )]
     UnknownCamera {
         /// The name asked for.
         name: String,
