@@ -8,7 +8,8 @@
 #   tools/fuzz.sh list                                    # the targets
 #
 # Targets: scene_toml, scene_json, scene_override (a TOML scene with a --set override on its
-# first line): parse, build and a 4×4 render; obj, mtl, texture (PNG and JPEG decoding). Their
+# first line), pack (a scene pack: overrides, scene text and packed files, NUL-separated):
+# parse, build and a 4×4 render; obj, mtl, texture (PNG and JPEG decoding). Their
 # bodies are in crates/penumbra-fuzz-targets. Needs the nightly toolchain
 # (`rustup toolchain install nightly`); installs cargo-fuzz from crates.io when it is missing.
 # Runs one fuzzer process. New inputs go to fuzz/target/corpus/TARGET (kept between runs, not
@@ -19,7 +20,7 @@
 # `cargo test -p penumbra-fuzz-targets` replays it) and fix the library.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-targets=(scene_toml scene_json scene_override obj mtl texture)
+targets=(scene_toml scene_json scene_override obj mtl texture pack)
 
 usage() {
     sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//' >&2

@@ -15,11 +15,12 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use penumbra::{
     decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, Override,
-    RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, World,
+    RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, ScenePack, World,
 };
 
 /// A fuzz target: its name (the folder of its corpus) and its body.
@@ -31,7 +32,7 @@ pub struct Target {
 }
 
 /// Every target.
-pub const TARGETS: [Target; 6] = [
+pub const TARGETS: [Target; 7] = [
     Target {
         name: "scene_toml",
         run: scene_toml,
@@ -55,6 +56,10 @@ pub const TARGETS: [Target; 6] = [
     Target {
         name: "texture",
         run: texture,
+    },
+    Target {
+        name: "pack",
+        run: pack,
     },
 ];
 
@@ -105,8 +110,72 @@ fn scene(data: &[u8], format: SceneFormat) {
     }
 }
 
+/// The folder a fuzzed pack's relative paths resolve against: its files are packed under it,
+/// and nothing there is on disk.
+pub const PACK_DIR: &str = "/penumbra-fuzz-pack";
+
+/// A scene pack as `penumbra.load_pack` receives it (from a pickle, from another machine),
+/// parsed, built from its files alone and rendered small. The input: the overrides (one per
+/// line), a NUL byte, the TOML scene text, a NUL byte, then for each packed file its path
+/// (relative to [`PACK_DIR`]), a NUL byte, its length (4 bytes, little-endian; cut to what is
+/// left) and its bytes.
+pub fn pack(data: &[u8]) {
+    let file = decode_pack(data).load();
+    if let Ok(f) = &file {
+        assert!(f.files().is_packed(), "a pack reads files from disk");
+    }
+    build_and_render(file);
+}
+
+/// The pack an input of [`pack`] describes.
+pub fn decode_pack(data: &[u8]) -> ScenePack {
+    let (overrides, rest) = until_nul(data);
+    let (scene, mut rest) = until_nul(rest);
+    let mut files = BTreeMap::new();
+    while !rest.is_empty() {
+        let (path, after) = until_nul(rest);
+        let (len, after) = after.split_at(after.len().min(4));
+        let mut le = [0u8; 4];
+        le[..len.len()].copy_from_slice(len);
+        let (bytes, after) = after.split_at(after.len().min(u32::from_le_bytes(le) as usize));
+        let path = Path::new(PACK_DIR).join(String::from_utf8_lossy(path).as_ref());
+        files.insert(path, bytes.to_vec());
+        rest = after;
+    }
+    ScenePack {
+        name: PathBuf::from("fuzz.toml"),
+        text: String::from_utf8_lossy(scene).into_owned(),
+        format: SceneFormat::Toml,
+        base_dir: PathBuf::from(PACK_DIR),
+        overrides: String::from_utf8_lossy(overrides)
+            .lines()
+            .map(str::to_owned)
+            .collect(),
+        files,
+    }
+}
+
+/// The bytes before the first NUL, and those after it (none when there is no NUL).
+fn until_nul(data: &[u8]) -> (&[u8], &[u8]) {
+    match data.iter().position(|&b| b == 0) {
+        Some(i) => (&data[..i], &data[i + 1..]),
+        None => (data, &[]),
+    }
+}
+
 fn scene_with(text: &str, format: SceneFormat, overrides: &[Override]) {
-    let file = match SceneFile::from_str_with(text, format, "fuzz", assets_dir(), overrides) {
+    build_and_render(SceneFile::from_str_with(
+        text,
+        format,
+        "fuzz",
+        assets_dir(),
+        overrides,
+    ));
+}
+
+/// A parsed scene file built and rendered small; an error is checked to be one clean line.
+fn build_and_render(file: Result<SceneFile, SceneError>) {
+    let file = match file {
         Ok(file) => file,
         Err(e) => return check_message(&e),
     };

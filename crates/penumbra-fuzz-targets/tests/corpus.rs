@@ -6,7 +6,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use penumbra::{Override, SceneFile, SceneFormat};
-use penumbra_fuzz_targets::{assets_dir, repo_dir, TARGETS};
+use penumbra_fuzz_targets::{assets_dir, decode_pack, repo_dir, TARGETS};
 
 /// The files of `dir`, sorted; none when it does not exist.
 fn files(dir: &Path) -> Vec<std::path::PathBuf> {
@@ -63,6 +63,14 @@ fn every_seed_scene_builds() {
             if let Err(e) = file.build(1) {
                 panic!("{}: {e}", path.display());
             }
+        }
+    }
+    // The packs, from their packed files alone (none of them is on disk where they say).
+    for path in files(&repo_dir().join("fuzz/corpus/pack")) {
+        let pack = decode_pack(&std::fs::read(&path).unwrap());
+        assert!(!pack.files.is_empty(), "{}", path.display());
+        if let Err(e) = pack.load().and_then(|file| file.build(1)) {
+            panic!("{}: {e}", path.display());
         }
     }
     // And with the override on their first line applied.
