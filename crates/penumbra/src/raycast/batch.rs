@@ -8,8 +8,10 @@
 
 use glam::Vec3;
 
+use super::run::QueryOptions;
 use super::traverse::{Accel, SlotHit, Stack};
 use super::watertight::PreparedRay;
+use super::RaycastError;
 use crate::simd::{Isa, Kernel};
 
 /// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
@@ -23,6 +25,8 @@ pub(super) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
 /// [`Accel::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
 pub(crate) struct Occlusions<'a> {
     pub accel: &'a Accel,
+    /// Checked before each ray: a cancelled query stops here.
+    pub options: &'a QueryOptions<'a>,
     pub rays: &'a [[f32; 6]],
     pub range: (f32, f32),
     pub out: &'a mut [bool],
@@ -36,6 +40,9 @@ impl Kernel for Occlusions<'_> {
         let (tnear, tfar) = self.range;
         let mut stack = Stack::default();
         for (ray, o) in self.rays.iter().zip(self.out) {
+            if self.options.cancelled() {
+                return;
+            }
             *o =
                 prepare(ray).is_some_and(|r| self.accel.occluded::<I>(&r, tnear, tfar, &mut stack));
         }
@@ -46,6 +53,8 @@ impl Kernel for Occlusions<'_> {
 /// to `out` (left alone for a ray that hits nothing).
 pub(crate) struct Counts<'a> {
     pub accel: &'a Accel,
+    /// Checked before each ray: a ray through a dense region can take milliseconds.
+    pub options: &'a QueryOptions<'a>,
     pub rays: &'a [[f32; 6]],
     pub out: &'a mut [i32],
 }
@@ -57,6 +66,9 @@ impl Kernel for Counts<'_> {
     fn run<const N: usize, I: Isa>(self) {
         let mut stack = Stack::default();
         for (ray, count) in self.rays.iter().zip(self.out) {
+            if self.options.cancelled() {
+                return;
+            }
             if let Some(r) = prepare(ray) {
                 let mut n = 0i32;
                 let tally = &mut |_| n = n.saturating_add(1);
@@ -68,24 +80,47 @@ impl Kernel for Counts<'_> {
 }
 
 /// The hits of each ray of `rays` from `t = 0` on, one per crossing, sorted by `t` then ids:
-/// the number of each ray's hits, and all the hits one ray after the other.
+/// the number of each ray's hits, and all the hits one ray after the other; `Err` when the
+/// query is cancelled (checked before each ray) or the hits do not fit in memory.
 pub(crate) struct Listing<'a> {
     pub accel: &'a Accel,
     pub rays: &'a [[f32; 6]],
+    pub options: &'a QueryOptions<'a>,
 }
 
+/// What [`Listing`] finds.
+pub(crate) type Listed = Result<(Vec<u32>, Vec<SlotHit>), RaycastError>;
+
 impl Kernel for Listing<'_> {
-    type Output = (Vec<u32>, Vec<SlotHit>);
+    type Output = Listed;
 
     #[inline(always)]
-    fn run<const N: usize, I: Isa>(self) -> (Vec<u32>, Vec<SlotHit>) {
+    fn run<const N: usize, I: Isa>(self) -> Listed {
         let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
         let mut stack = Stack::default();
+        let too_many = |n: usize| RaycastError::OutOfMemory {
+            what: "the intersections",
+            bytes: (n * size_of::<SlotHit>()) as u64,
+        };
         for ray in self.rays {
+            if self.options.cancelled() {
+                return Err(RaycastError::Cancelled);
+            }
             one.clear();
+            let mut full = false;
             if let Some(r) = prepare(ray) {
-                self.accel
-                    .each_hit::<I>(&r, 0.0, &mut stack, &mut |h| one.push(h));
+                self.accel.each_hit::<I>(&r, 0.0, &mut stack, &mut |h| {
+                    // Grown by hand, fallibly: a ray may cross millions of triangles.
+                    if one.len() == one.capacity() && one.try_reserve(one.len().max(16)).is_err() {
+                        full = true;
+                    }
+                    if !full {
+                        one.push(h);
+                    }
+                });
+            }
+            if full {
+                return Err(too_many(2 * one.len()));
             }
             one.sort_by(|a: &SlotHit, b: &SlotHit| {
                 a.crossing
@@ -94,8 +129,10 @@ impl Kernel for Listing<'_> {
                     .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
             });
             counts.push(one.len() as u32);
+            all.try_reserve(one.len())
+                .map_err(|_| too_many(all.len() + one.len()))?;
             all.extend_from_slice(&one);
         }
-        (counts, all)
+        Ok((counts, all))
     }
 }

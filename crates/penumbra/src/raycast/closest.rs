@@ -1,15 +1,26 @@
 //! The closest point of a triangle to a point, by Voronoi regions (Ericson, "Real-Time
 //! Collision Detection", 2005, §5.1.5), and of the whole surface, by a walk of the binary tree
 //! that visits the nearer child first and skips boxes farther than the best point so far.
+//!
+//! Both compute in `f64`: the region tests multiply four lengths (`d1·d4` is a product of
+//! dot products), which overflow `f32` from coordinates of about 1e9 on, where every point
+//! fell in a corner's region. In `f64` any finite `f32` point and triangle are fine.
 
-use glam::{Vec3, Vec3A};
+use glam::{DVec3, Vec3};
 
 use super::traverse::{Accel, STACK_SIZE};
 use crate::accel::BvhNode;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
+#[cfg(test)]
 pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
+    let (point, b1, b2) = closest_f64(p.as_dvec3(), tri.map(|c| c.as_dvec3()));
+    (point.as_vec3(), b1 as f32, b2 as f32)
+}
+
+/// [`closest_on_triangle`] in `f64`.
+fn closest_f64(p: DVec3, tri: [DVec3; 3]) -> (DVec3, f64, f64) {
     let [a, b, c] = tri;
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
@@ -60,7 +71,6 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Nearest {
     pub point: Vec3,
-    pub distance_sq: f32,
     pub b1: f32,
     pub b2: f32,
     pub geometry: u32,
@@ -77,10 +87,10 @@ impl Accel {
             return None;
         }
         let mut best: Option<Nearest> = None;
-        let mut best_d = f32::INFINITY;
-        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+        let mut best_d = f64::INFINITY;
+        let mut stack = [(0u32, 0.0f64); STACK_SIZE];
         let mut sp = 1;
-        let pa = Vec3A::from(p);
+        let pa = p.as_dvec3();
         while sp > 0 {
             sp -= 1;
             let (index, d_box) = stack[sp];
@@ -91,16 +101,15 @@ impl Accel {
             let first = node.first() as usize;
             if node.count() > 0 {
                 for i in first..first + node.count() as usize {
-                    let (q, b1, b2) =
-                        closest_on_triangle(p, self.slot(i).corners().map(Vec3::from));
-                    let d = (q - p).length_squared();
+                    let corners = self.slot(i).corners().map(|c| Vec3::from(c).as_dvec3());
+                    let (q, b1, b2) = closest_f64(pa, corners);
+                    let d = (q - pa).length_squared();
                     if d < best_d {
                         best_d = d;
                         best = Some(Nearest {
-                            point: q,
-                            distance_sq: d,
-                            b1,
-                            b2,
+                            point: q.as_vec3(),
+                            b1: b1 as f32,
+                            b2: b2 as f32,
                             geometry: self.ids(i)[0],
                             primitive: self.ids(i)[1],
                             slot: i as u32,
@@ -130,10 +139,10 @@ impl Accel {
 
 /// Squared distance from `p` to the node's box (0 inside).
 #[inline(always)]
-fn box_distance_sq(node: &BvhNode, p: Vec3A) -> f32 {
-    let lo = Vec3A::from(node.min_corner());
-    let hi = Vec3A::from(node.max_corner());
-    let d = (lo - p).max(p - hi).max(Vec3A::ZERO);
+fn box_distance_sq(node: &BvhNode, p: DVec3) -> f64 {
+    let lo = Vec3::from(node.min_corner()).as_dvec3();
+    let hi = Vec3::from(node.max_corner()).as_dvec3();
+    let d = (lo - p).max(p - hi).max(DVec3::ZERO);
     d.length_squared()
 }
 

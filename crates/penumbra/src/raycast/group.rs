@@ -14,7 +14,7 @@
 use glam::Vec3A;
 
 use super::boundary::Boundary;
-use super::watertight::{Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle};
+use super::watertight::{Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT};
 use crate::simd::Isa;
 
 /// Triangles per group.
@@ -116,6 +116,7 @@ impl PreparedRay {
         t_max: f32,
         rule: EdgeRule,
     ) -> GroupHits {
+        let t_max = t_max.min(T_LIMIT);
         let [kx, ky, kz] = self.axes();
         let [sx, sy] = self.shear();
         let inv_dz = self.inv_dz();
@@ -145,10 +146,9 @@ impl PreparedRay {
             let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
             // `element_sum` of glam's `Vec3A`: `(x + y) + (z + 0)`.
             let det = (u + v) + (w + 0.0);
-            let scaled_t =
-                (u * (f[0].2 * inv_dz) + v * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
+            let scaled_t = (u * f[0].2 + v * f[1].2) + (w * f[2].2 + 0.0);
             let inv_det = 1.0 / det;
-            let t = scaled_t * inv_det;
+            let t = scaled_t * inv_det * inv_dz;
             // `det` is not 0 and not NaN; `t` in `[t_min, t_max]` (false for a NaN `t`).
             #[allow(clippy::eq_op)]
             let ok = !(negative & positive) & (det != 0.0) & (det == det);

@@ -72,6 +72,8 @@ use std::sync::OnceLock;
 use glam::Vec3;
 
 use crate::geometry::{Geometry, Triangle};
+use crate::memory::human;
+use crate::scale::MAX_COORDINATE;
 use crate::world::{World, MAX_TRIANGLES};
 
 pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
@@ -119,6 +121,29 @@ pub enum RaycastError {
     /// The number of rays per point of an inside/outside vote is not odd.
     #[error("nsamples must be an odd number from 1 to 255, not {0}")]
     InvalidSamples(u32),
+    /// A vertex, a ray's origin or a query point of an occupancy vote has a coordinate
+    /// beyond ±[`MAX_COORDINATE`], where the 32-bit products of the watertight ray test
+    /// overflow and rays would silently miss.
+    #[error(
+        "{what} {index} has a coordinate beyond ±{MAX_COORDINATE:e}, the largest ray casting \
+         handles exactly (its 32-bit ray-triangle products would overflow): scale the scene \
+         down"
+    )]
+    Beyond {
+        /// `"vertex"`, `"ray"` or `"query point"`.
+        what: &'static str,
+        /// Its index in the array passed.
+        index: usize,
+    },
+    /// A result (or the rays of [`create_rays_pinhole`]) needs more memory than the process
+    /// may take.
+    #[error("{what} would take {}, more memory than this process can have", human(*.bytes))]
+    OutOfMemory {
+        /// What was being made: "the result", "the rays"…
+        what: &'static str,
+        /// Its size in bytes.
+        bytes: u64,
+    },
     /// A [`RaycastingScene::list_intersections`] result would hold more than 2³² − 1 hits.
     #[error("more than 2^32 - 1 intersections to list; pass fewer rays at a time")]
     TooManyIntersections,
@@ -186,7 +211,8 @@ impl RaycastingScene {
     /// results are indices into `triangles`.
     ///
     /// Nothing is added when an index is out of range ([`RaycastError::IndexOutOfRange`]) or
-    /// a used or unused vertex is not finite ([`RaycastError::NotFinite`]). Degenerate
+    /// a used or unused vertex is not finite ([`RaycastError::NotFinite`]) or beyond
+    /// ±[`MAX_COORDINATE`] ([`RaycastError::Beyond`]). Degenerate
     /// (zero-area) triangles are kept and never hit by rays (they still have closest points).
     pub fn add_triangles(
         &mut self,
@@ -198,6 +224,12 @@ impl RaycastingScene {
             .position(|v| !v.iter().all(|c| c.is_finite()))
         {
             return Err(RaycastError::NotFinite { vertex });
+        }
+        if let Some(index) = vertices.iter().position(|v| run::beyond(v)) {
+            return Err(RaycastError::Beyond {
+                what: "vertex",
+                index,
+            });
         }
         for (triangle, tri) in triangles.iter().enumerate() {
             if let Some(&index) = tri.iter().find(|&&i| i as usize >= vertices.len()) {

@@ -15,8 +15,9 @@
 //! visit.
 
 use super::boundary::Boundary;
+use super::run::QueryOptions;
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
-use super::watertight::{Crossing, EdgeRule, PreparedRay};
+use super::watertight::{Crossing, EdgeRule, PreparedRay, T_LIMIT};
 use super::wide::WIDTH;
 use crate::simd::{max, min, Isa, Kernel};
 
@@ -27,6 +28,8 @@ pub(crate) type ClosestHit = Option<SlotHit>;
 /// nothing), written to `hits`, as a [`Kernel`].
 pub(crate) struct CastPackets<'a> {
     pub accel: &'a Accel,
+    /// Checked before each packet: a cancelled query stops there.
+    pub options: &'a QueryOptions<'a>,
     pub rays: &'a [Option<PreparedRay>],
     pub hits: &'a mut [ClosestHit],
 }
@@ -36,11 +39,19 @@ impl Kernel for CastPackets<'_> {
 
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
-        let CastPackets { accel, rays, hits } = self;
+        let CastPackets {
+            accel,
+            options,
+            rays,
+            hits,
+        } = self;
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         let mut stack = Stack::default();
         let mut packet_stack = Vec::new();
         for (rays, hits) in rays.chunks(N).zip(hits.chunks_mut(N)) {
+            if options.cancelled() {
+                return;
+            }
             match lanes::<N>(rays) {
                 Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
                 None => {
@@ -122,7 +133,7 @@ fn trace<const N: usize, I: Isa>(
     hits: &mut [ClosestHit],
 ) {
     let mut best = Best {
-        t: [f32::INFINITY; N],
+        t: [T_LIMIT; N],
         b1: [0.0; N],
         b2: [0.0; N],
         slot: [0; N],
@@ -250,10 +261,9 @@ fn triangle<const N: usize, I: Isa>(
         let negative = (u < 0.0) | (v_ < 0.0) | (w < 0.0);
         let positive = (u > 0.0) | (v_ > 0.0) | (w > 0.0);
         let det = (u + v_) + (w + 0.0);
-        let scaled_t =
-            (u * (f[0].2 * inv_dz) + v_ * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
+        let scaled_t = (u * f[0].2 + v_ * f[1].2) + (w * f[2].2 + 0.0);
         let inv_det = 1.0 / det;
-        t[i] = scaled_t * inv_det;
+        t[i] = scaled_t * inv_det * inv_dz;
         b1[i] = v_ * inv_det;
         b2[i] = w * inv_det;
         #[allow(clippy::eq_op)]

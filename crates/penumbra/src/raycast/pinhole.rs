@@ -5,6 +5,7 @@
 
 use glam::{DMat3, DVec3, Mat3, Vec3};
 
+use super::run::room;
 use super::RaycastError;
 
 /// Most pixels [`create_rays_pinhole`] makes (2³² − 1, well beyond memory for 24-byte rays).
@@ -46,13 +47,21 @@ pub fn create_rays_pinhole(
         [extrinsic[2][0], extrinsic[2][1], extrinsic[2][2]],
     ])
     .transpose();
+    // The rotation part must turn the camera's axes into three independent directions: an
+    // all-zero or singular one would make every ray's direction zero or flat.
+    let scale = r.to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if r.determinant().abs() <= 1e-9 * scale * scale * scale {
+        return Err(invalid(
+            "the extrinsic matrix's rotation part (its upper-left 3x3) is singular",
+        ));
+    }
     let t = DVec3::new(extrinsic[0][3], extrinsic[1][3], extrinsic[2][3]);
     let center = (-(r.transpose() * t)).as_vec3();
     let world_from_pixel: Mat3 = (r.transpose() * k.inverse()).as_mat3();
     if !world_from_pixel.is_finite() || !center.is_finite() {
         return Err(invalid("the camera matrices overflow"));
     }
-    let mut rays = Vec::with_capacity(width as usize * height as usize);
+    let mut rays = room(width as usize * height as usize, "the rays")?;
     for y in 0..height {
         for x in 0..width {
             let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);

@@ -4,10 +4,9 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::batch::{prepare, Counts, Listing, Occlusions};
+use super::batch::{prepare, Counts, Listed, Listing, Occlusions};
 use super::packet::CastPackets;
-use super::run::{filled, run, QueryOptions, CHUNK};
-use super::traverse::SlotHit;
+use super::run::{beyond, budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::simd::{dispatch, simd_path};
@@ -15,6 +14,16 @@ use crate::simd::{dispatch, simd_path};
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets
 /// (16 rays with AVX-512, 8 without) are then 4 × 4 or 4 × 2 neighbouring rays.
 const TILE: usize = 4;
+
+/// Bytes of [`CastRays`] per ray: `t_hit`, two ids, uv and normal.
+const RESULT_BYTES: usize = 4 + 4 + 4 + 8 + 12;
+
+/// Bytes of [`ClosestPoints`] per point.
+const CLOSEST_BYTES: usize = 12 + 4 + 4 + 8 + 12;
+
+/// Rays of one round of an occupancy vote: the points' rays are made a round at a time,
+/// never all at once (`nsamples` rays of 24 bytes per point).
+const VOTE_RAYS: usize = 64 * CHUNK;
 
 /// The longest row that [`RaycastingScene::cast_rays_rows`] traces in tiles: a band is one
 /// work item, and this keeps it within 16 chunks.
@@ -126,6 +135,7 @@ impl RaycastingScene {
     ) -> Result<CastRays, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
         let n = rays.len();
+        budget(&[(n, RESULT_BYTES)], "the result")?;
         let mut out = CastRays {
             t_hit: filled(&pool, options, n, f32::INFINITY)?,
             geometry_ids: filled(&pool, options, n, INVALID_ID)?,
@@ -142,8 +152,11 @@ impl RaycastingScene {
             out.primitive_uvs.par_chunks_mut(chunk),
             out.primitive_normals.par_chunks_mut(chunk),
         )
-            .into_par_iter();
-        run(&pool, options, items, |(rays, t, g, p, uv, normal)| {
+            .into_par_iter()
+            .enumerate();
+        let far = FarOrigins::new();
+        run(&pool, options, items, |(k, (rays, t, g, p, uv, normal))| {
+            far.check(k * chunk, rays);
             // The rays in the order of the packets: tile by tile across a band, or as given.
             let order: Option<Vec<usize>> = row_length.map(|w| tile_order(rays.len(), w).collect());
             let index = |j: usize| order.as_ref().map_or(j, |o| o[j]);
@@ -152,6 +165,7 @@ impl RaycastingScene {
             let mut hits = vec![None; rays.len()];
             let kernel = CastPackets {
                 accel,
+                options,
                 rays: &prepared,
                 hits: &mut hits,
             };
@@ -166,6 +180,7 @@ impl RaycastingScene {
                 normal[i] = accel.normal(hit.slot);
             }
         })?;
+        far.result()?;
         Ok(out)
     }
 
@@ -179,20 +194,24 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<bool>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
-        let mut out = vec![false; rays.len()];
+        let mut out = filled(&pool, options, rays.len(), false)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
-        run(&pool, options, items, |(rays, out)| {
+        let far = FarOrigins::new();
+        run(&pool, options, items.enumerate(), |(k, (rays, out))| {
+            far.check(k * CHUNK, rays);
             let range = (tnear, tfar);
             dispatch(
                 simd_path(),
                 Occlusions {
                     accel,
+                    options,
                     rays,
                     range,
                     out,
                 },
             );
         })?;
+        far.result()?;
         Ok(out)
     }
 
@@ -205,11 +224,22 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<i32>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
-        let mut out = vec![0i32; rays.len()];
+        let mut out = filled(&pool, options, rays.len(), 0i32)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
-        run(&pool, options, items, |(rays, out)| {
-            dispatch(simd_path(), Counts { accel, rays, out });
+        let far = FarOrigins::new();
+        run(&pool, options, items.enumerate(), |(k, (rays, out))| {
+            far.check(k * CHUNK, rays);
+            dispatch(
+                simd_path(),
+                Counts {
+                    accel,
+                    options,
+                    rays,
+                    out,
+                },
+            );
         })?;
+        far.result()?;
         Ok(out)
     }
 
@@ -223,30 +253,46 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Intersections, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
-        let chunks: Vec<Option<(Vec<u32>, Vec<SlotHit>)>> = pool.install(|| {
+        let far = FarOrigins::new();
+        let chunks: Vec<Listed> = pool.install(|| {
             rays.par_chunks(CHUNK)
-                .map(|rays| {
-                    if options.cancelled() {
-                        return None;
-                    }
-                    Some(dispatch(simd_path(), Listing { accel, rays }))
+                .enumerate()
+                .map(|(k, rays)| {
+                    far.check(k * CHUNK, rays);
+                    dispatch(
+                        simd_path(),
+                        Listing {
+                            accel,
+                            rays,
+                            options,
+                        },
+                    )
                 })
                 .collect()
         });
         if options.cancelled() {
             return Err(RaycastError::Cancelled);
         }
-        let total: usize = chunks.iter().flatten().map(|(_, h)| h.len()).sum();
+        far.result()?;
+        let chunks = chunks.into_iter().collect::<Result<Vec<_>, _>>()?;
+        let total: usize = chunks.iter().map(|(_, h)| h.len()).sum();
         if total > u32::MAX as usize {
             return Err(RaycastError::TooManyIntersections);
         }
+        // Each hit's record (ray id, t, ids, uv: 24 bytes) and the ray splits.
+        let what = "the intersections";
+        budget(&[(total, 24), (rays.len() + 1, 4)], what)?;
         let mut out = Intersections {
-            ray_splits: Vec::with_capacity(rays.len() + 1),
-            ..Intersections::default()
+            ray_splits: room(rays.len() + 1, what)?,
+            ray_ids: room(total, what)?,
+            t_hit: room(total, what)?,
+            geometry_ids: room(total, what)?,
+            primitive_ids: room(total, what)?,
+            primitive_uvs: room(total, what)?,
         };
         out.ray_splits.push(0);
         let mut ray = 0u32;
-        for (counts, hits) in chunks.into_iter().flatten() {
+        for (counts, hits) in chunks {
             let mut hits = hits.iter();
             for count in counts {
                 let last = *out.ray_splits.last().unwrap_or(&0);
@@ -273,6 +319,7 @@ impl RaycastingScene {
     ) -> Result<ClosestPoints, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
         let n = points.len();
+        budget(&[(n, CLOSEST_BYTES)], "the result")?;
         let mut out = ClosestPoints {
             points: filled(&pool, options, n, [f32::NAN; 3])?,
             geometry_ids: filled(&pool, options, n, INVALID_ID)?,
@@ -315,11 +362,14 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<f32>, RaycastError> {
         let closest = self.compute_closest_points(points, options)?;
-        Ok(points
-            .iter()
-            .zip(&closest.points)
-            .map(|(q, p)| distance(q, p))
-            .collect())
+        let mut out = room(points.len(), "the result")?;
+        out.extend(
+            points
+                .iter()
+                .zip(&closest.points)
+                .map(|(q, p)| distance(q, p)),
+        );
+        Ok(out)
     }
 
     /// The distance to the surface, negative inside: a point is inside when most of
@@ -355,23 +405,31 @@ impl RaycastingScene {
         if nsamples.is_multiple_of(2) || nsamples > 255 {
             return Err(RaycastError::InvalidSamples(nsamples));
         }
+        if let Some(index) = points.iter().position(|p| beyond(p)) {
+            let what = "query point";
+            return Err(RaycastError::Beyond { what, index });
+        }
         let dirs = vote_directions(nsamples);
-        let rays: Vec<[f32; 6]> = points
-            .iter()
-            .flat_map(|p| dirs.iter().map(|d| [p[0], p[1], p[2], d[0], d[1], d[2]]))
-            .collect();
-        let counts = self.count_intersections(&rays, options)?;
-        Ok(counts
-            .chunks(dirs.len())
-            .map(|c| {
+        let mut out = room(points.len(), "the result")?;
+        let mut rays = Vec::new();
+        for points in points.chunks((VOTE_RAYS / dirs.len()).max(1)) {
+            rays.clear();
+            rays.extend(
+                points
+                    .iter()
+                    .flat_map(|p| dirs.iter().map(|d| [p[0], p[1], p[2], d[0], d[1], d[2]])),
+            );
+            let counts = self.count_intersections(&rays, options)?;
+            out.extend(counts.chunks(dirs.len()).map(|c| {
                 let odd = c.iter().filter(|&&n| n % 2 == 1).count();
                 if 2 * odd > c.len() {
                     1.0
                 } else {
                     0.0
                 }
-            })
-            .collect())
+            }));
+        }
+        Ok(out)
     }
 }
 
@@ -385,7 +443,8 @@ fn distance(q: &[f32; 3], p: &[f32; 3]) -> f32 {
     if p.is_nan() {
         return f32::INFINITY;
     }
-    (p - q).length()
+    // In f64: the square of a difference of 1e20 overflows f32.
+    (p.as_dvec3() - q.as_dvec3()).length() as f32
 }
 
 /// The `n` directions of an inside/outside vote: `(1, 1, 1)` and fixed offsets of at most

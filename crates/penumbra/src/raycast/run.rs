@@ -1,13 +1,14 @@
 //! How a batch query runs: on a pool of the scene's own (never rayon's global pool), in
 //! chunks of rays, with a cancel flag checked between chunks.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 
 use super::RaycastError;
 use crate::pool::thread_pool;
+use crate::scale::MAX_COORDINATE;
 
 /// Rays (or points) per parallel work item: large enough that scheduling costs nothing,
 /// small enough that two threads share a small batch and a cancel is seen within
@@ -90,6 +91,77 @@ where
     }
 }
 
+/// True when a coordinate of `point` is beyond ±[`MAX_COORDINATE`] (NaN and infinities are
+/// not: such rays miss).
+#[inline]
+pub(crate) fn beyond(point: &[f32]) -> bool {
+    point
+        .iter()
+        .any(|c| c.is_finite() && c.abs() > MAX_COORDINATE)
+}
+
+/// The first ray of a batch whose origin is beyond ±[`MAX_COORDINATE`], found by the
+/// workers chunk by chunk (where the rays are read anyway) rather than by a pass of its own.
+#[derive(Debug)]
+pub(crate) struct FarOrigins(AtomicUsize);
+
+impl FarOrigins {
+    pub fn new() -> FarOrigins {
+        FarOrigins(AtomicUsize::new(usize::MAX))
+    }
+
+    /// Notes the first far origin of `rays`, the rays from index `base` on.
+    #[inline]
+    pub fn check(&self, base: usize, rays: &[[f32; 6]]) {
+        if let Some(i) = rays.iter().position(|r| beyond(&r[..3])) {
+            self.0.fetch_min(base + i, Ordering::Relaxed);
+        }
+    }
+
+    /// `Err(Beyond)` naming the first far origin noted.
+    pub fn result(&self) -> Result<(), RaycastError> {
+        match self.0.load(Ordering::Relaxed) {
+            usize::MAX => Ok(()),
+            index => Err(RaycastError::Beyond { what: "ray", index }),
+        }
+    }
+}
+
+/// Sizes below this are only asked of the allocator; above, also checked against what the
+/// process may still take (`memory::available`, a few file reads).
+const CHECKED: u64 = 64 << 20;
+
+/// An empty vector with room for `n` values of `what`, or `Err(OutOfMemory)` when that is
+/// more than the process may take or the allocator refuses: never an abort.
+pub(crate) fn room<T>(n: usize, what: &'static str) -> Result<Vec<T>, RaycastError> {
+    budget(&[(n, size_of::<T>())], what)?;
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| RaycastError::OutOfMemory {
+            what,
+            bytes: bytes(n, size_of::<T>()),
+        })?;
+    Ok(v)
+}
+
+/// `n` values of `size` bytes, in bytes.
+fn bytes(n: usize, size: usize) -> u64 {
+    (n as u64).saturating_mul(size as u64)
+}
+
+/// `Err(OutOfMemory)` when arrays of `(count, size of one)` together are more than the
+/// process may still take.
+pub(crate) fn budget(arrays: &[(usize, usize)], what: &'static str) -> Result<(), RaycastError> {
+    let total = arrays
+        .iter()
+        .fold(0u64, |sum, &(n, size)| sum.saturating_add(bytes(n, size)));
+    let too_much = total > CHECKED && crate::memory::available().is_some_and(|a| total > a);
+    if too_much || total > isize::MAX as u64 {
+        return Err(RaycastError::OutOfMemory { what, bytes: total });
+    }
+    Ok(())
+}
+
 /// `n` copies of `value`, written by the workers of `pool` (in blocks of [`BLOCK`] values),
 /// so that the pages of a large result are first touched in parallel rather than by the
 /// caller alone, a serial part of a two-thread query on coherent rays (with this, 2048²
@@ -110,7 +182,7 @@ pub(crate) fn filled<T: Copy + Send + Sync>(
     value: T,
 ) -> Result<Vec<T>, RaycastError> {
     let count = n.div_ceil(BLOCK);
-    let mut blocks: Vec<[T; BLOCK]> = Vec::with_capacity(count);
+    let mut blocks: Vec<[T; BLOCK]> = room(count, "the result")?;
     while blocks.len() < count {
         if options.cancelled() {
             return Err(RaycastError::Cancelled);
@@ -149,6 +221,22 @@ mod tests {
         }
         let nan = filled(test_pool(), &options, 9, f32::NAN).unwrap();
         assert!(nan.iter().all(|x| x.is_nan()));
+    }
+
+    #[test]
+    fn sizes_beyond_memory_are_errors_not_aborts() {
+        // (count, what) of results no process can hold.
+        let too_much = |r: Result<Vec<[f32; 6]>, RaycastError>| {
+            matches!(r, Err(RaycastError::OutOfMemory { .. }))
+        };
+        for n in [usize::MAX / 24, usize::MAX / 48 + 1, 1 << 50] {
+            assert!(too_much(room(n, "the rays")), "{n}");
+        }
+        let options = QueryOptions::default();
+        let huge = filled(test_pool(), &options, 1 << 52, 0u64);
+        assert!(matches!(huge, Err(RaycastError::OutOfMemory { .. })));
+        assert!(budget(&[(usize::MAX, 8), (usize::MAX, 8)], "x").is_err());
+        assert_eq!(room::<u8>(16, "x").map(|v| v.capacity() >= 16), Ok(true));
     }
 
     #[test]

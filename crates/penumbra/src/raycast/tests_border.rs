@@ -9,7 +9,8 @@
 //! it exactly once. Coordinates are small dyadic numbers and the rays' vertical extent a
 //! power of two, so that the watertight test's sheared frame is exact and most rays pass
 //! exactly through the vertex or edge point they aim at; the same scenes scaled by powers of
-//! two up to 2⁴⁰ (about 1e12, the largest coordinate a scene may have) answer the same.
+//! two up to 2³⁶ (their rays then start up to 8e11 away; 1e12 is the largest coordinate
+//! allowed) answer the same.
 
 use glam::Vec3;
 use proptest::prelude::*;
@@ -239,9 +240,9 @@ fn scaled(mesh: &MeshData, scale: f32) -> MeshData {
     (v, mesh.1.clone())
 }
 
-/// Powers of two from 1 to 2⁴⁰ (about 1.1e12): scaling is exact, so the answers must not
-/// change.
-const SCALES: [f32; 4] = [1.0, 1.0 / 64.0, 8_589_934_592.0, 1_099_511_627_776.0 / 2.0];
+/// Powers of two from 2⁻⁶ to 2³⁶ (the rays' origins then reach 8e11, near the largest
+/// coordinate, 1e12): scaling is exact, so the answers must not change.
+const SCALES: [f32; 4] = [1.0, 1.0 / 64.0, 8_589_934_592.0, 68_719_476_736.0];
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
@@ -380,4 +381,106 @@ fn a_lone_triangle_and_a_fan_count_their_border_once() {
             assert!(a.listed[i].len() == 1 && near_one(a.listed[i][0]));
         }
     }
+}
+
+#[test]
+fn far_scenes_answer_as_near_ones_or_are_refused() {
+    // Two triangles at each scale up to 1e12, rays of short, unit and long directions from about
+    // the scale away: cast_rays and count_intersections agree, and the closest points are
+    // the points below, not a corner (f32 products overflowed from 1e10 on).
+    let options = QueryOptions::default();
+    for s in [1.0f32, 1e8, 1e10, 1e11, 1e12] {
+        let mut scene = RaycastingScene::new();
+        let v = [
+            [0.0, 0.0, 0.0],
+            [s, 0.0, 0.0],
+            [0.0, s, 0.0],
+            [s, s, 0.25 * s],
+        ];
+        scene.add_triangles(&v, &[[0, 1, 2], [1, 3, 2]]).unwrap();
+        let o = Vec3::new(0.3, 0.2, 0.9) * s;
+        let mut rays = Vec::new();
+        for i in 1..20 {
+            for j in 1..20 {
+                let d = Vec3::new(i as f32 / 20.0 * s, j as f32 / 20.0 * s, 0.0) - o;
+                let unit = d.normalize();
+                rays.push([o.x, o.y, o.z, d.x, d.y, d.z]);
+                rays.push([o.x, o.y, o.z, unit.x, unit.y, unit.z]);
+                let short = unit * 1e-3;
+                rays.push([o.x, o.y, o.z, short.x, short.y, short.z]);
+            }
+        }
+        let cast = scene.cast_rays(&rays, &options).unwrap();
+        let counts = scene.count_intersections(&rays, &options).unwrap();
+        for (i, ray) in rays.iter().enumerate() {
+            assert!(cast.t_hit[i].is_finite(), "scale {s:e}: {ray:?} missed");
+            assert_eq!(counts[i], 1, "scale {s:e}: {ray:?}");
+        }
+        let q = [
+            [0.25, 0.25, 1.0],
+            [0.25, 0.25, -0.5],
+            [0.5, -1.0, 0.0],
+            [9.0, 9.0, 0.0],
+        ]
+        .map(|p| p.map(|c| c * s));
+        let want = [
+            [0.25, 0.25, 0.0],
+            [0.25, 0.25, 0.0],
+            [0.5, 0.0, 0.0],
+            [1.0, 1.0, 0.25],
+        ];
+        let closest = scene.compute_closest_points(&q, &options).unwrap();
+        for (got, want) in closest.points.iter().zip(want) {
+            let (got, want) = (Vec3::from(*got), Vec3::from(want) * s);
+            assert!(
+                got.distance(want) <= 1e-5 * s,
+                "scale {s:e}: {got} for {want}"
+            );
+        }
+        // Query points far beyond the scene still find it.
+        let far = scene
+            .compute_distance(&[[0.0, 0.0, 1e30]], &options)
+            .unwrap();
+        assert!((far[0] - 1e30).abs() <= 1e24, "{}", far[0]);
+    }
+    // Beyond 1e12: vertices, ray origins and vote points are refused, naming which.
+    let mut scene = RaycastingScene::new();
+    let big = [[0.0, 0.0, 0.0], [2e12, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    fn beyond<T>(what: &'static str, index: usize) -> Result<T, RaycastError> {
+        Err(RaycastError::Beyond { what, index })
+    }
+    assert_eq!(scene.add_triangles(&big, &[[0, 1, 2]]), beyond("vertex", 1));
+    scene
+        .add_triangles(
+            &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[[0, 1, 2]],
+        )
+        .unwrap();
+    let mut rays = vec![[0.25, 0.25, 1.0, 0.0, 0.0, -1.0]; 3000];
+    rays[2500][2] = -3e12;
+    rays[2900][0] = 3e12;
+    assert_eq!(
+        scene.cast_rays(&rays, &options).map(|_| ()),
+        beyond("ray", 2500)
+    );
+    assert_eq!(
+        scene.cast_rays_rows(&rays, 100, &options).map(|_| ()),
+        beyond("ray", 2500)
+    );
+    let occluded = scene.test_occlusions(&rays, 0.0, f32::INFINITY, &options);
+    assert_eq!(occluded.map(|_| ()), beyond("ray", 2500));
+    assert_eq!(
+        scene.count_intersections(&rays, &options).map(|_| ()),
+        beyond("ray", 2500)
+    );
+    assert_eq!(
+        scene.list_intersections(&rays, &options).map(|_| ()),
+        beyond("ray", 2500)
+    );
+    let points = [[0.0; 3], [0.0, 5e12, 0.0]];
+    let occupancy = scene.compute_occupancy(&points, 1, &options);
+    assert_eq!(occupancy.map(|_| ()), beyond("query point", 1));
+    // Non-finite rays still just miss.
+    let nan = [[f32::NAN, 0.0, 1.0, 0.0, 0.0, -1.0]];
+    assert_eq!(scene.count_intersections(&nan, &options), Ok(vec![0]));
 }

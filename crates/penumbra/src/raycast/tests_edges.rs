@@ -224,9 +224,28 @@ fn pinhole_rays_follow_open3d_layout() {
         &create_rays_pinhole(k, moved, 1, 1).unwrap()[0][..3],
         &[3.0, 0.0, 0.0]
     );
-    // Invalid cameras are errors, never panics.
+    // Invalid cameras are errors, never panics: a singular intrinsic matrix, an all-zero,
+    // flat or non-finite extrinsic one.
     let zero = [[0.0; 3]; 3];
     assert!(create_rays_pinhole(zero, id, 2, 2).is_err());
+    let mut flat = id;
+    flat[2] = [1.0, 0.0, 0.0, 0.0];
+    let mut tiny = id;
+    tiny[1][1] = 1e-12;
+    for bad in [[[0.0; 4]; 4], flat, tiny] {
+        let err = create_rays_pinhole(k, bad, 2, 2).unwrap_err();
+        assert!(err.to_string().contains("singular"), "{err}");
+    }
+    // A scaled rotation is a camera still.
+    let mut scaled = id;
+    (scaled[0][0], scaled[1][1], scaled[2][2]) = (1e-6, 1e-6, 1e-6);
+    assert!(create_rays_pinhole(k, scaled, 2, 2).is_ok());
+    // Too many rays for memory is an error, not an abort.
+    let huge = create_rays_pinhole(k, id, 65535, 65535);
+    assert!(
+        matches!(huge, Err(RaycastError::OutOfMemory { .. })),
+        "{huge:?}"
+    );
     assert!(
         create_rays_pinhole_fov(0.0, [0.0; 3], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], 2, 2).is_err()
     );

@@ -45,6 +45,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
                 SimdPath::Portable,
                 CastPackets {
                     accel,
+                    options: &QueryOptions::default(),
                     rays,
                     hits: &mut hit,
                 },
@@ -56,6 +57,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
         let mut hits = vec![None; rays.len()];
         let kernel = CastPackets {
             accel,
+            options: &QueryOptions::default(),
             rays: &prepared,
             hits: &mut hits,
         };

@@ -28,6 +28,10 @@ use glam::{Vec3, Vec3A, Vec3Swizzles};
 use super::boundary::Boundary;
 use crate::math::unit_cross;
 
+/// The largest `t` of a hit: a `t` that overflows to infinity is beyond any distance `f32`
+/// holds, and no hit, in every query alike.
+pub(crate) const T_LIMIT: f32 = f32::MAX;
+
 /// How a ray exactly on a triangle's edge or vertex counts; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum EdgeRule {
@@ -134,8 +138,10 @@ impl PreparedRay {
     }
 
     /// Intersects the triangle `tri`, whose part of the surface's border is `boundary` (used
-    /// by [`EdgeRule::Owned`] only), for `t` in `[t_min, t_max]` under `rule`. Two-sided;
-    /// degenerate triangles and triangles seen exactly edge-on are missed.
+    /// by [`EdgeRule::Owned`] only), for `t` in `[t_min, t_max]` (and at most [`T_LIMIT`])
+    /// under `rule`. Two-sided; degenerate triangles and triangles seen exactly edge-on are
+    /// missed. Exact for corners and origins within ±[`MAX_COORDINATE`](crate::scale::MAX_COORDINATE): no product
+    /// overflows there.
     #[inline(always)]
     pub fn hit(
         &self,
@@ -183,10 +189,13 @@ impl PreparedRay {
                 }
             }
         }
-        let scaled_t = (uvw * (fz * self.inv_dz)).element_sum();
+        // `t = Σ uvw·fz / det / d_z`, dividing by `d_z` last: each product `uvw·fz` is at
+        // most 64·R³ for coordinates within ±R (see `MAX_COORDINATE`) whatever the
+        // direction's length, where `fz / d_z` first overflowed for short directions.
+        let scaled_t = (uvw * fz).element_sum();
         let inv_det = 1.0 / det;
-        let t = scaled_t * inv_det;
-        if !(t >= t_min && t <= t_max) {
+        let t = scaled_t * inv_det * self.inv_dz;
+        if !(t >= t_min && t <= t_max.min(T_LIMIT)) {
             return None;
         }
         Some(Crossing {
