@@ -101,14 +101,6 @@ impl Builder<'_> {
                     .collect(),
             };
         for (name, c, path) in named {
-            // A name is printed, and put into file names ({camera}): one with a NUL, a newline
-            // or an escape sequence is refused here, before anything renders.
-            if name.chars().any(char::is_control) {
-                return Err(self.bad(
-                    &path,
-                    "a camera name cannot hold control characters (NUL, newline, escape, ...)",
-                ));
-            }
             let up = c.up.map_or(glam::Vec3::Y, |u| u.vec3());
             let camera = Camera::new(c.position.vec3(), c.look_at.vec3(), up, c.fov.f32())
                 .map_err(|e| match e {
