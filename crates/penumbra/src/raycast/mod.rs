@@ -48,6 +48,7 @@ mod batch;
 mod boundary;
 mod closest;
 mod group;
+mod lazy;
 mod packet;
 mod pinhole;
 mod queries;
@@ -67,7 +68,7 @@ mod tests_meshes;
 #[cfg(test)]
 mod tests_packets;
 
-use std::sync::OnceLock;
+use std::sync::Arc;
 
 use glam::Vec3;
 
@@ -80,6 +81,7 @@ pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
 pub use queries::{CastRays, ClosestPoints, Intersections};
 pub use run::QueryOptions;
 
+use lazy::{LazyAccel, Triangles};
 use run::Pools;
 use traverse::Accel;
 
@@ -156,14 +158,12 @@ pub enum RaycastError {
 /// Queries take `&self` and may run from several threads at once.
 #[derive(Debug, Default)]
 pub struct RaycastingScene {
-    /// Every triangle; `Triangle::object` is its geometry id.
-    geometry: Geometry,
-    /// For each triangle of `geometry`, its index within its own geometry.
-    local_ids: Vec<u32>,
+    /// Every triangle with its geometry and primitive ids.
+    triangles: Arc<Triangles>,
     /// Number of geometries added.
     geometries: u32,
     /// The BVH, built on demand.
-    accel: OnceLock<Accel>,
+    accel: LazyAccel,
     /// The worker pool of the last query.
     pools: Pools,
 }
@@ -194,13 +194,16 @@ impl RaycastingScene {
                 *c - 1
             })
             .collect();
+        let geometry = Geometry {
+            positions: geometry.positions.clone(),
+            triangles: geometry.triangles.clone(),
+            ..Geometry::default()
+        };
         RaycastingScene {
-            geometry: Geometry {
-                positions: geometry.positions.clone(),
-                triangles: geometry.triangles.clone(),
-                ..Geometry::default()
-            },
-            local_ids,
+            triangles: Arc::new(Triangles {
+                geometry,
+                local_ids,
+            }),
             geometries: objects,
             ..RaycastingScene::default()
         }
@@ -240,17 +243,22 @@ impl RaycastingScene {
                 });
             }
         }
-        if self.geometry.len() + triangles.len() > MAX_TRIANGLES
-            || self.geometry.positions.len() + vertices.len() > u32::MAX as usize
+        let all = &self.triangles.geometry;
+        if all.len() + triangles.len() > MAX_TRIANGLES
+            || all.positions.len() + vertices.len() > u32::MAX as usize
         {
             return Err(RaycastError::TooManyTriangles);
         }
         let id = self.geometries;
-        let base = self.geometry.positions.len() as u32;
-        self.geometry
+        // Forget the structure first: a build still running then holds the only other
+        // reference, and the triangles are copied once at most.
+        self.accel.reset();
+        let all = Arc::make_mut(&mut self.triangles);
+        let base = all.geometry.positions.len() as u32;
+        all.geometry
             .positions
             .extend(vertices.iter().map(|&v| Vec3::from(v)));
-        self.geometry
+        all.geometry
             .triangles
             .extend(triangles.iter().map(|t| Triangle {
                 vertices: t.map(|i| base + i),
@@ -258,9 +266,8 @@ impl RaycastingScene {
                 object: id,
                 smooth: false,
             }));
-        self.local_ids.extend(0..triangles.len() as u32);
+        all.local_ids.extend(0..triangles.len() as u32);
         self.geometries += 1;
-        self.accel = OnceLock::new();
         Ok(id)
     }
 
@@ -271,29 +278,25 @@ impl RaycastingScene {
 
     /// Number of triangles of all geometries.
     pub fn triangle_count(&self) -> usize {
-        self.geometry.len()
+        self.triangles.geometry.len()
     }
 
     /// Builds the acceleration structure now (with `threads` workers, 0 for one per core)
     /// rather than on the next query. Does nothing when it is already built.
     pub fn commit(&self, threads: usize) -> Result<(), RaycastError> {
-        if self.accel.get().is_none() {
-            let pool = self.pools.get(threads)?;
-            self.accel
-                .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
-        }
-        Ok(())
+        let pool = self.pools.get(threads)?;
+        let options = QueryOptions::default();
+        self.accel.get(&self.triangles, &pool, &options).map(|_| ())
     }
 
-    /// The built structure and the pool for a query.
+    /// The built structure and the pool for a query: built first if need be, on a thread of
+    /// its own when large, so that a cancel is answered during the build too.
     fn prepare(
         &self,
         options: &QueryOptions,
-    ) -> Result<(&Accel, std::sync::Arc<rayon::ThreadPool>), RaycastError> {
+    ) -> Result<(Arc<Accel>, Arc<rayon::ThreadPool>), RaycastError> {
         let pool = self.pools.get(options.threads)?;
-        let accel = self
-            .accel
-            .get_or_init(|| Accel::build(&self.geometry, &self.local_ids, Some(&pool)));
+        let accel = self.accel.get(&self.triangles, &pool, options)?;
         Ok((accel, pool))
     }
 
@@ -301,13 +304,15 @@ impl RaycastingScene {
     #[cfg(test)]
     fn ids(&self, triangle: u32) -> (u32, u32) {
         let t = triangle as usize;
-        (self.geometry.triangles[t].object, self.local_ids[t])
+        let all = &self.triangles;
+        (all.geometry.triangles[t].object, all.local_ids[t])
     }
 
     /// Corners of scene triangle `triangle`.
     #[cfg(test)]
     fn corners(&self, triangle: u32) -> watertight::Corners {
-        self.geometry
+        self.triangles
+            .geometry
             .corners(triangle as usize)
             .map(glam::Vec3A::from)
     }

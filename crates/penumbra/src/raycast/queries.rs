@@ -134,6 +134,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<CastRays, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let accel = &*accel;
         let n = rays.len();
         budget(&[(n, RESULT_BYTES)], "the result")?;
         let mut out = CastRays {
@@ -194,6 +195,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<bool>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let accel = &*accel;
         let mut out = filled(&pool, options, rays.len(), false)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
         let far = FarOrigins::new();
@@ -224,6 +226,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<i32>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let accel = &*accel;
         let mut out = filled(&pool, options, rays.len(), 0i32)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
         let far = FarOrigins::new();
@@ -253,6 +256,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Intersections, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let accel = &*accel;
         let far = FarOrigins::new();
         let chunks: Vec<Listed> = pool.install(|| {
             rays.par_chunks(CHUNK)
@@ -318,6 +322,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<ClosestPoints, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let accel = &*accel;
         let n = points.len();
         budget(&[(n, CLOSEST_BYTES)], "the result")?;
         let mut out = ClosestPoints {

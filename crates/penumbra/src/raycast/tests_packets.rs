@@ -31,6 +31,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
     let mut scene = RaycastingScene::new();
     scene.add_triangles(&mesh.0, &mesh.1).unwrap();
     let (accel, _) = scene.prepare(&QueryOptions::default()).unwrap();
+    let accel = &*accel;
     let prepared: Vec<Option<PreparedRay>> = rays
         .iter()
         .map(|r| PreparedRay::new(Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..])))

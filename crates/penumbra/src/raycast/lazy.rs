@@ -1,0 +1,210 @@
+//! The acceleration structure of a [`RaycastingScene`](super::RaycastingScene), built on the
+//! first query after a change. A large build (a million triangles: about a second) runs on a
+//! thread of its own while the query waits for it watching its cancel flag, so that Ctrl-C
+//! is answered at once; the build, left to finish, then serves the next query. A small one
+//! runs on the caller's thread.
+
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::Duration;
+
+use super::run::QueryOptions;
+use super::traverse::Accel;
+use super::RaycastError;
+use crate::geometry::Geometry;
+
+/// Triangles below this many are built on the calling thread (a few milliseconds).
+const ON_THREAD: usize = 1 << 15;
+
+/// How often a waiting query looks at its cancel flag.
+const POLL: Duration = Duration::from_millis(5);
+
+/// The triangles of a scene and each one's index within its own geometry, shared with a
+/// build that outlives a cancelled query.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Triangles {
+    /// Every triangle; `Triangle::object` is its geometry id.
+    pub geometry: Geometry,
+    /// For each triangle of `geometry`, its index within its own geometry.
+    pub local_ids: Vec<u32>,
+}
+
+/// Where a build stands.
+#[derive(Debug)]
+enum State {
+    Building,
+    Built(Arc<Accel>),
+    /// The build's thread ended without a result (it panicked).
+    Lost,
+}
+
+/// One build and the queries waiting for it.
+#[derive(Debug)]
+struct Build {
+    state: Mutex<State>,
+    done: Condvar,
+}
+
+impl Build {
+    fn state(&self) -> MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn finish(&self, state: State) {
+        *self.state() = state;
+        self.done.notify_all();
+    }
+
+    /// The built structure, waiting for it while `options` is not cancelled.
+    fn wait(&self, options: &QueryOptions) -> Result<Arc<Accel>, RaycastError> {
+        let mut state = self.state();
+        loop {
+            match &*state {
+                State::Built(accel) => return Ok(accel.clone()),
+                State::Lost => {
+                    return Err(RaycastError::Threads(
+                        "the acceleration structure's build failed".into(),
+                    ))
+                }
+                State::Building if options.cancelled() => return Err(RaycastError::Cancelled),
+                State::Building => {
+                    state = match self.done.wait_timeout(state, POLL) {
+                        Ok((s, _)) => s,
+                        Err(e) => e.into_inner().0,
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// Marks a build lost when its thread ends without finishing it.
+struct Finish(Arc<Build>);
+
+impl Drop for Finish {
+    fn drop(&mut self) {
+        let mut state = self.0.state();
+        if matches!(*state, State::Building) {
+            *state = State::Lost;
+            self.0.done.notify_all();
+        }
+    }
+}
+
+/// The scene's structure: none yet, or the build of the current triangles.
+#[derive(Debug, Default)]
+pub(crate) struct LazyAccel {
+    build: Mutex<Option<Arc<Build>>>,
+}
+
+impl LazyAccel {
+    /// Forgets the structure: the triangles changed. A build still running finishes for
+    /// nobody.
+    pub fn reset(&mut self) {
+        *self.build.get_mut().unwrap_or_else(|e| e.into_inner()) = None;
+    }
+
+    /// The structure over `triangles`, built on `pool` by the first caller; `Err(Cancelled)`
+    /// as soon as `options` is cancelled while it is being built.
+    pub fn get(
+        &self,
+        triangles: &Arc<Triangles>,
+        pool: &Arc<rayon::ThreadPool>,
+        options: &QueryOptions,
+    ) -> Result<Arc<Accel>, RaycastError> {
+        let build = {
+            let mut slot = self.build.lock().unwrap_or_else(|e| e.into_inner());
+            match &*slot {
+                Some(build) => build.clone(),
+                None => {
+                    let build = Arc::new(Build {
+                        state: Mutex::new(State::Building),
+                        done: Condvar::new(),
+                    });
+                    *slot = Some(build.clone());
+                    start(&build, triangles, pool);
+                    build
+                }
+            }
+        };
+        build.wait(options)
+    }
+}
+
+/// Builds over `triangles` into `build`: on a thread of its own when they are many and the
+/// thread starts, else here.
+fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::ThreadPool>) {
+    let work = {
+        let (build, triangles, pool) = (build.clone(), triangles.clone(), pool.clone());
+        move || {
+            let finish = Finish(build);
+            let t = &triangles;
+            let accel = Accel::build(&t.geometry, &t.local_ids, Some(&pool));
+            finish.0.finish(State::Built(Arc::new(accel)));
+        }
+    };
+    if triangles.geometry.len() < ON_THREAD {
+        return work();
+    }
+    // A thread that cannot start leaves the build to this one.
+    let spawned = std::thread::Builder::new()
+        .name("penumbra-raycast-build".into())
+        .spawn(work.clone());
+    if spawned.is_err() {
+        work();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::time::Instant;
+
+    use super::super::{QueryOptions, RaycastError, RaycastingScene};
+    use crate::sampling::Rng;
+
+    /// A soup of `n` small random triangles in the unit cube.
+    fn soup(n: usize) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+        let mut rng = Rng::new(5, &[]);
+        let v: Vec<[f32; 3]> = (0..3 * n).map(|_| [0; 3].map(|_| rng.uniform())).collect();
+        let t = (0..n as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
+        (v, t)
+    }
+
+    #[test]
+    fn a_query_cancelled_during_the_build_returns_at_once() {
+        // Half a million triangles: a build of a second or more here.
+        let (v, t) = soup(1 << 19);
+        let mut scene = RaycastingScene::new();
+        scene.add_triangles(&v, &t).unwrap();
+        let cancel = AtomicBool::new(false);
+        let options = QueryOptions {
+            threads: 2,
+            cancel: Some(&cancel),
+        };
+        let rays = [[0.5, 0.5, -1.0, 0.0, 0.0, 1.0]];
+        let (result, sent, answered) = std::thread::scope(|s| {
+            let sender = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(30));
+                cancel.store(true, Ordering::Relaxed);
+                Instant::now()
+            });
+            let result = scene.count_intersections(&rays, &options);
+            let answered = Instant::now();
+            (result, sender.join().unwrap(), answered)
+        });
+        assert_eq!(result, Err(RaycastError::Cancelled));
+        let latency = answered.saturating_duration_since(sent);
+        assert!(latency.as_secs_f64() < 0.1, "{latency:?} after the cancel");
+        // The build went on, and serves the next query; a change starts another one.
+        let plain = QueryOptions::default();
+        let started = Instant::now();
+        let first = scene.count_intersections(&rays, &plain).unwrap();
+        eprintln!("the rest of the build: {:?}", started.elapsed());
+        assert!(first[0] > 0);
+        scene.add_triangles(&v[..3], &[[0, 1, 2]]).unwrap();
+        let again = scene.count_intersections(&rays, &plain).unwrap();
+        assert!(again[0] >= first[0]);
+    }
+}
