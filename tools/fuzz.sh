@@ -8,7 +8,7 @@
 #   tools/fuzz.sh list                                    # the targets
 #
 # Targets: scene_toml, scene_json, scene_override (a TOML scene with a --set override on its
-# first line), pack (a scene pack: overrides, scene text and packed files, NUL-separated):
+# first line), pack (a scene pack: its overrides, scene text and packed files, see the body):
 # parse, build and a 4×4 render; obj, mtl, texture (PNG and JPEG decoding). Their
 # bodies are in crates/penumbra-fuzz-targets. Needs the nightly toolchain
 # (`rustup toolchain install nightly`); installs cargo-fuzz from crates.io when it is missing.
