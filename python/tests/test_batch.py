@@ -125,7 +125,13 @@ def test_ctrl_c_exits_130_and_leaves_no_partial_image(tmp_path):
     )
     out_dir = tmp_path / "out"
     deadline = time.monotonic() + 120
-    while not out_dir.exists() and time.monotonic() < deadline and proc.poll() is None:
+
+    def finished() -> bool:
+        # A committed image (temporary files have other names): the folder alone appears
+        # before the first image is written, and a signal then leaves none.
+        return out_dir.exists() and any(out_dir.glob("*.png"))
+
+    while not finished() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)
