@@ -108,10 +108,10 @@ class Scene:
         return [os.fspath(p) for p in self._core.files]
 
     def pack(self) -> PackedScene:
-        """The scene file's text with the bytes of every file in :attr:`files`, read again
-        now (they must not have changed since the scene was loaded): what
-        :func:`load_pack` builds the same scene from in another process or on another
-        machine, without those files. Raises ``OSError`` when a file cannot be read."""
+        """The scene file's text with the bytes of every file in :attr:`files` as the load
+        read them (a loaded scene is a snapshot: files edited on disk since change nothing):
+        what :func:`load_pack` builds the same scene from in another process or on another
+        machine, without those files."""
         return PackedScene(self._core.pack())
 
     def __reduce__(self):
