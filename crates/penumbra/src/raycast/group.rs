@@ -7,14 +7,17 @@
 //!
 //! Exactness: each lane computes what [`PreparedRay::hit`] computes for its triangle,
 //! operation for operation (the same differences, products and sums in the same order, no
-//! fused multiply-add), and a lane whose edge function rounds to exactly zero is handed to
-//! [`PreparedRay::hit`] itself (which recomputes it in `f64`). So a group gives each of its
+//! fused multiply-add), and a lane whose edge function rounds to exactly zero, or whose `t`
+//! overflows, is handed to [`PreparedRay::hit`] itself (which recomputes it in `f64`, or in
+//! another order). So a group gives each of its
 //! triangles the very answer of the one-triangle test.
 
 use glam::Vec3A;
 
 use super::boundary::Boundary;
-use super::watertight::{Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT};
+use super::watertight::{
+    overflows, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
+};
 use crate::simd::Isa;
 
 /// Triangles per group.
@@ -146,13 +149,16 @@ impl PreparedRay {
             let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
             // `element_sum` of glam's `Vec3A`: `(x + y) + (z + 0)`.
             let det = (u + v) + (w + 0.0);
-            let scaled_t = (u * f[0].2 + v * f[1].2) + (w * f[2].2 + 0.0);
+            let scaled_t =
+                (u * (f[0].2 * inv_dz) + v * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
             let inv_det = 1.0 / det;
-            let t = scaled_t * inv_det * inv_dz;
+            let t = scaled_t * inv_det;
             // `det` is not 0 and not NaN; `t` in `[t_min, t_max]` (false for a NaN `t`).
             #[allow(clippy::eq_op)]
             let ok = !(negative & positive) & (det != 0.0) & (det == det);
             inside[i] = -i32::from(ok & (t >= t_min) & (t <= t_max));
+            // A hit whose `t` overflowed goes to the one-triangle test too.
+            zero[i] |= -i32::from(ok & overflows(t));
             hits.t[i] = t;
             hits.b1[i] = v * inv_det;
             hits.b2[i] = w * inv_det;

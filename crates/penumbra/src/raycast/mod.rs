@@ -139,11 +139,14 @@ pub enum RaycastError {
     },
     /// A result (or the rays of [`create_rays_pinhole`]) needs more memory than the process
     /// may take.
-    #[error("{what} would take {}, more memory than this process can have", human(*.bytes))]
+    #[error(
+        "not enough memory for {what}: {} more is more than this process can take",
+        human(*.bytes)
+    )]
     OutOfMemory {
         /// What was being made: "the result", "the rays"…
         what: &'static str,
-        /// Its size in bytes.
+        /// The bytes asked for when memory ran out.
         bytes: u64,
     },
     /// A [`RaycastingScene::list_intersections`] result would hold more than 2³² − 1 hits.

@@ -17,7 +17,7 @@
 use super::boundary::Boundary;
 use super::run::QueryOptions;
 use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
-use super::watertight::{Crossing, EdgeRule, PreparedRay, T_LIMIT};
+use super::watertight::{overflows, Crossing, EdgeRule, PreparedRay, T_LIMIT};
 use super::wide::WIDTH;
 use crate::simd::{max, min, Isa, Kernel};
 
@@ -261,14 +261,17 @@ fn triangle<const N: usize, I: Isa>(
         let negative = (u < 0.0) | (v_ < 0.0) | (w < 0.0);
         let positive = (u > 0.0) | (v_ > 0.0) | (w > 0.0);
         let det = (u + v_) + (w + 0.0);
-        let scaled_t = (u * f[0].2 + v_ * f[1].2) + (w * f[2].2 + 0.0);
+        let scaled_t =
+            (u * (f[0].2 * inv_dz) + v_ * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
         let inv_det = 1.0 / det;
-        t[i] = scaled_t * inv_det * inv_dz;
+        t[i] = scaled_t * inv_det;
         b1[i] = v_ * inv_det;
         b2[i] = w * inv_det;
         #[allow(clippy::eq_op)]
         let inside = !(negative & positive) & (det != 0.0) & (det == det);
         hit[i] = -i32::from(inside & (t[i] >= 0.0) & (t[i] <= best.t[i]));
+        // A hit whose `t` overflowed: the one-triangle test, as for an edge.
+        zero[i] |= -i32::from(inside & overflows(t[i]));
     }
     let exact = I::mask(&zero) & mask;
     let mut hits = I::mask(&hit) & mask & !exact;

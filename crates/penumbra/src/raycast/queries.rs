@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::batch::{prepare, Counts, Listed, Listing, Occlusions};
+use super::batch::{prepare, Counts, Listing, Occlusions};
 use super::packet::CastPackets;
 use super::run::{beyond, budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::watertight::PreparedRay;
@@ -258,7 +258,9 @@ impl RaycastingScene {
         let (accel, pool) = self.prepare(options)?;
         let accel = &*accel;
         let far = FarOrigins::new();
-        let chunks: Vec<Listed> = pool.install(|| {
+        // The first error (memory, cancel) stops the other chunks, and what they hold is
+        // freed.
+        let chunks: Result<Vec<_>, RaycastError> = pool.install(|| {
             rays.par_chunks(CHUNK)
                 .enumerate()
                 .map(|(k, rays)| {
@@ -278,7 +280,7 @@ impl RaycastingScene {
             return Err(RaycastError::Cancelled);
         }
         far.result()?;
-        let chunks = chunks.into_iter().collect::<Result<Vec<_>, _>>()?;
+        let chunks = chunks?;
         let total: usize = chunks.iter().map(|(_, h)| h.len()).sum();
         if total > u32::MAX as usize {
             return Err(RaycastError::TooManyIntersections);

@@ -113,6 +113,15 @@ impl FarOrigins {
     /// Notes the first far origin of `rays`, the rays from index `base` on.
     #[inline]
     pub fn check(&self, base: usize, rays: &[[f32; 6]]) {
+        // A branch-free pass first (vectorized, a microsecond per chunk), the search only when
+        // it finds something (an infinite origin passes it, and then the search finds none).
+        let large = |c: f32| c.abs() > MAX_COORDINATE;
+        let any = rays.iter().fold(false, |any, r| {
+            any | large(r[0]) | large(r[1]) | large(r[2])
+        });
+        if !any {
+            return;
+        }
         if let Some(i) = rays.iter().position(|r| beyond(&r[..3])) {
             self.0.fetch_min(base + i, Ordering::Relaxed);
         }
@@ -142,6 +151,26 @@ pub(crate) fn room<T>(n: usize, what: &'static str) -> Result<Vec<T>, RaycastErr
             bytes: bytes(n, size_of::<T>()),
         })?;
     Ok(v)
+}
+
+/// Makes room in `v` for `additional` more values (doubling, as `push` does), fallibly and
+/// within the budget of [`budget`]: for results that grow as they are found.
+pub(crate) fn grow<T>(
+    v: &mut Vec<T>,
+    additional: usize,
+    what: &'static str,
+) -> Result<(), RaycastError> {
+    let need = v.len().saturating_add(additional);
+    if need <= v.capacity() {
+        return Ok(());
+    }
+    let more = need.max(2 * v.capacity()) - v.len();
+    budget(&[(more, size_of::<T>())], what)?;
+    v.try_reserve_exact(more)
+        .map_err(|_| RaycastError::OutOfMemory {
+            what,
+            bytes: bytes(need, size_of::<T>()),
+        })
 }
 
 /// `n` values of `size` bytes, in bytes.

@@ -189,12 +189,12 @@ impl PreparedRay {
                 }
             }
         }
-        // `t = Σ uvw·fz / det / d_z`, dividing by `d_z` last: each product `uvw·fz` is at
-        // most 64·R³ for coordinates within ±R (see `MAX_COORDINATE`) whatever the
-        // direction's length, where `fz / d_z` first overflowed for short directions.
-        let scaled_t = (uvw * fz).element_sum();
+        let scaled_t = (uvw * (fz * self.inv_dz)).element_sum();
         let inv_det = 1.0 / det;
-        let t = scaled_t * inv_det * self.inv_dz;
+        let mut t = scaled_t * inv_det;
+        if overflows(t) {
+            t = far_t(uvw, fz, inv_det, self.inv_dz);
+        }
         if !(t >= t_min && t <= t_max.min(T_LIMIT)) {
             return None;
         }
@@ -204,6 +204,23 @@ impl PreparedRay {
             b2: uvw.z * inv_det,
         })
     }
+}
+
+/// True when a hit's `t` came out infinite or NaN: for a short direction far from the
+/// triangle, the products `uvw·(fz/d_z)` overflow (the group and packet tests hand such
+/// lanes to [`PreparedRay::hit`], which recomputes `t` with [`far_t`]).
+#[inline(always)]
+pub(crate) fn overflows(t: f32) -> bool {
+    !t.is_finite()
+}
+
+/// `t = Σ uvw·fz / det / d_z`, dividing by `d_z` last: each product `uvw·fz` is at most 64·R³
+/// for corners and origins within ±R (`MAX_COORDINATE`), whatever the direction's length.
+/// The usual order (`fz/d_z` first) is kept where it does not overflow, so that ordinary
+/// answers stay bit for bit what they were.
+#[inline(never)]
+fn far_t(uvw: Vec3A, fz: Vec3A, inv_det: f32, inv_dz: f32) -> f32 {
+    (uvw * fz).element_sum() * inv_det * inv_dz
 }
 
 /// `a·b − c·d` in `f64` (exact products of `f32`), rounded to `f32` keeping its sign: a
