@@ -6,8 +6,10 @@ several): numpy arrays that also have Open3D's ``.numpy()``, ``.cpu()``, ``.isfi
 ``.isinf()`` and ``.isnan()``, so ``ans["t_hit"].numpy()`` works as with Open3D. Inputs may be
 numpy arrays, lists or Open3D tensors. Differences from Open3D: float64 (or integer) rays
 and points are converted to float32 rather than refused; an index out of range in
-``add_triangles`` is a ``ValueError``; and the ray test is watertight: a ray aimed exactly at
-an edge shared by two triangles, or at a vertex, hits the surface.
+``add_triangles`` is a ``ValueError``; the ray test is watertight: a ray aimed exactly at
+an edge shared by two triangles, or at a vertex, hits the surface; vertices and ray origins
+beyond ±1e12 (where 32-bit ray tests overflow) are refused with a ``ValueError``; and a
+result too large for memory raises ``MemoryError`` naming the call.
 
 >>> import numpy as np, penumbra
 >>> scene = penumbra.RaycastingScene()
@@ -35,14 +37,42 @@ from ._tensor import Tensor, tensor
 INVALID_ID: int = _core.INVALID_ID
 
 
-def _numpy(value: Any) -> np.ndarray:
+#: Containers whose order is arbitrary, or that are not sequences of values at all: taken as
+#: arrays, their elements would land in an arbitrary order (or become one opaque object).
+_UNORDERED = (set, frozenset, dict, type({}.keys()), type({}.values()))
+
+
+def _numpy(value: Any, call: str, name: str) -> np.ndarray:
     """``value`` as a numpy array; Open3D tensors (anything with a ``numpy()`` method that is
-    not an array) are converted through it, after ``cpu()`` when they have one."""
+    not an array) are converted through it, after ``cpu()`` when they have one. Sets and
+    dicts, at any depth of nested lists, are refused with a TypeError naming ``call`` and
+    ``name``."""
     if not isinstance(value, np.ndarray) and callable(getattr(value, "numpy", None)):
         if callable(getattr(value, "cpu", None)):
             value = value.cpu()
         value = value.numpy()
-    return np.asarray(value)
+    if _holds_unordered(value):
+        raise TypeError(
+            f"{call}: {name} must be an array or a list of numbers, not a "
+            f"{type(_holds_unordered(value)).__name__} (its order is arbitrary)"
+        )
+    try:
+        return np.asarray(value)
+    except MemoryError:
+        raise MemoryError(f"{call}: {name} is too large to convert to an array") from None
+
+
+def _holds_unordered(value: Any, depth: int = 0) -> Any:
+    """The first set or dict in ``value`` or its nested lists and tuples (not arrays), or
+    None."""
+    if isinstance(value, _UNORDERED):
+        return value
+    if isinstance(value, (list, tuple)) and depth < 4:
+        for item in value[:64] if len(value) > 64 else value:
+            found = _holds_unordered(item, depth + 1)
+            if found is not None:
+                return found
+    return None
 
 
 #: Values converted between two chances for Ctrl-C to stop a conversion: about 10 ms.
@@ -65,16 +95,25 @@ def _copy(dst: np.ndarray, src: np.ndarray) -> None:
             dst[i : i + step] = src[i : i + step]
 
 
-def _rows(value: Any, width: int, name: str) -> Tuple[np.ndarray, Tuple[int, ...]]:
+def _rows(value: Any, width: int, call: str, name: str) -> Tuple[np.ndarray, Tuple[int, ...]]:
     """A (..., width) array of reals as C-contiguous float32 rows, and its leading shape."""
-    array = _numpy(value)
+    array = _numpy(value, call, name)
     if array.dtype.kind not in "fiu":
-        raise TypeError(f"{name} must be an array of real numbers, not dtype {array.dtype}")
+        raise TypeError(
+            f"{call}: {name} must be an array of real numbers, not dtype {array.dtype}"
+        )
     if array.ndim == 0 or array.shape[-1] != width:
-        raise ValueError(f"{name} must have shape (..., {width}), not {array.shape}")
+        raise ValueError(f"{call}: {name} must have shape (..., {width}), not {array.shape}")
     lead = array.shape[:-1]
     if array.dtype != np.float32 or not array.flags.c_contiguous:
-        converted = np.empty(array.shape, np.float32)
+        try:
+            converted = np.empty(array.shape, np.float32)
+        except MemoryError:
+            gib = array.size * 4 / 2**30
+            raise MemoryError(
+                f"{call}: {name} needs {gib:.1f} GiB as float32, more memory than this "
+                "process can have"
+            ) from None
         _copy(converted, array)
         array = converted
     return array.reshape(-1, width), lead
@@ -86,10 +125,26 @@ def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, T
     return {k: tensor(v.reshape(lead + v.shape[1:])) for k, v in result.items()}
 
 
-def _threads(nthreads: int) -> int:
-    if not isinstance(nthreads, (int, np.integer)) or nthreads < 0:
-        raise ValueError(f"nthreads must be a non-negative integer, not {nthreads!r}")
-    return int(nthreads)
+def _integer(value: Any, call: str, name: str, low: int, high: int) -> int:
+    """``value`` as an int from ``low`` to ``high``: a TypeError for what is not an integer
+    (a float is not truncated), a ValueError naming ``call`` and ``name`` out of range (never
+    the bare OverflowError of a conversion to a fixed-width integer)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{call}: {name} must be an integer, not {value!r}")
+    if not low <= value <= high:
+        raise ValueError(f"{call}: {name} must be from {low} to {high}, not {value}")
+    return int(value)
+
+
+def _threads(nthreads: Any, call: str) -> int:
+    return _integer(nthreads, call, "nthreads", 0, _core.MAX_THREADS)
+
+
+def _samples(nsamples: Any, call: str) -> int:
+    n = _integer(nsamples, call, "nsamples", 1, 255)
+    if n % 2 == 0:
+        raise ValueError(f"{call}: nsamples must be odd (a majority vote), not {n}")
+    return n
 
 
 class RaycastingScene:
@@ -111,7 +166,7 @@ class RaycastingScene:
     INVALID_ID: int = _core.INVALID_ID
 
     def __init__(self, nthreads: int = 0) -> None:
-        self._core = _core.CoreRaycastingScene(_threads(nthreads))
+        self._core = _core.CoreRaycastingScene(_threads(nthreads, "RaycastingScene"))
 
     @classmethod
     def _wrap(cls, core: "_core.CoreRaycastingScene") -> "RaycastingScene":
@@ -142,15 +197,20 @@ class RaycastingScene:
                     "add_triangles takes (vertex_positions, triangle_indices) or an "
                     "open3d.t.geometry.TriangleMesh"
                 ) from None
-        vertices, _ = _rows(vertex_positions, 3, "vertex_positions")
-        indices = _numpy(triangle_indices)
+        call = "add_triangles"
+        vertices, _ = _rows(vertex_positions, 3, call, "vertex_positions")
+        indices = _numpy(triangle_indices, call, "triangle_indices")
         if indices.dtype.kind not in "iu":
-            raise TypeError(f"triangle_indices must be integers, not dtype {indices.dtype}")
+            raise TypeError(
+                f"{call}: triangle_indices must be integers, not dtype {indices.dtype}"
+            )
         if indices.ndim != 2 or indices.shape[1] != 3:
-            raise ValueError(f"triangle_indices must have shape (M, 3), not {indices.shape}")
+            raise ValueError(
+                f"{call}: triangle_indices must have shape (M, 3), not {indices.shape}"
+            )
         if indices.size and (indices.min() < 0 or indices.max() > INVALID_ID):
             raise ValueError(
-                f"triangle_indices must be in [0, {len(vertices)}), "
+                f"{call}: triangle_indices must be in [0, {len(vertices)}), "
                 f"not from {indices.min()} to {indices.max()}"
             )
         indices = np.ascontiguousarray(indices, dtype=np.uint32)
@@ -166,25 +226,29 @@ class RaycastingScene:
 
         Rays shaped (height, width, 6), as ``create_rays_pinhole`` makes them, are traced as
         an image: square packets of neighbouring rays, the same results, faster."""
-        r, lead = _rows(rays, 6, "rays")
+        call = "cast_rays"
+        r, lead = _rows(rays, 6, call, "rays")
         row_length = lead[-1] if len(lead) >= 2 else 0
-        return _shaped(self._core.cast_rays(r, _threads(nthreads), row_length), lead)
+        return _shaped(self._core.cast_rays(r, _threads(nthreads, call), row_length), lead)
 
     def test_occlusions(
         self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0
     ) -> Tensor:
         """Whether each ray meets a triangle with ``tnear <= t <= tfar``: a (...) bool
         array."""
-        r, lead = _rows(rays, 6, "rays")
-        hit = self._core.test_occlusions(r, float(tnear), float(tfar), _threads(nthreads))
+        call = "test_occlusions"
+        r, lead = _rows(rays, 6, call, "rays")
+        near, far = _real(tnear, call, "tnear"), _real(tfar, call, "tfar")
+        hit = self._core.test_occlusions(r, near, far, _threads(nthreads, call))
         return tensor(hit.reshape(lead))
 
     def count_intersections(self, rays: Any, nthreads: int = 0) -> Tensor:
         """How many times each ray crosses the surface (t >= 0): a (...) int32 array. A ray
         through an edge shared by two triangles, or through a vertex, crosses once; from
         outside a closed mesh the count is even."""
-        r, lead = _rows(rays, 6, "rays")
-        return tensor(self._core.count_intersections(r, _threads(nthreads)).reshape(lead))
+        call = "count_intersections"
+        r, lead = _rows(rays, 6, call, "rays")
+        return tensor(self._core.count_intersections(r, _threads(nthreads, call)).reshape(lead))
 
     def list_intersections(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """Every crossing of every ray, as ``count_intersections`` counts them, sorted by t
@@ -192,30 +256,35 @@ class RaycastingScene:
         ray i are ``ray_splits[i]:ray_splits[i + 1]``, rays numbered in C order of the
         leading shape), and per hit ``ray_ids``, ``t_hit``, ``geometry_ids``,
         ``primitive_ids`` and ``primitive_uvs`` (k, 2)."""
-        r, _ = _rows(rays, 6, "rays")
-        listed = self._core.list_intersections(r, _threads(nthreads))
+        call = "list_intersections"
+        r, _ = _rows(rays, 6, call, "rays")
+        listed = self._core.list_intersections(r, _threads(nthreads, call))
         return {k: tensor(v) for k, v in listed.items()}
 
     def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """The closest surface point of each query point: a dict of ``points`` (..., 3),
         ``geometry_ids``, ``primitive_ids`` (...) uint32, ``primitive_uvs`` (..., 2) and
         ``primitive_normals`` (..., 3). An empty scene gives NaN points and INVALID_ID."""
-        p, lead = _rows(query_points, 3, "query_points")
-        return _shaped(self._core.compute_closest_points(p, _threads(nthreads)), lead)
+        call = "compute_closest_points"
+        p, lead = _rows(query_points, 3, call, "query_points")
+        return _shaped(self._core.compute_closest_points(p, _threads(nthreads, call)), lead)
 
     def compute_distance(self, query_points: Any, nthreads: int = 0) -> Tensor:
         """The distance of each query point to the surface: (...) float32 (inf for an empty
         scene)."""
-        p, lead = _rows(query_points, 3, "query_points")
-        return tensor(self._core.compute_distance(p, _threads(nthreads)).reshape(lead))
+        call = "compute_distance"
+        p, lead = _rows(query_points, 3, call, "query_points")
+        return tensor(self._core.compute_distance(p, _threads(nthreads, call)).reshape(lead))
 
     def compute_signed_distance(
         self, query_points: Any, nthreads: int = 0, nsamples: int = 1
     ) -> Tensor:
         """The distance to the surface, negative inside (as ``compute_occupancy`` decides,
         with ``nsamples`` rays): (...) float32. Meaningful for closed meshes."""
-        p, lead = _rows(query_points, 3, "query_points")
-        d = self._core.compute_signed_distance(p, _threads(nthreads), int(nsamples))
+        call = "compute_signed_distance"
+        p, lead = _rows(query_points, 3, call, "query_points")
+        n = _samples(nsamples, call)
+        d = self._core.compute_signed_distance(p, _threads(nthreads, call), n)
         return tensor(d.reshape(lead))
 
     def compute_occupancy(
@@ -225,8 +294,10 @@ class RaycastingScene:
         A point is inside when most of ``nsamples`` (odd) rays from it cross the surface an
         odd number of times; crossings are counted exactly, so 1 is enough for a closed
         mesh."""
-        p, lead = _rows(query_points, 3, "query_points")
-        occ = self._core.compute_occupancy(p, _threads(nthreads), int(nsamples))
+        call = "compute_occupancy"
+        p, lead = _rows(query_points, 3, call, "query_points")
+        n = _samples(nsamples, call)
+        occ = self._core.compute_occupancy(p, _threads(nthreads, call), n)
         return tensor(occ.reshape(lead))
 
     @staticmethod
@@ -262,23 +333,44 @@ def _pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
     missing = [n for n in names if n not in bound]
     if missing:
         raise TypeError(f"create_rays_pinhole: missing arguments {missing}")
-    w, h = _size(bound["width_px"], "width_px"), _size(bound["height_px"], "height_px")
+    call = "create_rays_pinhole"
+    w = _integer(bound["width_px"], call, "width_px", 0, _MAX_SIDE)
+    h = _integer(bound["height_px"], call, "height_px", 0, _MAX_SIDE)
     if use_fov:
         vec = [_vector(bound[n], (3,), n) for n in ("center", "eye", "up")]
-        return _core.create_rays_pinhole_fov(float(bound["fov_deg"]), *vec, w, h)
+        fov = _real(bound["fov_deg"], call, "fov_deg")
+        return _core.create_rays_pinhole_fov(fov, *vec, w, h)
     k = _vector(bound["intrinsic_matrix"], (3, 3), "intrinsic_matrix")
     e = _vector(bound["extrinsic_matrix"], (4, 4), "extrinsic_matrix")
     return _core.create_rays_pinhole(k, e, w, h)
 
 
+#: The largest width_px or height_px: a 32-bit count.
+_MAX_SIDE = 2**32 - 1
+
+
 def _vector(value: Any, shape: Tuple[int, ...], name: str) -> Any:
-    array = _numpy(value).astype(np.float64)
+    call = "create_rays_pinhole"
+    array = _numpy(value, call, name)
+    if array.dtype.kind not in "fiu":
+        raise TypeError(
+            f"{call}: {name} must be an array of real numbers, not dtype {array.dtype}"
+        )
     if array.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, not {array.shape}")
-    return array.tolist()
+        raise ValueError(f"{call}: {name} must have shape {shape}, not {array.shape}")
+    return array.astype(np.float64).tolist()
 
 
-def _size(value: Any, name: str) -> int:
-    if not isinstance(value, (int, np.integer)) or value < 0:
-        raise ValueError(f"{name} must be a non-negative integer, not {value!r}")
-    return int(value)
+def _real(value: Any, call: str, name: str) -> float:
+    """``value`` as a float: a TypeError naming ``call`` and ``name`` for what is not a real
+    number (a string, a set...)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        raise TypeError(f"{call}: {name} must be a real number, not {value!r}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{call}: {name} is too large for a float: {value}") from None

@@ -3,39 +3,97 @@
 //! C-contiguous float32 rows (`penumbra.RaycastingScene` reshapes and converts them) and go
 //! out as numpy arrays in dicts keyed as Open3D's results.
 
+use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
+
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{Element, IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
-use penumbra::{QueryOptions, RaycastingScene, World};
-use pyo3::exceptions::PyValueError;
+use penumbra::{QueryOptions, RaycastError, RaycastingScene, World};
+use pyo3::exceptions::{PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::raycast_error;
-use crate::interrupt::interruptible;
+use crate::interrupt::{interruptible, POLL};
 
 /// Triangle meshes to cast rays against; see `penumbra.RaycastingScene`.
-#[pyclass(module = "penumbra._core")]
+///
+/// Frozen, the scene behind a lock: a query holds it shared while it runs with the GIL
+/// released, and `add_triangles` from another thread meanwhile waits for the queries to end
+/// (Ctrl-C still stops the wait) rather than failing with PyO3's "Already borrowed".
+#[pyclass(module = "penumbra._core", frozen)]
 pub struct CoreRaycastingScene {
-    scene: RaycastingScene,
+    scene: RwLock<RaycastingScene>,
     /// Worker threads of a query whose own `nthreads` is 0 (0: one per core).
     threads: usize,
+}
+
+/// The argument a ray-casting error is about, as the Python API names it.
+fn argument(e: &RaycastError) -> Option<&'static str> {
+    Some(match e {
+        RaycastError::IndexOutOfRange { .. } => "triangle_indices",
+        RaycastError::NotFinite { .. } | RaycastError::Beyond { what: "vertex", .. } => {
+            "vertex_positions"
+        }
+        RaycastError::Beyond { what: "ray", .. } => "rays",
+        RaycastError::Beyond { .. } => "query_points",
+        RaycastError::InvalidSamples(_) => "nsamples",
+        _ => return None,
+    })
+}
+
+/// A ray-casting error of the call `call` as Python sees it, its message naming the call and
+/// the argument: `MemoryError` for a result too large, `OSError` for threads that cannot
+/// start, `KeyboardInterrupt` for a cancelled query, else `ValueError`.
+pub(crate) fn call_error(call: &str, e: RaycastError) -> PyErr {
+    let message = match argument(&e) {
+        Some(arg) => format!("{call}: {arg}: {e}"),
+        None => format!("{call}: {e}"),
+    };
+    match e {
+        RaycastError::OutOfMemory { .. } => PyMemoryError::new_err(message),
+        RaycastError::Threads(_) => PyOSError::new_err(message),
+        RaycastError::Cancelled => raycast_error(e),
+        _ => PyValueError::new_err(message),
+    }
 }
 
 impl CoreRaycastingScene {
     /// The triangles of a built world, geometry id = object index.
     pub fn from_world(world: &World) -> CoreRaycastingScene {
         CoreRaycastingScene {
-            scene: RaycastingScene::from_world(world),
+            scene: RwLock::new(RaycastingScene::from_world(world)),
             threads: 0,
         }
     }
 
-    /// Runs `query` on the scene with the GIL released and the thread count of the call.
+    /// The scene, shared with other queries.
+    fn read(&self) -> RwLockReadGuard<'_, RaycastingScene> {
+        self.scene.read().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The scene alone, once the queries running from other threads are done: waited for
+    /// without the GIL, checking for signals every [`POLL`].
+    fn write(&self, py: Python<'_>) -> PyResult<RwLockWriteGuard<'_, RaycastingScene>> {
+        loop {
+            match self.scene.try_write() {
+                Ok(scene) => return Ok(scene),
+                Err(TryLockError::Poisoned(e)) => return Ok(e.into_inner()),
+                Err(TryLockError::WouldBlock) => {
+                    py.detach(|| std::thread::sleep(POLL));
+                    py.check_signals()?;
+                }
+            }
+        }
+    }
+
+    /// Runs `query` (the call `call`) on the scene with the GIL released and the thread count
+    /// of the call.
     fn query<T: Send>(
         &self,
         py: Python<'_>,
+        call: &str,
         nthreads: usize,
-        query: impl FnOnce(&RaycastingScene, &QueryOptions) -> Result<T, penumbra::RaycastError> + Send,
+        query: impl FnOnce(&RaycastingScene, &QueryOptions) -> Result<T, RaycastError> + Send,
     ) -> PyResult<T> {
         let threads = if nthreads == 0 {
             self.threads
@@ -44,7 +102,7 @@ impl CoreRaycastingScene {
         };
         if threads > penumbra::MAX_THREADS {
             return Err(PyValueError::new_err(format!(
-                "nthreads must be from 0 to {}, not {threads}",
+                "{call}: nthreads must be from 0 to {}, not {threads}",
                 penumbra::MAX_THREADS
             )));
         }
@@ -54,9 +112,10 @@ impl CoreRaycastingScene {
                 threads,
                 cancel: Some(cancel),
             };
-            query(scene, &options)
+            let scene = scene.read().unwrap_or_else(|e| e.into_inner());
+            query(&scene, &options)
         })?
-        .map_err(raycast_error)
+        .map_err(|e| call_error(call, e))
     }
 }
 
@@ -108,32 +167,36 @@ impl CoreRaycastingScene {
     #[pyo3(signature = (nthreads = 0))]
     fn new(nthreads: usize) -> Self {
         CoreRaycastingScene {
-            scene: RaycastingScene::new(),
+            scene: RwLock::new(RaycastingScene::new()),
             threads: nthreads,
         }
     }
 
     /// Adds an (N, 3) float32 vertex array and an (M, 3) uint32 index array; returns the id.
     fn add_triangles(
-        &mut self,
+        &self,
+        py: Python<'_>,
         vertices: PyReadonlyArray2<'_, f32>,
         triangles: PyReadonlyArray2<'_, u32>,
     ) -> PyResult<u32> {
-        let v = rows::<f32, 3>(&vertices, "vertices")?;
-        let t = rows::<u32, 3>(&triangles, "triangles")?;
-        self.scene.add_triangles(v, t).map_err(raycast_error)
+        let v = rows::<f32, 3>(&vertices, "vertex_positions")?;
+        let t = rows::<u32, 3>(&triangles, "triangle_indices")?;
+        let mut scene = self.write(py)?;
+        scene
+            .add_triangles(v, t)
+            .map_err(|e| call_error("add_triangles", e))
     }
 
     /// Number of geometries added.
     #[getter]
     fn geometry_count(&self) -> u32 {
-        self.scene.geometry_count()
+        self.read().geometry_count()
     }
 
     /// Number of triangles of all geometries.
     #[getter]
     fn triangle_count(&self) -> usize {
-        self.scene.triangle_count()
+        self.read().triangle_count()
     }
 
     /// Closest hits of (n, 6) rays; `row_length` > 0 when they are the rows of an image,
@@ -147,7 +210,9 @@ impl CoreRaycastingScene {
         row_length: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
-        let hits = self.query(py, nthreads, |s, o| s.cast_rays_rows(rays, row_length, o))?;
+        let hits = self.query(py, "cast_rays", nthreads, |s, o| {
+            s.cast_rays_rows(rays, row_length, o)
+        })?;
         let d = PyDict::new(py);
         d.set_item("t_hit", vec1(py, hits.t_hit))?;
         d.set_item("geometry_ids", vec1(py, hits.geometry_ids))?;
@@ -167,7 +232,9 @@ impl CoreRaycastingScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
-        let hit = self.query(py, nthreads, |s, o| s.test_occlusions(rays, tnear, tfar, o))?;
+        let hit = self.query(py, "test_occlusions", nthreads, |s, o| {
+            s.test_occlusions(rays, tnear, tfar, o)
+        })?;
         Ok(vec1(py, hit))
     }
 
@@ -179,7 +246,9 @@ impl CoreRaycastingScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
-        let counts = self.query(py, nthreads, |s, o| s.count_intersections(rays, o))?;
+        let counts = self.query(py, "count_intersections", nthreads, |s, o| {
+            s.count_intersections(rays, o)
+        })?;
         Ok(vec1(py, counts))
     }
 
@@ -191,7 +260,9 @@ impl CoreRaycastingScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
-        let all = self.query(py, nthreads, |s, o| s.list_intersections(rays, o))?;
+        let all = self.query(py, "list_intersections", nthreads, |s, o| {
+            s.list_intersections(rays, o)
+        })?;
         let d = PyDict::new(py);
         d.set_item("ray_splits", vec1(py, all.ray_splits))?;
         d.set_item("ray_ids", vec1(py, all.ray_ids))?;
@@ -210,7 +281,9 @@ impl CoreRaycastingScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let points = rows::<f32, 3>(&points, "query_points")?;
-        let near = self.query(py, nthreads, |s, o| s.compute_closest_points(points, o))?;
+        let near = self.query(py, "compute_closest_points", nthreads, |s, o| {
+            s.compute_closest_points(points, o)
+        })?;
         let d = PyDict::new(py);
         d.set_item("points", vec2(py, near.points)?)?;
         d.set_item("geometry_ids", vec1(py, near.geometry_ids))?;
@@ -228,7 +301,9 @@ impl CoreRaycastingScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let points = rows::<f32, 3>(&points, "query_points")?;
-        let d = self.query(py, nthreads, |s, o| s.compute_distance(points, o))?;
+        let d = self.query(py, "compute_distance", nthreads, |s, o| {
+            s.compute_distance(points, o)
+        })?;
         Ok(vec1(py, d))
     }
 
@@ -241,7 +316,7 @@ impl CoreRaycastingScene {
         nsamples: u32,
     ) -> PyResult<Bound<'py, PyAny>> {
         let points = rows::<f32, 3>(&points, "query_points")?;
-        let d = self.query(py, nthreads, |s, o| {
+        let d = self.query(py, "compute_signed_distance", nthreads, |s, o| {
             s.compute_signed_distance(points, nsamples, o)
         })?;
         Ok(vec1(py, d))
@@ -256,7 +331,7 @@ impl CoreRaycastingScene {
         nsamples: u32,
     ) -> PyResult<Bound<'py, PyAny>> {
         let points = rows::<f32, 3>(&points, "query_points")?;
-        let d = self.query(py, nthreads, |s, o| {
+        let d = self.query(py, "compute_occupancy", nthreads, |s, o| {
             s.compute_occupancy(points, nsamples, o)
         })?;
         Ok(vec1(py, d))
@@ -274,7 +349,7 @@ pub fn create_rays_pinhole(
 ) -> PyResult<Bound<'_, PyAny>> {
     let rays = py
         .detach(|| penumbra::create_rays_pinhole(intrinsic, extrinsic, width, height))
-        .map_err(raycast_error)?;
+        .map_err(|e| call_error("create_rays_pinhole", e))?;
     ray_image(py, rays, width, height)
 }
 
@@ -291,6 +366,6 @@ pub fn create_rays_pinhole_fov(
 ) -> PyResult<Bound<'_, PyAny>> {
     let rays = py
         .detach(|| penumbra::create_rays_pinhole_fov(fov_deg, center, eye, up, width, height))
-        .map_err(raycast_error)?;
+        .map_err(|e| call_error("create_rays_pinhole", e))?;
     ray_image(py, rays, width, height)
 }
