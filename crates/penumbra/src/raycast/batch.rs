@@ -8,6 +8,7 @@
 
 use glam::Vec3;
 
+use super::boundary::Boundary;
 use super::run::{grow, QueryOptions};
 use super::traverse::{Accel, SlotHit, Stack};
 use super::watertight::PreparedRay;
@@ -60,6 +61,8 @@ impl Kernel for Occlusions<'_> {
 /// to `out` (left alone for a ray that hits nothing).
 pub(crate) struct Counts<'a> {
     pub accel: &'a Accel,
+    /// [`Accel::border`].
+    pub border: &'a [Boundary],
     /// Checked every [`CHECK`] rays.
     pub options: &'a QueryOptions<'a>,
     pub rays: &'a [[f32; 6]],
@@ -80,7 +83,8 @@ impl Kernel for Counts<'_> {
                 if let Some(r) = prepare(ray) {
                     let mut n = 0i32;
                     let tally = &mut |_| n = n.saturating_add(1);
-                    self.accel.each_hit::<I>(&r, 0.0, &mut stack, tally);
+                    self.accel
+                        .each_hit::<I>(&r, 0.0, self.border, &mut stack, tally);
                     *count = n;
                 }
             }
@@ -93,6 +97,8 @@ impl Kernel for Counts<'_> {
 /// query is cancelled (checked before each ray) or the hits do not fit in memory.
 pub(crate) struct Listing<'a> {
     pub accel: &'a Accel,
+    /// [`Accel::border`].
+    pub border: &'a [Boundary],
     pub rays: &'a [[f32; 6]],
     pub options: &'a QueryOptions<'a>,
 }
@@ -116,15 +122,16 @@ impl Kernel for Listing<'_> {
             one.clear();
             let mut full = Ok(());
             if let Some(r) = prepare(ray) {
-                self.accel.each_hit::<I>(&r, 0.0, &mut stack, &mut |h| {
-                    // A ray may cross millions of triangles: grown fallibly.
-                    if full.is_ok() {
-                        full = grow(&mut one, 1, what);
-                    }
-                    if full.is_ok() {
-                        one.push(h);
-                    }
-                });
+                self.accel
+                    .each_hit::<I>(&r, 0.0, self.border, &mut stack, &mut |h| {
+                        // A ray may cross millions of triangles: grown fallibly.
+                        if full.is_ok() {
+                            full = grow(&mut one, 1, what);
+                        }
+                        if full.is_ok() {
+                            one.push(h);
+                        }
+                    });
             }
             full?;
             one.sort_by(|a: &SlotHit, b: &SlotHit| {

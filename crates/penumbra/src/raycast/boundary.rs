@@ -13,7 +13,8 @@
 //! Edges and vertices are matched by their exact coordinates, not by index, as the
 //! watertight test matches them: two triangles that share corner positions share the edge,
 //! whichever geometry or vertex array they come from. Degenerate triangles (zero area, which
-//! rays never hit) take no part.
+//! rays never hit) take no part. The scene makes this on its first counting query (the
+//! closest-hit and occlusion queries need none of it).
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -56,33 +57,67 @@ fn degenerate(c: &Corners) -> bool {
     (b - a).cross(c - a) == DVec3::ZERO
 }
 
+/// Edges from which the sort runs on the pool.
+const PARALLEL_SORT: usize = 1 << 18;
+
+/// The corners of edge `k` of `c` (opposite corner `k`) as exact keys, in order.
+fn edge_key(c: &Corners, k: usize) -> (Key, Key) {
+    let (p, q) = (key(c[(k + 1) % 3]), key(c[(k + 2) % 3]));
+    (p.min(q), p.max(q))
+}
+
+/// A 64-bit mix of an edge's keys: sorting these (16-byte entries, one integer compare)
+/// costs half what sorting the keys themselves did.
+fn edge_hash((p, q): (Key, Key)) -> u64 {
+    p.iter().chain(&q).fold(0x9e37_79b9_7f4a_7c15u64, |h, &x| {
+        (h ^ x as u64)
+            .wrapping_mul(0x0100_0000_01b3)
+            .rotate_left(29)
+    })
+}
+
 /// The [`Boundary`] of each triangle of `tris` (in that order; a vertex of the boundary is
 /// owned by its first triangle in this order), sorting the edges on `pool`.
 pub(crate) fn boundaries(tris: &[Corners], pool: Option<&rayon::ThreadPool>) -> Vec<Boundary> {
-    // Every edge of every proper triangle as (its two corners in order, triangle, edge).
-    let mut edges: Vec<(Key, Key, u32, u8)> = tris
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| !degenerate(c))
-        .flat_map(|(i, c)| {
-            (0..3u8).map(move |k| {
-                let (p, q) = (key(c[(k as usize + 1) % 3]), key(c[(k as usize + 2) % 3]));
-                (p.min(q), p.max(q), i as u32, k)
-            })
-        })
+    let proper: Vec<bool> = tris.iter().map(|c| !degenerate(c)).collect();
+    // Every edge of every proper triangle as (hash, 3·triangle + edge).
+    let mut edges: Vec<(u64, u32)> = (0..tris.len())
+        .filter(|&i| proper[i])
+        .flat_map(|i| (0..3).map(move |k| (i, k)))
+        .map(|(i, k)| (edge_hash(edge_key(&tris[i], k)), (3 * i + k) as u32))
         .collect();
-    let sort = |e: &mut Vec<(Key, Key, u32, u8)>| e.par_sort_unstable();
     match pool {
-        Some(pool) => pool.install(|| sort(&mut edges)),
-        None => sort(&mut edges),
+        Some(pool) if edges.len() >= PARALLEL_SORT => pool.install(|| edges.par_sort_unstable()),
+        _ => edges.sort_unstable(),
     }
+    let exact = |e: u32| edge_key(&tris[e as usize / 3], e as usize % 3);
     let mut out = vec![Boundary::default(); tris.len()];
-    // Vertices of the boundary, each with the first triangle that has it.
+    // Vertices of the boundary.
     let mut vertices: Vec<Key> = Vec::new();
-    for run in edges.chunk_by(|a, b| (a.0, a.1) == (b.0, b.1)) {
-        if let [(p, q, i, k)] = run {
-            out[*i as usize].0 |= 1 << k;
-            vertices.extend([*p, *q]);
+    let mut alone = |e: u32, key: (Key, Key)| {
+        out[e as usize / 3].0 |= 1 << (e % 3);
+        vertices.extend([key.0, key.1]);
+    };
+    for run in edges.chunk_by(|a, b| a.0 == b.0) {
+        match run {
+            [(_, e)] => alone(*e, exact(*e)),
+            // Two triangles of one edge, unless their hashes collide.
+            [(_, e), (_, f)] => {
+                let (a, b) = (exact(*e), exact(*f));
+                if a != b {
+                    alone(*e, a);
+                    alone(*f, b);
+                }
+            }
+            // Within a longer run, each edge alone with its exact key is on the boundary.
+            _ => {
+                for &(_, e) in run {
+                    let key = exact(e);
+                    if run.iter().filter(|&&(_, f)| exact(f) == key).count() == 1 {
+                        alone(e, key);
+                    }
+                }
+            }
         }
     }
     vertices.sort_unstable();
@@ -91,7 +126,7 @@ pub(crate) fn boundaries(tris: &[Corners], pool: Option<&rayon::ThreadPool>) -> 
         return out;
     }
     let mut owner: Vec<Option<u32>> = vec![None; vertices.len()];
-    for (i, c) in tris.iter().enumerate().filter(|(_, c)| !degenerate(c)) {
+    for (i, c) in tris.iter().enumerate().filter(|&(i, _)| proper[i]) {
         for (corner, p) in c.iter().enumerate() {
             let Ok(v) = vertices.binary_search(&key(*p)) else {
                 continue;

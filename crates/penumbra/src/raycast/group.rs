@@ -37,9 +37,6 @@ pub(crate) struct TriangleGroup {
     /// is done, from a group still in the caches: read from a separate array indexed by
     /// slot, they were a cache miss at the end of each incoherent ray.
     ids: [[u32; 2]; GROUP],
-    /// Each lane's part of the surface's border, for the one-triangle test of a lane on an
-    /// edge (it fits in the padding of the sixth cache line).
-    boundary: [Boundary; GROUP],
 }
 
 /// What a group test finds: the lanes hit (bit `i` for lane `i`) and each lane's crossing
@@ -65,17 +62,15 @@ impl GroupHits {
 
 impl TriangleGroup {
     /// The group of leaf slots `first .. first + count` (`1 <= count <= 8`) of `tris`, whose
-    /// geometry and primitive ids are `ids` and parts of the border `boundary`.
+    /// geometry and primitive ids are `ids`.
     pub fn new(
         tris: &[SoaTriangle],
         ids: &[[u32; 2]],
-        boundary: &[Boundary],
         first: usize,
         count: usize,
     ) -> TriangleGroup {
         let mut v = [[[0.0; GROUP]; 3]; 3];
         let ids = std::array::from_fn(|lane| ids[first + lane.min(count - 1)]);
-        let boundary = std::array::from_fn(|lane| boundary[first + lane.min(count - 1)]);
         for lane in 0..GROUP {
             let corners = tris[first + lane.min(count - 1)].corners();
             for (corner, c) in corners.iter().enumerate() {
@@ -88,7 +83,6 @@ impl TriangleGroup {
             v,
             first: first as u32,
             ids,
-            boundary,
         }
     }
 
@@ -106,8 +100,9 @@ impl TriangleGroup {
 }
 
 impl PreparedRay {
-    /// [`PreparedRay::hit`] on the lanes `valid` of `group` (whose triangles are `tris`,
-    /// indexed by leaf slot).
+    /// [`PreparedRay::hit`] on the lanes `valid` of `group` (whose triangles are `tris` and
+    /// parts of the surface's border `border`, indexed by leaf slot; `border` may be empty
+    /// for [`EdgeRule::Inclusive`]).
     #[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
     #[inline(always)]
     pub fn hit_group<I: Isa>(
@@ -115,6 +110,7 @@ impl PreparedRay {
         group: &TriangleGroup,
         valid: u32,
         tris: &[SoaTriangle],
+        border: &[Boundary],
         t_min: f32,
         t_max: f32,
         rule: EdgeRule,
@@ -171,7 +167,8 @@ impl PreparedRay {
             let lane = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let slot = group.first as usize + lane;
-            if let Some(c) = self.hit(&tris[slot], group.boundary[lane], t_min, t_max, rule) {
+            let boundary = border.get(slot).copied().unwrap_or_default();
+            if let Some(c) = self.hit(&tris[slot], boundary, t_min, t_max, rule) {
                 hits.mask |= 1 << lane;
                 (hits.t[lane], hits.b1[lane], hits.b2[lane]) = (c.t, c.b1, c.b2);
             }
@@ -193,6 +190,7 @@ mod tests {
         group: &'a TriangleGroup,
         valid: u32,
         tris: &'a [SoaTriangle],
+        border: &'a [Boundary],
         rule: EdgeRule,
     }
 
@@ -206,9 +204,10 @@ mod tests {
                 group,
                 valid,
                 tris,
+                border,
                 rule,
             } = self;
-            ray.hit_group::<I>(group, valid, tris, 0.0, 10.0, rule)
+            ray.hit_group::<I>(group, valid, tris, border, 0.0, 10.0, rule)
         }
     }
 
@@ -249,7 +248,7 @@ mod tests {
                 for first in (0..tris.len()).step_by(3) {
                     let count = (tris.len() - first).min(GROUP);
                     let ids: Vec<[u32; 2]> = (0..tris.len() as u32).map(|i| [0, i]).collect();
-                    let group = TriangleGroup::new(&tris, &ids, &boundary, first, count);
+                    let group = TriangleGroup::new(&tris, &ids, first, count);
                     for lane in 0..count {
                         assert_eq!(group.ids(lane), [0, (first + lane) as u32]);
                     }
@@ -261,6 +260,7 @@ mod tests {
                             group,
                             valid,
                             tris,
+                            border: &boundary,
                             rule,
                         };
                         let got = dispatch(path, test);

@@ -343,7 +343,7 @@ fn leaf_by_lane<const N: usize, I: Isa>(
         let Some(ray) = &lanes.rays[i] else { continue };
         for (group, valid) in accel.leaf(index, count) {
             let rule = EdgeRule::Inclusive;
-            let hits = ray.hit_group::<I>(group, valid, accel.tris(), 0.0, best.t[i], rule);
+            let hits = ray.hit_group::<I>(group, valid, accel.tris(), &[], 0.0, best.t[i], rule);
             let mut lanes_hit = hits.mask;
             while lanes_hit != 0 {
                 let lane = lanes_hit.trailing_zeros() as usize;

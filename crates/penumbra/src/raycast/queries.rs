@@ -229,6 +229,7 @@ impl RaycastingScene {
         let accel = &*accel;
         let mut out = filled(&pool, options, rays.len(), 0i32)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
+        let border = accel.border(&pool);
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
@@ -236,6 +237,7 @@ impl RaycastingScene {
                 simd_path(),
                 Counts {
                     accel,
+                    border,
                     options,
                     rays,
                     out,
@@ -257,6 +259,7 @@ impl RaycastingScene {
     ) -> Result<Intersections, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
         let accel = &*accel;
+        let border = accel.border(&pool);
         let far = FarOrigins::new();
         // The first error (memory, cancel) stops the other chunks, and what they hold is
         // freed.
@@ -269,6 +272,7 @@ impl RaycastingScene {
                         simd_path(),
                         Listing {
                             accel,
+                            border,
                             rays,
                             options,
                         },

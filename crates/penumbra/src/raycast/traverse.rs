@@ -16,7 +16,9 @@
 
 use glam::Vec3A;
 
-use super::boundary::boundaries;
+use std::sync::OnceLock;
+
+use super::boundary::{boundaries, Boundary};
 use super::group::{TriangleGroup, GROUP};
 use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use super::wide::{collapse, WideNode, WIDTH};
@@ -75,6 +77,9 @@ pub(crate) struct Accel {
     /// `cast_rays` computed one per hit (from the hit's group, a square root and a division
     /// each: 4 % of coherent rays' time).
     normals: Vec<[f32; 3]>,
+    /// Each leaf slot's part of the surface's border, for the counting rule: made by the
+    /// first counting query ([`Accel::border`]), which the others do not need.
+    border: OnceLock<Vec<Boundary>>,
 }
 
 /// A hit of the closest-hit or every-hit traversal: where, and which triangle.
@@ -114,12 +119,6 @@ impl Accel {
             .iter()
             .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
             .collect();
-        // The border of the surface, its vertices owned by the first triangle added.
-        let corners: Vec<_> = (0..geometry.len())
-            .map(|i| geometry.corners(i).map(Vec3A::from))
-            .collect();
-        let by_triangle = boundaries(&corners, pool);
-        let boundary: Vec<_> = slots.iter().map(|&i| by_triangle[i as usize]).collect();
         // Each leaf's triangles as groups (one, at most eight triangles), the leaf child's
         // index its first group.
         let mut groups = Vec::new();
@@ -127,13 +126,7 @@ impl Accel {
             let index = groups.len() as u32;
             for start in (first..first + count).step_by(GROUP) {
                 let n = (first + count - start).min(GROUP as u32);
-                groups.push(TriangleGroup::new(
-                    &tris,
-                    &ids,
-                    &boundary,
-                    start as usize,
-                    n as usize,
-                ));
+                groups.push(TriangleGroup::new(&tris, &ids, start as usize, n as usize));
             }
             index
         });
@@ -144,6 +137,7 @@ impl Accel {
             tris,
             ids,
             normals,
+            border: OnceLock::new(),
         }
     }
 
@@ -162,6 +156,21 @@ impl Accel {
     #[inline(always)]
     pub fn normal(&self, slot: u32) -> [f32; 3] {
         self.normals[slot as usize]
+    }
+
+    /// Each leaf slot's part of the surface's border (a vertex of the border owned by its
+    /// first triangle added), made on first use, sorting the edges on `pool`.
+    pub fn border(&self, pool: &rayon::ThreadPool) -> &[Boundary] {
+        self.border.get_or_init(|| {
+            let slots = self.bvh.prim_ids();
+            // The corners by triangle, in the order they were added.
+            let mut corners = vec![[Vec3A::ZERO; 3]; slots.len()];
+            for (slot, &i) in slots.iter().enumerate() {
+                corners[i as usize] = self.tris[slot].corners();
+            }
+            let by_triangle = boundaries(&corners, Some(pool));
+            slots.iter().map(|&i| by_triangle[i as usize]).collect()
+        })
     }
 
     /// The binary tree.
@@ -250,7 +259,7 @@ impl Accel {
             }
             for (group, valid) in self.leaf(first, count) {
                 let rule = EdgeRule::Inclusive;
-                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
+                let hits = ray.hit_group::<I>(group, valid, &self.tris, &[], t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
@@ -322,20 +331,20 @@ impl Accel {
     }
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
-    /// per crossing of the surface), in traversal order.
+    /// per crossing of the surface), in traversal order; `border` is [`Accel::border`].
     #[inline(always)]
     pub fn each_hit<I: Isa>(
         &self,
         ray: &PreparedRay,
         t_min: f32,
+        border: &[Boundary],
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
         self.visit::<I>(
             ray,
-            t_min,
-            f32::INFINITY,
-            EdgeRule::Owned,
+            (t_min, f32::INFINITY),
+            (EdgeRule::Owned, border),
             stack,
             &mut |h| {
                 f(h);
@@ -344,14 +353,14 @@ impl Accel {
         );
     }
 
-    /// Visits the hits with `t` in `[t_min, t_max]` under `rule` until `f` returns false.
+    /// Visits the hits with `t` in `[t_min, t_max]` under `rule` (with the border of
+    /// [`Accel::border`] for [`EdgeRule::Owned`]) until `f` returns false.
     #[inline(always)]
     fn visit<I: Isa>(
         &self,
         ray: &PreparedRay,
-        t_min: f32,
-        t_max: f32,
-        rule: EdgeRule,
+        (t_min, t_max): (f32, f32),
+        (rule, border): (EdgeRule, &[Boundary]),
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit) -> bool,
     ) {
@@ -365,7 +374,8 @@ impl Accel {
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {
-                let hits = ray.hit_group::<I>(group, valid, &self.tris, t_min, t_max, rule);
+                let tris = &self.tris;
+                let hits = ray.hit_group::<I>(group, valid, tris, border, t_min, t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
