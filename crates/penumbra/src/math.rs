@@ -5,12 +5,20 @@ use glam::{Mat3, Mat4, Vec3};
 /// `v` normalized, or zero for a zero or non-finite `v`. A vector whose squared length
 /// overflows (|v| ≳ 1e19) or underflows (|v| ≲ 1e-19) is first scaled by its largest
 /// component; other vectors take the plain path, bit for bit, so the images of ordinary scenes
-/// do not change.
+/// do not change. The plain path is inlined (it runs once per camera hit); the rescaling is not.
+#[inline(always)]
 pub(crate) fn unit(v: Vec3) -> Vec3 {
     let n = v.normalize_or_zero();
     if n != Vec3::ZERO {
-        return n;
+        n
+    } else {
+        rescaled_unit(v)
     }
+}
+
+#[cold]
+#[inline(never)]
+fn rescaled_unit(v: Vec3) -> Vec3 {
     let largest = v.abs().max_element();
     if largest > 0.0 && largest.is_finite() {
         (v / largest).normalize_or_zero()
@@ -23,8 +31,20 @@ pub(crate) fn unit(v: Vec3) -> Vec3 {
 /// edges are parallel or not finite: edges 1e-15 long, or 1e20, still give the normal (they are
 /// scaled by their largest components first when the cross product would underflow or
 /// overflow).
+#[inline(always)]
 pub(crate) fn unit_cross(e1: Vec3, e2: Vec3) -> Vec3 {
-    let n = unit(e1.cross(e2));
+    let n = e1.cross(e2).normalize_or_zero();
+    if n != Vec3::ZERO {
+        n
+    } else {
+        rescaled_unit_cross(e1, e2)
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn rescaled_unit_cross(e1: Vec3, e2: Vec3) -> Vec3 {
+    let n = rescaled_unit(e1.cross(e2));
     if n != Vec3::ZERO {
         return n;
     }
