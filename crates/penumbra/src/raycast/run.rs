@@ -1,5 +1,7 @@
 //! How a batch query runs: on a pool of the scene's own (never rayon's global pool), in
-//! chunks of rays, with a cancel flag checked between chunks.
+//! chunks of rays, with a cancel flag checked between chunks (and by the kernels every few
+//! rays, see `batch`); results allocated fallibly within the memory the process may take;
+//! ray origins checked against the largest coordinate.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -31,8 +33,9 @@ pub struct QueryOptions<'a> {
     /// Worker threads: 0 for one per core this process may use. The work runs on a pool of
     /// the scene's own, kept between calls with the same count.
     pub threads: usize,
-    /// When set to true (from another thread, a signal handler…), the query stops within a
-    /// chunk of 1024 rays per thread and returns [`RaycastError::Cancelled`].
+    /// When set to true (from another thread, a signal handler…), the query stops within 8
+    /// rays per thread (or while it waits for the BVH's build) and returns
+    /// [`RaycastError::Cancelled`].
     pub cancel: Option<&'a AtomicBool>,
 }
 
