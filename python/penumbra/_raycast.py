@@ -30,7 +30,7 @@ from typing import Any, Dict, Tuple
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._tensor import Tensor, tensor
 
 #: The geometry and primitive id of a miss (Open3D's ``RaycastingScene.INVALID_ID``).
@@ -125,23 +125,13 @@ def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, T
     return {k: tensor(v.reshape(lead + v.shape[1:])) for k, v in result.items()}
 
 
-def _integer(value: Any, call: str, name: str, low: int, high: int) -> int:
-    """``value`` as an int from ``low`` to ``high``: a TypeError for what is not an integer
-    (a float is not truncated), a ValueError naming ``call`` and ``name`` out of range (never
-    the bare OverflowError of a conversion to a fixed-width integer)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{call}: {name} must be an integer, not {value!r}")
-    if not low <= value <= high:
-        raise ValueError(f"{call}: {name} must be from {low} to {high}, not {value}")
-    return int(value)
-
-
 def _threads(nthreads: Any, call: str) -> int:
-    return _integer(nthreads, call, "nthreads", 0, _core.MAX_THREADS)
+    """Open3D's ``nthreads``: 0 (one per core) to ``MAX_THREADS``."""
+    return _args.integer(call, "nthreads", nthreads, 0, _core.MAX_THREADS)
 
 
 def _samples(nsamples: Any, call: str) -> int:
-    n = _integer(nsamples, call, "nsamples", 1, 255)
+    n = _args.integer(call, "nsamples", nsamples, 1, 255)
     if n % 2 == 0:
         raise ValueError(f"{call}: nsamples must be odd (a majority vote), not {n}")
     return n
@@ -238,7 +228,7 @@ class RaycastingScene:
         array."""
         call = "test_occlusions"
         r, lead = _rows(rays, 6, call, "rays")
-        near, far = _real(tnear, call, "tnear"), _real(tfar, call, "tfar")
+        near, far = _real(call, "tnear", tnear), _real(call, "tfar", tfar)
         hit = self._core.test_occlusions(r, near, far, _threads(nthreads, call))
         return tensor(hit.reshape(lead))
 
@@ -334,19 +324,15 @@ def _pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
     if missing:
         raise TypeError(f"create_rays_pinhole: missing arguments {missing}")
     call = "create_rays_pinhole"
-    w = _integer(bound["width_px"], call, "width_px", 0, _MAX_SIDE)
-    h = _integer(bound["height_px"], call, "height_px", 0, _MAX_SIDE)
+    w = _args.integer(call, "width_px", bound["width_px"], 0, _args.U32_MAX)
+    h = _args.integer(call, "height_px", bound["height_px"], 0, _args.U32_MAX)
     if use_fov:
         vec = [_vector(bound[n], (3,), n) for n in ("center", "eye", "up")]
-        fov = _real(bound["fov_deg"], call, "fov_deg")
+        fov = _real(call, "fov_deg", bound["fov_deg"])
         return _core.create_rays_pinhole_fov(fov, *vec, w, h)
     k = _vector(bound["intrinsic_matrix"], (3, 3), "intrinsic_matrix")
     e = _vector(bound["extrinsic_matrix"], (4, 4), "extrinsic_matrix")
     return _core.create_rays_pinhole(k, e, w, h)
-
-
-#: The largest width_px or height_px: a 32-bit count.
-_MAX_SIDE = 2**32 - 1
 
 
 def _vector(value: Any, shape: Tuple[int, ...], name: str) -> Any:
@@ -361,16 +347,8 @@ def _vector(value: Any, shape: Tuple[int, ...], name: str) -> Any:
     return array.astype(np.float64).tolist()
 
 
-def _real(value: Any, call: str, name: str) -> float:
-    """``value`` as a float: a TypeError naming ``call`` and ``name`` for what is not a real
-    number (a string, a set...)."""
-    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
+def _real(call: str, name: str, value: Any) -> float:
+    """:func:`_args.real`, taking a 0-d array (a scalar tensor's ``numpy()``) as its value."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-        value, (int, float, np.integer, np.floating)
-    ):
-        raise TypeError(f"{call}: {name} must be a real number, not {value!r}")
-    try:
-        return float(value)
-    except OverflowError:
-        raise ValueError(f"{call}: {name} is too large for a float: {value}") from None
+    return _args.real(call, name, value)
