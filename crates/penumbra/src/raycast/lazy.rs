@@ -1,5 +1,6 @@
 //! The acceleration structure of a [`RaycastingScene`](super::RaycastingScene), built on the
-//! first query after a change. A large build (a million triangles: about a second) runs on a
+//! first query after a change (and the border of the counting rule, on the first counting
+//! query: see [`border`]). A large build (a million triangles: about a second) runs on a
 //! thread of its own while the query waits for it watching its cancel flag, so that Ctrl-C
 //! is answered at once; the build, left to finish, then serves the next query. A small one
 //! runs on the caller's thread.
@@ -7,6 +8,7 @@
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
+use super::boundary::Boundary;
 use super::run::QueryOptions;
 use super::traverse::Accel;
 use super::RaycastError;
@@ -154,6 +156,42 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
     }
 }
 
+/// [`Accel::border`] for a counting query: made on a thread of its own for a large scene
+/// (a sort of every edge: a few tenths of a second for a million triangles) while the query
+/// waits watching its cancel flag; a cancelled query returns at once, and the work, left to
+/// finish, serves the next one.
+pub(crate) fn border<'a>(
+    accel: &'a Arc<Accel>,
+    pool: &Arc<rayon::ThreadPool>,
+    options: &QueryOptions,
+) -> Result<&'a [Boundary], RaycastError> {
+    if let Some(border) = accel.made_border() {
+        return Ok(border);
+    }
+    if accel.tris().len() < ON_THREAD {
+        return Ok(accel.border(pool));
+    }
+    // Several waiting queries may start a thread each: one makes it, the others wait for it.
+    let (a, p) = (accel.clone(), pool.clone());
+    let spawned = std::thread::Builder::new()
+        .name("penumbra-raycast-border".into())
+        .spawn(move || {
+            a.border(&p);
+        });
+    if spawned.is_err() {
+        return Ok(accel.border(pool));
+    }
+    loop {
+        if let Some(border) = accel.made_border() {
+            return Ok(border);
+        }
+        if options.cancelled() {
+            return Err(RaycastError::Cancelled);
+        }
+        std::thread::sleep(POLL);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -173,7 +211,7 @@ mod tests {
     }
 
     #[test]
-    fn a_query_cancelled_during_the_build_returns_at_once() {
+    fn a_query_cancelled_during_the_build_or_the_border_returns_at_once() {
         // Half a million triangles: a build of a second or more here.
         let (v, t) = soup(1 << 19);
         let mut scene = RaycastingScene::new();
@@ -197,7 +235,24 @@ mod tests {
         assert_eq!(result, Err(RaycastError::Cancelled));
         let latency = answered.saturating_duration_since(sent);
         assert!(latency.as_secs_f64() < 0.1, "{latency:?} after the cancel");
-        // The build went on, and serves the next query; a change starts another one.
+        // The build went on, and serves the next query; so does the border of the counting
+        // rule, made on the first counting query and cancelled the same way.
+        scene.commit(2).unwrap();
+        cancel.store(false, Ordering::Relaxed);
+        let (result, sent, answered) = std::thread::scope(|s| {
+            let sender = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(10));
+                cancel.store(true, Ordering::Relaxed);
+                Instant::now()
+            });
+            let result = scene.count_intersections(&rays, &options);
+            let answered = Instant::now();
+            (result, sender.join().unwrap(), answered)
+        });
+        assert_eq!(result, Err(RaycastError::Cancelled));
+        let latency = answered.saturating_duration_since(sent);
+        assert!(latency.as_secs_f64() < 0.1, "{latency:?} after the cancel");
+        // A change starts another build.
         let plain = QueryOptions::default();
         let started = Instant::now();
         let first = scene.count_intersections(&rays, &plain).unwrap();

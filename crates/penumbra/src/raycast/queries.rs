@@ -5,6 +5,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::batch::{prepare, Counts, Listing, Occlusions};
+use super::lazy;
 use super::packet::CastPackets;
 use super::run::{beyond, budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::watertight::PreparedRay;
@@ -226,10 +227,10 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<i32>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let border = lazy::border(&accel, &pool, options)?;
         let accel = &*accel;
         let mut out = filled(&pool, options, rays.len(), 0i32)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
-        let border = accel.border(&pool);
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
@@ -258,8 +259,8 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Intersections, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
+        let border = lazy::border(&accel, &pool, options)?;
         let accel = &*accel;
-        let border = accel.border(&pool);
         let far = FarOrigins::new();
         // The first error (memory, cancel) stops the other chunks, and what they hold is
         // freed.

@@ -173,6 +173,11 @@ impl Accel {
         })
     }
 
+    /// [`Accel::border`] when it is made.
+    pub fn made_border(&self) -> Option<&[Boundary]> {
+        self.border.get().map(Vec::as_slice)
+    }
+
     /// The binary tree.
     pub(super) fn bvh(&self) -> &Bvh {
         &self.bvh
