@@ -49,7 +49,6 @@
 mod accel;
 mod camera;
 mod encode8;
-mod file_name;
 mod files;
 mod film;
 mod geometry;
@@ -60,6 +59,7 @@ mod light;
 mod material;
 mod math;
 mod memory;
+mod names;
 mod pool;
 mod raycast;
 mod render;
@@ -80,7 +80,6 @@ pub mod shapes {
 pub use accel::{intersect_brute_force, occluded_brute_force, Bvh, Pairs, Segments};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
-pub use file_name::file_name_part;
 pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
@@ -92,6 +91,7 @@ pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
+pub use names::{escape_controls, file_name_part};
 pub use pool::MAX_THREADS;
 pub use raycast::{
     create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
@@ -105,9 +105,9 @@ pub use render::{
 pub use sampling::{Rng, Sampler};
 pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};
 pub use scene::{
-    desc, escape_controls, inspect_mtl, inspect_obj, inspect_obj_bytes, AssetKind, ErrorKind,
-    Location, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile,
-    SceneFormat, ScenePack, MAX_SCENE_BYTES,
+    desc, inspect_mtl, inspect_obj, inspect_obj_bytes, AssetKind, ErrorKind, Location, ObjInfo,
+    Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat,
+    ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
 pub use staged::{commit_all, StagedFile};

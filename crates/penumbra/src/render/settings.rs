@@ -7,8 +7,8 @@ use thiserror::Error;
 use crate::camera::Camera;
 use crate::integrator::{LightModel, Shading, ShadingSettings};
 use crate::math::Rgb;
+use crate::names::escape_controls;
 use crate::sampling::{perfect_square_root, Sampler};
-use crate::scene::escape_controls;
 use crate::world::World;
 
 /// Largest film: 2^28 pixels (16384 × 16384), 3 GiB of float RGB.

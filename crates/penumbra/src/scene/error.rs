@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use thiserror::Error;
 
+use crate::names::escape_controls;
+
 /// One step of a key path: a table key or an array index.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Segment {
@@ -80,24 +82,6 @@ pub struct Location {
     /// The override (`KEY.PATH=VALUE`, see [`Override`](super::Override)) that set the value
     /// the error is about, which is then not in the file: no line or column.
     pub set_by: Option<String>,
-}
-
-/// `text` with every control character (newline, ESC, BEL, ...) written as a Rust escape
-/// such as `\n` or `\u{1b}`: names and strings from a file reach messages this way, so one
-/// message stays one line and cannot drive the terminal that shows it.
-pub fn escape_controls(text: &str) -> String {
-    if !text.chars().any(char::is_control) {
-        return text.to_owned();
-    }
-    text.chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
 }
 
 impl fmt::Display for Location {

@@ -21,7 +21,7 @@ use crate::sampling::Sampler;
 use crate::world::World;
 
 pub use desc::SceneDesc;
-pub use error::{escape_controls, AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
 pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 pub use overrides::{Override, OverrideError};
 pub use pack::{PackError, ScenePack};

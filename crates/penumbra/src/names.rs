@@ -1,15 +1,37 @@
-//! Names inside file names: a camera's or a view's name put into an output pattern such as
-//! `out/{camera}.png` must stay one file name in the pattern's folder, whatever the scene or
-//! the jobs file calls it. One rule for the command line's `{camera}` and for Python's batches
-//! (`{name}`), so that a name gives the same file everywhere.
+//! Names from files made safe where they go: inside file names and inside messages.
+//!
+//! A camera's or a view's name put into an output pattern such as `out/{camera}.png` must stay
+//! one file name in the pattern's folder, whatever the scene or the jobs file calls it: one rule
+//! ([`file_name_part`]) for the command line's `{camera}` and for Python's batches (`{name}`),
+//! so that a name gives the same file everywhere. A name or string quoted in a message is
+//! escaped ([`escape_controls`]) so that the message stays one line.
 //!
 //! ```
-//! use penumbra::file_name_part;
+//! use penumbra::{escape_controls, file_name_part};
 //!
 //! assert_eq!(file_name_part("front"), "front");
 //! assert_eq!(file_name_part("side/left"), "side_left");
 //! assert_eq!(file_name_part(".."), "_.");
+//! assert_eq!(escape_controls("a\nb"), "a\\nb");
 //! ```
+
+/// `text` with every control character (newline, ESC, BEL, ...) written as a Rust escape
+/// such as `\n` or `\u{1b}`: names and strings from a file reach messages this way, so one
+/// message stays one line and cannot drive the terminal that shows it.
+pub fn escape_controls(text: &str) -> String {
+    if !text.chars().any(char::is_control) {
+        return text.to_owned();
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
 
 /// `name` as a part of one file name: every path separator (`/`, `\`), drive colon (`:`) and
 /// control character (NUL, newline, escape, ...) becomes `_`, and so does a leading `.` or `-`
