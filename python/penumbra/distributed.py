@@ -25,7 +25,9 @@ from __future__ import annotations
 import itertools
 import os
 import re
+import signal
 import socket
+import threading
 from collections import OrderedDict
 from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -146,8 +148,11 @@ def _gather(
     index = {ref: i for i, ref in enumerate(refs)}
     pending = list(refs)
     bar = _bar(progress, len(refs), unit)
+    interrupted, previous = _defer_ctrl_c()
     try:
         while pending:
+            if interrupted.is_set():
+                raise KeyboardInterrupt
             done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
             for ref in done:
                 try:
@@ -168,8 +173,26 @@ def _gather(
             ray.cancel(ref, force=True)
         raise
     finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
         if bar is not None:
             bar.close()
+
+
+def _defer_ctrl_c() -> Tuple[threading.Event, Any]:
+    """An event that Ctrl-C sets while tasks are awaited, instead of raising
+    KeyboardInterrupt wherever the main thread happens to be: raised inside Ray's calls, it
+    made Ray's core worker abort now and then ("Tried to complete task that was not pending"),
+    so the batch died with a crash report instead of exiting 130. :func:`_gather` raises it
+    itself between waits (within 0.5 s). Only Python's default handler is replaced, and only on
+    the main thread, where handlers live; the handler it replaced is returned (or None)."""
+    event = threading.Event()
+    if (
+        threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    ):
+        return event, signal.signal(signal.SIGINT, lambda *_: event.set())
+    return event, None
 
 
 # Terminal escape sequences (colours) in Ray's messages.
