@@ -210,47 +210,46 @@ mod tests {
         (v, t)
     }
 
+    /// Counts `rays` with a cancel set `delay_ms` after the query starts: the result, and how
+    /// long after the cancel the query answered.
+    fn count_cancelled_after(
+        scene: &RaycastingScene,
+        rays: &[[f32; 6]],
+        delay_ms: u64,
+    ) -> (Result<Vec<i32>, RaycastError>, std::time::Duration) {
+        let cancel = AtomicBool::new(false);
+        let options = QueryOptions {
+            threads: 2,
+            cancel: Some(&cancel),
+        };
+        let (result, sent, answered) = std::thread::scope(|s| {
+            let sender = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+                cancel.store(true, Ordering::Relaxed);
+                Instant::now()
+            });
+            let result = scene.count_intersections(rays, &options);
+            let answered = Instant::now();
+            (result, sender.join().unwrap(), answered)
+        });
+        (result, answered.saturating_duration_since(sent))
+    }
+
     #[test]
     fn a_query_cancelled_during_the_build_or_the_border_returns_at_once() {
         // Half a million triangles: a build of a second or more here.
         let (v, t) = soup(1 << 19);
         let mut scene = RaycastingScene::new();
         scene.add_triangles(&v, &t).unwrap();
-        let cancel = AtomicBool::new(false);
-        let options = QueryOptions {
-            threads: 2,
-            cancel: Some(&cancel),
-        };
         let rays = [[0.5, 0.5, -1.0, 0.0, 0.0, 1.0]];
-        let (result, sent, answered) = std::thread::scope(|s| {
-            let sender = s.spawn(|| {
-                std::thread::sleep(std::time::Duration::from_millis(30));
-                cancel.store(true, Ordering::Relaxed);
-                Instant::now()
-            });
-            let result = scene.count_intersections(&rays, &options);
-            let answered = Instant::now();
-            (result, sender.join().unwrap(), answered)
-        });
+        let (result, latency) = count_cancelled_after(&scene, &rays, 30);
         assert_eq!(result, Err(RaycastError::Cancelled));
-        let latency = answered.saturating_duration_since(sent);
         assert!(latency.as_secs_f64() < 0.1, "{latency:?} after the cancel");
         // The build went on, and serves the next query; so does the border of the counting
         // rule, made on the first counting query and cancelled the same way.
         scene.commit(2).unwrap();
-        cancel.store(false, Ordering::Relaxed);
-        let (result, sent, answered) = std::thread::scope(|s| {
-            let sender = s.spawn(|| {
-                std::thread::sleep(std::time::Duration::from_millis(10));
-                cancel.store(true, Ordering::Relaxed);
-                Instant::now()
-            });
-            let result = scene.count_intersections(&rays, &options);
-            let answered = Instant::now();
-            (result, sender.join().unwrap(), answered)
-        });
+        let (result, latency) = count_cancelled_after(&scene, &rays, 10);
         assert_eq!(result, Err(RaycastError::Cancelled));
-        let latency = answered.saturating_duration_since(sent);
         assert!(latency.as_secs_f64() < 0.1, "{latency:?} after the cancel");
         // A change starts another build.
         let plain = QueryOptions::default();
