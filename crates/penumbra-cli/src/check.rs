@@ -2,9 +2,10 @@
 //! triangles and bounds, and warnings (on stderr; see `warnings`) for scene mistakes. A
 //! `.obj` file is summarized on its own (see `check_obj`).
 
+use std::ops::Range;
 use std::path::Path;
 
-use penumbra::{desc::ShapeDesc, Aabb, SceneDesc, World};
+use penumbra::{desc::ShapeDesc, Aabb, SceneDesc, World, WorldStats};
 use serde_json::{json, Value};
 
 use crate::args::CheckArgs;
@@ -32,7 +33,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     } else {
         path.display().to_string()
     };
-    let objects = objects(world, &file.desc);
+    let objects = objects(world, &file.desc, &scene.objects);
     let bounds: Vec<(String, Aabb)> = objects.iter().map(|o| (o.key.clone(), o.bounds)).collect();
     let aspect = scene.settings.width as f32 / scene.settings.height as f32;
     let mut warnings = light_warnings(world, scene.settings.light_model);
@@ -52,6 +53,9 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             "spp": settings.spp,
             "sampler": settings.sampler.name(),
             "triangles": s.triangles,
+            "unique_triangles": s.unique_triangles,
+            "meshes": s.meshes,
+            "instances": s.instances,
             "lights": s.lights,
             "light_samples": light_samples(world, None),
             "materials": s.materials,
@@ -77,7 +81,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             settings.spp,
             settings.sampler.name()
         ),
-        format!("  triangles  {}", s.triangles),
+        triangles_line(&s),
         format!(
             "  lights     {} ({} light sample{} per shading point)",
             s.lights,
@@ -118,16 +122,47 @@ struct ObjectInfo {
     bounds: Aabb,
 }
 
-/// Each object's triangles and world-space bounds, in file order (object ids are file
-/// indexes: every `[[objects]]` entry adds one object).
-fn objects(world: &World, desc: &SceneDesc) -> Vec<ObjectInfo> {
+/// "  triangles  N", and when instances place meshes, how many of those are in memory.
+fn triangles_line(s: &WorldStats) -> String {
+    if s.instances == 0 {
+        return format!("  triangles  {}", s.triangles);
+    }
+    format!(
+        "  triangles  {} ({} in memory: {} instance{} of {} mesh{})",
+        s.triangles,
+        s.unique_triangles,
+        s.instances,
+        if s.instances == 1 { "" } else { "s" },
+        s.meshes,
+        if s.meshes == 1 { "" } else { "es" }
+    )
+}
+
+/// Each `[[objects]]` entry's triangles (as rays see them: every copy counted) and
+/// world-space bounds, in file order; `ids` are the object ids each entry added.
+fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInfo> {
+    // The entry of each object id.
+    let mut entry_of = Vec::new();
+    for (entry, range) in ids.iter().enumerate() {
+        entry_of.extend(range.clone().map(|_| entry));
+    }
     let mut acc = vec![(0usize, Aabb::EMPTY); desc.objects.len()];
+    let mut add = |object: u32, triangles: usize, b: Aabb| {
+        if let Some((count, bounds)) = entry_of.get(object as usize).and_then(|&e| acc.get_mut(e)) {
+            *count += triangles;
+            *bounds = bounds.union(b);
+        }
+    };
     let geometry = world.geometry();
     for (i, t) in geometry.triangles.iter().enumerate() {
-        if let Some((count, bounds)) = acc.get_mut(t.object as usize) {
-            *count += 1;
-            *bounds = geometry.corners(i).into_iter().fold(*bounds, Aabb::grow);
-        }
+        let corners = geometry
+            .corners(i)
+            .into_iter()
+            .fold(Aabb::EMPTY, Aabb::grow);
+        add(t.object, 1, corners);
+    }
+    for (object, triangles, bounds) in world.instance_summary() {
+        add(object, triangles, bounds);
     }
     desc.objects
         .iter()
@@ -141,6 +176,7 @@ fn objects(world: &World, desc: &SceneDesc) -> Vec<ObjectInfo> {
                 ShapeDesc::Cube(_) => "cube".to_owned(),
                 ShapeDesc::Sphere(_) => "sphere".to_owned(),
                 ShapeDesc::Mesh(m) => format!("mesh {}", m.file),
+                ShapeDesc::Instances(d) => format!("instances {}", d.file),
             },
             triangles,
             bounds,

@@ -24,6 +24,7 @@ fn kind_name(kind: ErrorKind) -> &'static str {
         ErrorKind::UnknownName => "unknown_name",
         ErrorKind::Asset(AssetKind::Mesh) => "asset_mesh",
         ErrorKind::Asset(AssetKind::Image) => "asset_image",
+        ErrorKind::Asset(AssetKind::Transforms) => "asset_transforms",
         ErrorKind::File => "file",
     }
 }
@@ -100,8 +101,13 @@ pub(crate) fn image_error(call: &str, e: ImageError) -> PyErr {
 pub(crate) fn buffer<T>(call: &str, what: &str, len: usize) -> PyResult<Vec<T>> {
     let mut v = Vec::new();
     v.try_reserve_exact(len)
-        .map_err(|_| PyMemoryError::new_err(format!("{call}: not enough memory for {what}")))?;
+        .map_err(|_| no_memory(call, what))?;
     Ok(v)
+}
+
+/// The `MemoryError` saying that `call` has no memory for `what`.
+pub(crate) fn no_memory(call: &str, what: &str) -> PyErr {
+    PyMemoryError::new_err(format!("{call}: not enough memory for {what}"))
 }
 
 /// A ray-casting error as Python sees it: bad meshes, cameras or arguments are a `ValueError`,

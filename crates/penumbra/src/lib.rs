@@ -77,7 +77,9 @@ pub mod shapes {
     pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 }
 
-pub use accel::{intersect_brute_force, occluded_brute_force, Bvh, Pairs, Segments};
+pub use accel::{
+    intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
+};
 pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
 pub use files::Files;
@@ -113,7 +115,10 @@ pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdP
 pub use staged::{commit_all, StagedFile};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use texture_file::decode_texture_image;
-pub use world::{World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL, MAX_TRIANGLES};
+pub use world::{
+    flatten_instances, World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL,
+    FLATTEN_TRIANGLES, MAX_INSTANCES, MAX_TRIANGLES,
+};
 
 // The README's Rust snippets are compiled (and, unless `no_run`, run) as doc-tests.
 #[cfg(doctest)]

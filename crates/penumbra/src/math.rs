@@ -120,6 +120,25 @@ impl Aabb {
         }
     }
 
+    /// The box of this box's eight corners mapped by `transform`: it holds every point of
+    /// the box so mapped (up to the rounding of the map). Empty stays empty.
+    pub fn transformed(&self, transform: &Transform) -> Aabb {
+        if self.is_empty() {
+            return Aabb::EMPTY;
+        }
+        (0..8)
+            .map(|k: u32| {
+                let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+                Vec3::new(
+                    pick(1, self.min.x, self.max.x),
+                    pick(2, self.min.y, self.max.y),
+                    pick(4, self.min.z, self.max.z),
+                )
+            })
+            .map(|c| transform.point(c))
+            .fold(Aabb::EMPTY, Aabb::grow)
+    }
+
     /// True when the box holds no point.
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
@@ -204,6 +223,13 @@ impl Transform {
     /// A normal mapped to world space and normalized.
     pub fn normal(&self, n: Vec3) -> Vec3 {
         unit(self.normal_from_object * n)
+    }
+
+    /// A bound on how much the map stretches a length: the Frobenius norm of its linear part,
+    /// at least its largest singular value.
+    pub fn largest_stretch(&self) -> f32 {
+        let m = Mat3::from_mat4(self.world_from_object);
+        (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
     }
 
     /// True when the linear part cannot be inverted (a zero scale), so normals are undefined.

@@ -69,6 +69,13 @@ pub(crate) fn largest_coordinate(points: &[Vec3]) -> f32 {
         .fold(0.0, f32::max)
 }
 
+/// The longest edge of `triangles` (0 for none).
+pub(crate) fn longest_edge(triangles: impl Iterator<Item = [Vec3; 3]>) -> f32 {
+    triangles
+        .map(|[a, b, c]| (b - a).length().max((c - a).length()).max((c - b).length()))
+        .fold(0.0, f32::max)
+}
+
 /// The points a light's shadow rays end at: an area light's corners (the hull of its
 /// samples), or a point light's position.
 pub(crate) fn light_points(light: &Light) -> impl Iterator<Item = Vec3> {
@@ -87,15 +94,18 @@ pub(crate) struct Reach {
 
 impl Reach {
     pub(crate) fn of(geometry: &Geometry) -> Reach {
-        let longest_edge = (0..geometry.len())
-            .map(|i| {
-                let [a, b, c] = geometry.corners(i);
-                (b - a).length().max((c - a).length()).max((c - b).length())
-            })
-            .fold(0.0, f32::max);
         Reach {
             bounds: geometry.bounds(),
-            longest_edge,
+            longest_edge: longest_edge((0..geometry.len()).map(|i| geometry.corners(i))),
+        }
+    }
+
+    /// The reach of these triangles and more within `bounds` whose edges are at most
+    /// `longest_edge` long.
+    pub(crate) fn with(self, bounds: Aabb, longest_edge: f32) -> Reach {
+        Reach {
+            bounds: self.bounds.union(bounds),
+            longest_edge: self.longest_edge.max(longest_edge),
         }
     }
 

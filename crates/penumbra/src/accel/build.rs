@@ -8,7 +8,6 @@ use rayon::prelude::*;
 
 use super::split::{bounds_of, split, Bins};
 use super::{accel, Bvh, BvhNode, PARALLEL_MIN};
-use crate::geometry::Geometry;
 use crate::math::Aabb;
 
 /// Nodes with at least this many primitives bin them in parallel (when building on a pool).
@@ -22,36 +21,61 @@ pub(super) struct BuildPrim {
     pub index: u32,
 }
 
-/// Builds the hierarchy over every triangle of `geometry`, on the threads of `pool` when there
-/// is one and the mesh is large enough to gain from it.
-pub(super) fn build(geometry: &Geometry, pool: Option<&rayon::ThreadPool>) -> Bvh {
-    if geometry.is_empty() {
-        return Bvh::default();
+/// Builds the hierarchy over the `n` triangles whose corners `corners(i)` gives, on the
+/// threads of `pool` when there is one and the mesh is large enough to gain from it.
+pub(super) fn build(
+    n: usize,
+    corners: impl Fn(usize) -> [Vec3; 3] + Sync,
+    pool: Option<&rayon::ThreadPool>,
+) -> Bvh {
+    let bounds = |i: usize| corners(i).into_iter().fold(Aabb::EMPTY, Aabb::grow);
+    let (nodes, prim_ids) = build_tree(n, bounds, pool);
+    let tri = |&i: &u32| accel(corners(i as usize));
+    let tris = if n >= 2 * PARALLEL_MIN && pool.is_some() {
+        prim_ids.par_iter().map(tri).collect()
+    } else {
+        prim_ids.iter().map(tri).collect()
+    };
+    Bvh {
+        nodes,
+        tris,
+        prim_ids,
+    }
+}
+
+/// The nodes over the `n` primitives whose boxes `bounds(i)` gives, and the permutation from
+/// leaf order to primitive index; on the threads of `pool` when there is one and there are
+/// enough primitives to gain from it.
+pub(super) fn build_tree(
+    n: usize,
+    bounds: impl Fn(usize) -> Aabb + Sync,
+    pool: Option<&rayon::ThreadPool>,
+) -> (Vec<BvhNode>, Vec<u32>) {
+    if n == 0 {
+        return (Vec::new(), Vec::new());
     }
     match pool {
-        Some(pool) if geometry.len() >= 2 * PARALLEL_MIN => {
-            pool.install(|| build_with(geometry, true))
-        }
-        _ => build_with(geometry, false),
+        Some(pool) if n >= 2 * PARALLEL_MIN => pool.install(|| build_with(n, &bounds, true)),
+        _ => build_with(n, bounds, false),
     }
 }
 
 /// The build, either all on the calling thread or, when `parallel`, with every step over all
 /// primitives (their boxes, the top splits' binning, the final arrays) and every pair of large
 /// subtrees spread over the current rayon pool. Both give the same nodes.
-fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
+fn build_with(
+    n: usize,
+    bounds: impl Fn(usize) -> Aabb + Sync,
+    parallel: bool,
+) -> (Vec<BvhNode>, Vec<u32>) {
     let prim = |i: usize| {
-        let bounds = geometry
-            .corners(i)
-            .into_iter()
-            .fold(Aabb::EMPTY, Aabb::grow);
+        let bounds = bounds(i);
         BuildPrim {
             bounds,
             centroid: bounds.center(),
             index: i as u32,
         }
     };
-    let n = geometry.len();
     let mut prims: Vec<BuildPrim>;
     let (bounds, centroids);
     if parallel {
@@ -65,25 +89,12 @@ fn build_with(geometry: &Geometry, parallel: bool) -> Bvh {
         (bounds, centroids) = bounds_of(&prims);
     }
     let nodes = build_subtree(&mut prims, 0, 0, (bounds, centroids), parallel);
-    let tri = |p: &BuildPrim| accel(geometry.corners(p.index as usize));
-    let (prim_ids, tris) = if parallel {
-        (
-            prims.par_iter().map(|p| p.index).collect(),
-            prims.par_iter().map(tri).collect(),
-        )
+    let prim_ids = if parallel {
+        prims.par_iter().map(|p| p.index).collect()
     } else {
-        (
-            prims.iter().map(|p| p.index).collect(),
-            prims.iter().map(tri).collect(),
-        )
+        prims.iter().map(|p| p.index).collect()
     };
-    // The build's copy of every primitive is not needed past this point.
-    drop(prims);
-    Bvh {
-        nodes,
-        tris,
-        prim_ids,
-    }
+    (nodes, prim_ids)
 }
 
 /// A node whose box is `bounds` grown outward by a relative 2⁻²⁰ (and at least the smallest

@@ -155,6 +155,7 @@ fn closest_packet<const N: usize, I: Isa>(
                             b1: best.b1[i],
                             b2: best.b2[i],
                             triangle: best.id[i] - 1,
+                            instance: None,
                         });
                     }
                 }

@@ -19,6 +19,8 @@
 //!   from neighbouring points to one light sample);
 //! - `shaft`: shaft culling for those bundles when every point has the same light samples:
 //!   the few triangles in the hull of a batch's points and samples, tested without the tree;
+//! - `instances` and `levels`: the second level (meshes built once and placed by instances
+//!   under a top-level tree) and the pair of levels a world queries;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
 use glam::Vec3;
@@ -29,6 +31,8 @@ use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
 mod closest;
+mod instances;
+mod levels;
 mod packet;
 mod segments;
 mod shaft;
@@ -39,6 +43,8 @@ mod validate;
 #[cfg(test)]
 mod tests;
 
+pub use instances::Instances;
+pub use levels::Levels;
 pub use segments::{Pairs, Segments};
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
@@ -144,14 +150,14 @@ const MAX_DEPTH: usize = STACK_SIZE - 2;
 impl Bvh {
     /// Builds the hierarchy over every triangle of `geometry` on the calling thread.
     pub fn build(geometry: &Geometry) -> Bvh {
-        build::build(geometry, None)
+        build::build(geometry.len(), |i| geometry.corners(i), None)
     }
 
     /// Builds the hierarchy on the threads of `pool`: the per-triangle steps and the binning of
     /// the top splits run in parallel chunks, and large subtrees are built on separate
     /// threads. The result is the same as [`Bvh::build`]'s, node for node.
     pub fn build_parallel(geometry: &Geometry, pool: &rayon::ThreadPool) -> Bvh {
-        build::build(geometry, Some(pool))
+        build::build(geometry.len(), |i| geometry.corners(i), Some(pool))
     }
 
     /// Number of nodes.

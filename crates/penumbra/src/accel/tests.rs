@@ -121,6 +121,7 @@ fn assert_from_agrees(
             b1: 0.5,
             b2: 0.5,
             triangle: 7,
+            instance: None,
         };
         let mut hits = vec![Some(stale); dirs.len()];
         bvh.intersect_from_on(path, origin, dirs, t_min, t_max, &mut hits);
@@ -257,6 +258,7 @@ fn empty_scene_misses_everything() {
         b1: 0.0,
         b2: 0.0,
         triangle: 7,
+        instance: None,
     };
     let mut hits = [Some(stale); 2];
     bvh.intersect_batch(&rays, 0.0, f32::INFINITY, &mut hits);

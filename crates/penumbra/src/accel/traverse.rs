@@ -1,12 +1,112 @@
-//! Queries on a built [`Bvh`]: the slab test, closest-hit traversal (`intersect`), any-hit
-//! traversal (`occluded`), and the batch forms over them (`intersect_batch`, and
-//! `occluded_from` for segments sharing one origin).
+//! Single-ray queries on a built [`Bvh`]: the slab test, and the two walks every single-ray
+//! query is made of, generic over what a leaf holds (triangles in a mesh's tree, instances in
+//! the top-level tree; see `instances`): the closest-first walk (`walk_closest`) and the
+//! any-hit walk (`walk_any`). `intersect`, `occluded` and `intersect_batch` are those walks
+//! over triangles.
+
+use std::ops::Range;
 
 use glam::Vec3A;
 
 use super::{Bvh, BvhNode, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::math::Ray;
+
+/// The closest-first walk over `nodes` (root at 0, not empty) for the ray `origin` with
+/// reciprocal direction `inv_dir`: visits every leaf the ray enters within `(t_min, t)`, the
+/// nearer child first, and skips each waiting subtree the ray no longer enters before `t`.
+/// `leaf(slots, t)` tests the leaf's slots and lowers `t` to the closest hit it finds (or
+/// keeps it). Boxes entered at exactly `t` are still visited, so a leaf can take a tie.
+#[inline(always)]
+pub(super) fn walk_closest(
+    nodes: &[BvhNode],
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    t_min: f32,
+    t: &mut f32,
+    mut leaf: impl FnMut(Range<usize>, &mut f32),
+) {
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 0;
+    let mut node = &nodes[0];
+    if slab(node, origin, inv_dir, t_min, *t).is_none() {
+        return;
+    }
+    loop {
+        if node.is_leaf() {
+            let first = node.first as usize;
+            leaf(first..first + node.count as usize, t);
+        } else {
+            let (l, r) = (node.first as usize, node.first as usize + 1);
+            let dl = slab(&nodes[l], origin, inv_dir, t_min, *t);
+            let dr = slab(&nodes[r], origin, inv_dir, t_min, *t);
+            match (dl, dr) {
+                (Some(a), Some(b)) => {
+                    let (near, far) = if a <= b { (l, r) } else { (r, l) };
+                    stack[sp] = far as u32;
+                    sp += 1;
+                    node = &nodes[near];
+                    continue;
+                }
+                (Some(_), None) => {
+                    node = &nodes[l];
+                    continue;
+                }
+                (None, Some(_)) => {
+                    node = &nodes[r];
+                    continue;
+                }
+                (None, None) => {}
+            }
+        }
+        // Pop the next subtree that can still hold a closer hit.
+        loop {
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            let candidate = &nodes[stack[sp] as usize];
+            if slab(candidate, origin, inv_dir, t_min, *t).is_some() {
+                node = candidate;
+                break;
+            }
+        }
+    }
+}
+
+/// The any-hit walk over `nodes` (root at 0, not empty): visits the leaves the ray enters
+/// within `(t_min, t_max)` until `leaf(slots)` says it found a hit; true when one did.
+#[inline(always)]
+pub(super) fn walk_any(
+    nodes: &[BvhNode],
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    t_min: f32,
+    t_max: f32,
+    mut leaf: impl FnMut(Range<usize>) -> bool,
+) -> bool {
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 1;
+    stack[0] = 0;
+    while sp > 0 {
+        sp -= 1;
+        let node = &nodes[stack[sp] as usize];
+        if slab(node, origin, inv_dir, t_min, t_max).is_none() {
+            continue;
+        }
+        if node.is_leaf() {
+            let first = node.first as usize;
+            if leaf(first..first + node.count as usize) {
+                return true;
+            }
+        } else {
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
+    }
+    false
+}
 
 /// The closest hit with `t` in `(t_min, t_max)`, if any.
 pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<Hit> {
@@ -20,67 +120,35 @@ pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Opt
     let mut best: Option<(usize, f32, f32)> = None;
     let mut best_id = u32::MAX;
     let mut limit = t_max;
-    let mut stack = [0u32; STACK_SIZE];
-    let mut sp = 0;
-    let mut node = &bvh.nodes[0];
-    slab(node, origin, inv_dir, t_min, t_max)?;
-    loop {
-        if node.is_leaf() {
-            let first = node.first as usize;
-            for i in first..first + node.count as usize {
+    walk_closest(
+        &bvh.nodes,
+        origin,
+        inv_dir,
+        t_min,
+        &mut t_max,
+        |slots, t_max| {
+            for i in slots {
                 let tri = &bvh.tris[i];
                 let hit = tri.hit(ray, t_min, limit);
                 if let Some(h) = hit {
                     let id = bvh.prim_ids[i];
-                    if h.t < t_max || id < best_id {
-                        t_max = h.t;
+                    if h.t < *t_max || id < best_id {
+                        *t_max = h.t;
                         limit = h.t.next_up();
                         best_id = id;
                         best = Some((i, h.b1, h.b2));
                     }
                 }
             }
-        } else {
-            let (l, r) = (node.first as usize, node.first as usize + 1);
-            let dl = slab(&bvh.nodes[l], origin, inv_dir, t_min, t_max);
-            let dr = slab(&bvh.nodes[r], origin, inv_dir, t_min, t_max);
-            match (dl, dr) {
-                (Some(a), Some(b)) => {
-                    let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                    stack[sp] = far as u32;
-                    sp += 1;
-                    node = &bvh.nodes[near];
-                    continue;
-                }
-                (Some(_), None) => {
-                    node = &bvh.nodes[l];
-                    continue;
-                }
-                (None, Some(_)) => {
-                    node = &bvh.nodes[r];
-                    continue;
-                }
-                (None, None) => {}
-            }
-        }
-        // Pop the next subtree that can still hold a closer hit.
-        loop {
-            if sp == 0 {
-                return best.map(|(i, b1, b2)| Hit {
-                    t: t_max,
-                    b1,
-                    b2,
-                    triangle: bvh.prim_ids[i],
-                });
-            }
-            sp -= 1;
-            let candidate = &bvh.nodes[stack[sp] as usize];
-            if slab(candidate, origin, inv_dir, t_min, t_max).is_some() {
-                node = candidate;
-                break;
-            }
-        }
-    }
+        },
+    );
+    best.map(|(i, b1, b2)| Hit {
+        t: t_max,
+        b1,
+        b2,
+        triangle: bvh.prim_ids[i],
+        instance: None,
+    })
 }
 
 /// True when any triangle meets the ray with `t` in `(t_min, t_max)`; stops at the first.
@@ -89,30 +157,11 @@ pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         return false;
     }
     let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-    let mut stack = [0u32; STACK_SIZE];
-    let mut sp = 1;
-    stack[0] = 0;
-    while sp > 0 {
-        sp -= 1;
-        let node = &bvh.nodes[stack[sp] as usize];
-        if slab(node, origin, inv_dir, t_min, t_max).is_none() {
-            continue;
-        }
-        if node.is_leaf() {
-            let first = node.first as usize;
-            for tri in &bvh.tris[first..first + node.count as usize] {
-                let hit = tri.hit(ray, t_min, t_max);
-                if hit.is_some() {
-                    return true;
-                }
-            }
-        } else {
-            stack[sp] = node.first;
-            stack[sp + 1] = node.first + 1;
-            sp += 2;
-        }
-    }
-    false
+    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
+        bvh.tris[slots]
+            .iter()
+            .any(|tri| tri.hit(ray, t_min, t_max).is_some())
+    })
 }
 
 /// The closest hit of every ray of `rays`, written to `hits`; see [`Bvh::intersect_batch`].
@@ -131,7 +180,13 @@ pub(super) fn intersect_batch(
 
 /// The entry distance of the ray into the node's box within `(t_min, t_max)`, or `None`.
 #[inline(always)]
-fn slab(node: &BvhNode, origin: Vec3A, inv_dir: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+pub(super) fn slab(
+    node: &BvhNode,
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    t_min: f32,
+    t_max: f32,
+) -> Option<f32> {
     // With padded boxes (see `build::node`), `bound − origin` is zero only for rays outside the
     // true box, so a NaN from 0·∞ can only turn a miss into a miss: SIMD min/max need no NaN
     // care.

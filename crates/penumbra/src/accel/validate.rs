@@ -86,6 +86,7 @@ pub fn intersect_brute_force(
                 b1: h.b1,
                 b2: h.b2,
                 triangle: i as u32,
+                instance: None,
             });
         }
     }

@@ -31,6 +31,28 @@ impl Mesh {
     pub fn is_empty(&self) -> bool {
         self.indices.is_empty()
     }
+
+    /// True when every vertex has a shading normal to interpolate.
+    pub fn is_smooth(&self) -> bool {
+        !self.normals.is_empty() && self.normals.len() == self.positions.len()
+    }
+
+    /// True when every vertex has texture coordinates (else they are (0, 0) everywhere).
+    pub fn has_uvs(&self) -> bool {
+        self.uvs.len() == self.positions.len()
+    }
+
+    /// The material slot of triangle `i`.
+    pub fn slot(&self, i: usize) -> u32 {
+        self.material_slots.get(i).copied().unwrap_or(0)
+    }
+}
+
+/// The material of slot `slot` for an object whose slots map to `materials`: slots past the
+/// end take the last entry, and no entries means the default material, 0.
+pub(crate) fn material_of(slot: u32, materials: &[u32]) -> u32 {
+    let fallback = materials.last().copied().unwrap_or(0);
+    materials.get(slot as usize).copied().unwrap_or(fallback)
 }
 
 /// One triangle of the built scene: three indices into [`Geometry`]'s vertex buffers.
@@ -64,7 +86,7 @@ impl Geometry {
     /// becomes the scene material `materials[k]` (slots past the end use the last entry).
     pub fn append(&mut self, mesh: &Mesh, world: &Transform, materials: &[u32], object: u32) {
         let base = self.positions.len() as u32;
-        let smooth = !mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len();
+        let smooth = mesh.is_smooth();
         self.positions
             .extend(mesh.positions.iter().map(|&p| world.point(p)));
         if smooth {
@@ -74,18 +96,16 @@ impl Geometry {
             self.normals
                 .extend(std::iter::repeat_n(Vec3::ZERO, mesh.positions.len()));
         }
-        if mesh.uvs.len() == mesh.positions.len() {
+        if mesh.has_uvs() {
             self.uvs.extend_from_slice(&mesh.uvs);
         } else {
             self.uvs
                 .extend(std::iter::repeat_n(Vec2::ZERO, mesh.positions.len()));
         }
-        let fallback = materials.last().copied().unwrap_or(0);
         for (i, idx) in mesh.indices.iter().enumerate() {
-            let slot = mesh.material_slots.get(i).copied().unwrap_or(0) as usize;
             self.triangles.push(Triangle {
                 vertices: idx.map(|v| base + v),
-                material: materials.get(slot).copied().unwrap_or(fallback),
+                material: material_of(mesh.slot(i), materials),
                 object,
                 smooth,
             });

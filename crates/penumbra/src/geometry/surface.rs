@@ -3,8 +3,9 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Geometry, Hit};
-use crate::math::unit_cross;
+use super::mesh::material_of;
+use super::{Geometry, Hit, Mesh};
+use crate::math::{unit_cross, Transform};
 
 /// The surface at a ray hit, in world space. Normals are as the triangle defines them, not
 /// turned toward the ray: callers that shade face-forward them, callers that cast rays (like
@@ -58,44 +59,91 @@ impl Surface {
         (n_geom, n)
     }
 
-    /// The surface of `geometry` at `hit`.
+    /// The surface of `geometry` at `hit` (a hit of the world's own triangles).
     pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
         let tri = &geometry.triangles[hit.triangle as usize];
         let [i0, i1, i2] = tri.vertices.map(|v| v as usize);
-        let (p0, p1, p2) = (
-            geometry.positions[i0],
-            geometry.positions[i1],
-            geometry.positions[i2],
-        );
+        let corner = |i: usize| Corner {
+            position: geometry.positions[i],
+            normal: geometry.normals[i],
+            uv: geometry.uvs[i],
+        };
+        let ids = (hit.triangle, tri.object, tri.material);
+        Surface::interpolate([corner(i0), corner(i1), corner(i2)], tri.smooth, hit, ids)
+    }
+
+    /// The surface at `hit` of `mesh` placed in the world by `world` as object `object`, its
+    /// material slots mapped by `materials`: the corners are transformed exactly as
+    /// [`Geometry::append`] transforms a copy of the mesh, so the surface is the copy's.
+    pub fn from_instance(
+        mesh: &Mesh,
+        world: &Transform,
+        hit: &Hit,
+        object: u32,
+        materials: &[u32],
+    ) -> Surface {
+        let index = hit.triangle as usize;
+        let smooth = mesh.is_smooth();
+        let corner = |v: u32| {
+            let v = v as usize;
+            Corner {
+                position: world.point(mesh.positions[v]),
+                normal: if smooth {
+                    world.normal(mesh.normals[v])
+                } else {
+                    Vec3::ZERO
+                },
+                uv: if mesh.has_uvs() {
+                    mesh.uvs[v]
+                } else {
+                    Vec2::ZERO
+                },
+            }
+        };
+        let corners = mesh.indices[index].map(corner);
+        let material = material_of(mesh.slot(index), materials);
+        Surface::interpolate(corners, smooth, hit, (hit.triangle, object, material))
+    }
+
+    /// The surface at `hit`'s barycentrics of the triangle with world-space `corners`; `ids`
+    /// are its triangle, object and material.
+    fn interpolate(corners: [Corner; 3], smooth: bool, hit: &Hit, ids: (u32, u32, u32)) -> Surface {
+        let [c0, c1, c2] = corners;
+        let (p0, p1, p2) = (c0.position, c1.position, c2.position);
         let b0 = 1.0 - hit.b1 - hit.b2;
         let geometric_normal = unit_cross(p1 - p0, p2 - p0);
-        let shading_normal = if tri.smooth {
-            let ns = b0 * geometry.normals[i0]
-                + hit.b1 * geometry.normals[i1]
-                + hit.b2 * geometry.normals[i2];
+        let shading_normal = if smooth {
+            let ns = b0 * c0.normal + hit.b1 * c1.normal + hit.b2 * c2.normal;
             ns.try_normalize().unwrap_or(geometric_normal)
         } else {
             geometric_normal
         };
+        let (triangle, object, material) = ids;
         Surface {
             position: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
             error: GAMMA_7 * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
                 + Vec3::splat(GAMMA_3 * ((p1 - p0).length() + (p2 - p0).length())),
             geometric_normal,
             shading_normal,
-            uv: b0 * geometry.uvs[i0] + hit.b1 * geometry.uvs[i1] + hit.b2 * geometry.uvs[i2],
-            triangle: hit.triangle,
-            object: tri.object,
-            material: tri.material,
+            uv: b0 * c0.uv + hit.b1 * c1.uv + hit.b2 * c2.uv,
+            triangle,
+            object,
+            material,
         }
     }
+}
+
+/// A triangle corner in world space.
+#[derive(Clone, Copy)]
+struct Corner {
+    position: Vec3,
+    normal: Vec3,
+    uv: Vec2,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Mesh;
-    use crate::math::Transform;
 
     #[test]
     fn interpolates_position_uv_and_normals_and_keeps_ids() {
@@ -113,6 +161,7 @@ mod tests {
             b1: 0.25,
             b2: 0.5,
             triangle: 0,
+            instance: None,
         };
         let s = Surface::from_hit(&g, &hit);
         assert!((s.position - Vec3::new(0.25, 0.5, 0.0)).length() < 1e-6);

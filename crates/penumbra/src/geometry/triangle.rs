@@ -57,8 +57,8 @@ pub fn intersect_triangle(
     }
 }
 
-/// The closest hit of a ray: distance, barycentrics and the index of the triangle in
-/// [`Geometry::triangles`](super::Geometry::triangles).
+/// The closest hit of a ray: distance, barycentrics, the triangle and, for a mesh placed by
+/// an instance, which instance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Ray parameter of the hit.
@@ -67,8 +67,11 @@ pub struct Hit {
     pub b1: f32,
     /// Barycentric weight of the triangle's third vertex.
     pub b2: f32,
-    /// Index of the triangle hit.
+    /// Index of the triangle hit: in [`Geometry::triangles`](super::Geometry::triangles)
+    /// without an instance, else in the instance's mesh.
     pub triangle: u32,
+    /// The instance whose mesh holds the triangle, or `None` for the world's own triangles.
+    pub instance: Option<u32>,
 }
 
 #[cfg(test)]

@@ -82,7 +82,8 @@ pub(crate) struct AovContext {
 }
 
 impl AovContext {
-    /// Indexes the objects of `world`. Objects' triangles are contiguous and in object order.
+    /// Indexes the objects of `world` (its own triangles: each object's are contiguous, and
+    /// in object order).
     pub(crate) fn new(world: &World) -> Self {
         let mut first_triangle = Vec::new();
         for (i, tri) in world.geometry().triangles.iter().enumerate() {
@@ -100,11 +101,15 @@ impl AovContext {
             return AovPixel::MISS;
         };
         let surface = world.surface(&hit);
-        let first = self
-            .first_triangle
-            .get(surface.object as usize)
-            .copied()
-            .unwrap_or(0);
+        // An instance's triangles are numbered within its mesh already.
+        let first = match hit.instance {
+            Some(_) => 0,
+            None => self
+                .first_triangle
+                .get(surface.object as usize)
+                .copied()
+                .unwrap_or(0),
+        };
         AovPixel {
             // The camera's rays have unit directions, so t is the distance.
             depth: hit.t,

@@ -129,6 +129,8 @@ pub enum AssetKind {
     Mesh,
     /// A texture image.
     Image,
+    /// A `.npy` file of instance transforms.
+    Transforms,
 }
 
 /// Why a scene could not be loaded or built. Every variant is the user's input being wrong.

@@ -6,6 +6,7 @@ mod build;
 pub mod desc;
 mod error;
 mod locate;
+mod npy;
 mod obj;
 mod overrides;
 mod pack;
@@ -85,6 +86,9 @@ pub struct Scene {
     /// by the path the scene resolved it to, sorted: with the scene's text, all it takes to
     /// build it again (see [`SceneFile::pack`]).
     pub files: Vec<PathBuf>,
+    /// For each `[[objects]]` entry, in file order, the object ids it added: one, or one per
+    /// copy for `type = "instances"`.
+    pub objects: Vec<std::ops::Range<u32>>,
 }
 
 impl SceneFile {

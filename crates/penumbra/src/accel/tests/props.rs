@@ -104,7 +104,7 @@ proptest! {
         let g = soup(&tris);
         let bvh = build_checked(&g);
         // Stale contents must be overwritten, misses included.
-        let stale = Hit { t: -1.0, b1: 0.5, b2: 0.5, triangle: u32::MAX };
+        let stale = Hit { t: -1.0, b1: 0.5, b2: 0.5, triangle: u32::MAX, instance: None };
         let mut hits = vec![Some(stale); rays.len()];
         bvh.intersect_batch(&rays, t_min, t_max, &mut hits);
         for (ray, hit) in rays.iter().zip(&hits) {

@@ -12,6 +12,10 @@ use crate::scene::error::{AssetKind, ErrorKind};
 /// index buffers, the BVH and the BVH build's temporaries (measured: about 175 bytes).
 pub(super) const BYTES_PER_TRIANGLE: u64 = 200;
 
+/// Memory an instance takes at the peak of building the world: its transform twice (for
+/// shading and for the walk), its share of the top-level tree and of that tree's build.
+pub(super) const BYTES_PER_INSTANCE: u64 = 512;
+
 /// Memory a decoded texel keeps: linear float RGB.
 pub(super) const BYTES_PER_TEXEL: u64 = 12;
 
@@ -25,6 +29,8 @@ pub(super) struct Budget {
     pub(super) available: Option<u64>,
     /// Triangles added so far.
     pub(super) triangles: u64,
+    /// Instances added so far.
+    pub(super) instances: u64,
     /// Bytes of the textures decoded so far.
     pub(super) texture_bytes: u64,
 }
@@ -34,13 +40,21 @@ impl Budget {
         Budget {
             available,
             triangles: 0,
+            instances: 0,
             texture_bytes: 0,
         }
     }
 
+    /// Bytes the scene takes so far.
+    fn used(&self) -> u64 {
+        self.triangles * BYTES_PER_TRIANGLE
+            + self.instances * BYTES_PER_INSTANCE
+            + self.texture_bytes
+    }
+
     /// Bytes still free for a texture's decoding, if known.
     pub(super) fn left(&self) -> Option<u64> {
-        let used = self.triangles * BYTES_PER_TRIANGLE + self.texture_bytes;
+        let used = self.used();
         self.available.map(|a| a.saturating_sub(used))
     }
 }
@@ -51,7 +65,7 @@ impl Builder<'_> {
     pub(super) fn take_triangles(&mut self, path: &KeyPath, triangles: usize) -> Result<()> {
         let budget = &mut self.budget;
         let total = budget.triangles + triangles as u64;
-        let need = total * BYTES_PER_TRIANGLE + budget.texture_bytes;
+        let need = budget.used() + triangles as u64 * BYTES_PER_TRIANGLE;
         if let Some(available) = budget.available.filter(|&a| need > a) {
             return Err(self.bad(
                 path,
@@ -64,6 +78,26 @@ impl Builder<'_> {
             ));
         }
         budget.triangles = total;
+        Ok(())
+    }
+
+    /// Counts one instance of the object at `path`, refusing it when it would no longer fit
+    /// in memory.
+    pub(super) fn take_instance(&mut self, path: &KeyPath) -> Result<()> {
+        let need = self.budget.used() + BYTES_PER_INSTANCE;
+        if let Some(available) = self.budget.available.filter(|&a| need > a) {
+            return Err(self.bad(
+                path,
+                format!(
+                    "this instance brings the scene to {} instances, which need about {} of \
+                     memory, more than the {} available",
+                    self.budget.instances + 1,
+                    crate::memory::human(need),
+                    crate::memory::human(available)
+                ),
+            ));
+        }
+        self.budget.instances += 1;
         Ok(())
     }
 

@@ -8,6 +8,7 @@ mod bounds;
 mod budget;
 mod materials;
 mod objects;
+mod placements;
 mod settings;
 
 pub(super) use settings::implied_spp;
@@ -37,6 +38,10 @@ struct Builder<'a> {
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     /// OBJ files read once per scene.
     meshes: HashMap<PathBuf, objects::LoadedObj>,
+    /// How many copies of each OBJ file the scene places.
+    uses: HashMap<PathBuf, usize>,
+    /// `.npy` files of instance transforms read once per scene.
+    transforms: HashMap<PathBuf, std::rc::Rc<[glam::Mat4]>>,
     /// Every file read (meshes, material libraries, images), as resolved.
     read: BTreeSet<PathBuf>,
     world: WorldBuilder,
@@ -63,6 +68,8 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         pool: thread_pool(threads).ok().map(|(pool, _)| pool),
         images: HashMap::new(),
         meshes: HashMap::new(),
+        uses: HashMap::new(),
+        transforms: HashMap::new(),
         read: BTreeSet::new(),
         world: WorldBuilder::new(),
         lighting: Lighting {
@@ -117,8 +124,12 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         let path = KeyPath::root("materials").key(name);
         b.check_reflected(&bounds::material_key(&path, m, term), "this material", most)?;
     }
+    b.uses = b.count_uses(&desc.objects);
+    let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, o) in desc.objects.iter().enumerate() {
+        let first = b.world.object_count();
         b.object(&KeyPath::root("objects").index(i), o)?;
+        objects.push(first..b.world.object_count());
     }
     if let Some(problem) = b.world.scale_problem() {
         let path = match &problem {
@@ -140,6 +151,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         output: film.output,
         gamma: film.gamma,
         files: b.read.into_iter().collect(),
+        objects,
     })
 }
 

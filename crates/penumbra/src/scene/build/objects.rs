@@ -1,19 +1,21 @@
 //! Objects: each shape becomes an object-space [`Mesh`] (OBJ files read once per scene, their
-//! MTL materials made once per file) and is added to the world with its transform.
+//! MTL materials made once per file) and is added to the world with its transform: copied,
+//! or, for an OBJ file the scene places many times, built once and instanced.
 
 use std::rc::Rc;
 
 use glam::Vec3;
 
 use super::materials::{material, Phong};
+use super::placements::Placement;
 use super::{Builder, Result};
 use crate::geometry::{self, Mesh};
 use crate::math::Transform;
-use crate::scene::desc::{ObjectDesc, ShapeDesc};
+use crate::scene::desc::{ColorDesc, ObjectDesc, ShapeDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::obj::{load_obj, ObjMaterial};
 use crate::texture::{Filter, ImageTexture, Texture, TextureKind, Wrap};
-use crate::world::{WorldError, DEFAULT_MATERIAL};
+use crate::world::{flatten_instances, WorldError, DEFAULT_MATERIAL};
 
 /// An OBJ file read once for every object that uses it.
 pub(super) struct LoadedObj {
@@ -22,6 +24,8 @@ pub(super) struct LoadedObj {
     /// World materials made from `mtl` (then the default for faces without one), made when an
     /// object first uses the file without a `material` of its own.
     world_materials: Option<Vec<u32>>,
+    /// The world's shared mesh of the file, once an object instances it.
+    shared: Option<u32>,
 }
 
 impl Builder<'_> {
@@ -31,22 +35,14 @@ impl Builder<'_> {
             o.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
             o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
         );
-        if world.is_singular() {
-            // The rotation is orthonormal: a zero factor, or factors so large or small that
-            // the inverse (which the normals need) leaves the range of f32.
-            let zero = o.scale.is_some_and(|s| s.rgb().cmpeq(Vec3::ZERO).any());
-            let message = if zero {
-                "scale must not be zero"
-            } else {
-                "this scale cannot be inverted in 32-bit floats (which the normals need): its \
-                 factors, or their products, are beyond about 1e-38..1e38"
-            };
-            return Err(self.bad(&path.key("scale"), message));
-        }
-        let mut materials = vec![match &o.material {
-            Some(name) => self.material_index(&path.key("material"), name)?,
-            None => DEFAULT_MATERIAL,
-        }];
+        self.check_invertible(&path.key("scale"), &world, o.scale)?;
+        let material = match &o.material {
+            Some(name) => Some(self.material_index(&path.key("material"), name)?),
+            None => None,
+        };
+        let mut materials = vec![material.unwrap_or(DEFAULT_MATERIAL)];
+        let mut placements = Vec::new();
+        let mut file = None;
         let mesh = match &o.shape {
             ShapeDesc::Triangle(t) => {
                 let uvs = t
@@ -80,25 +76,125 @@ impl Builder<'_> {
                 Rc::new(geometry::sphere(s.radius.f32()))
             }
             ShapeDesc::Mesh(m) => {
-                let (mesh, mtl_materials) =
-                    self.obj(&path.key("file"), &m.file, o.material.is_none())?;
-                if let Some(m) = mtl_materials {
-                    materials = m;
-                }
-                mesh
+                file = Some(&m.file);
+                self.obj_with_materials(path, &m.file, material.is_none(), &mut materials)?
+            }
+            ShapeDesc::Instances(d) => {
+                file = Some(&d.file);
+                placements = self.placements(path, &d.transforms)?;
+                self.obj_with_materials(path, &d.file, material.is_none(), &mut materials)?
             }
         };
-        self.take_triangles(path, mesh.len())?;
-        self.world
-            .add_mesh(&mesh, &world, &materials)
-            .map_err(|e| {
+        if placements.is_empty() && !matches!(o.shape, ShapeDesc::Instances(_)) {
+            placements.push(Placement {
+                transform: Transform::IDENTITY,
+                material: None,
+                at: path.clone(),
+            });
+        }
+        // Each copy: its placement, then the object's transform; its material, or the
+        // object's materials.
+        let mut copies = Vec::with_capacity(placements.len());
+        for p in placements {
+            let transform = world.then_after(p.transform);
+            self.check_invertible(&p.at, &transform, None)?;
+            let materials = match &p.material {
+                Some(name) => vec![self.material_index(&p.at.key("material"), name)?],
+                None => materials.clone(),
+            };
+            copies.push((transform, materials, p.at));
+        }
+        let shared = match file {
+            Some(file) => self.shared_mesh(path, file, &mesh, copies.len())?,
+            None => None,
+        };
+        for (transform, materials, at) in copies {
+            let added = match shared {
+                Some(id) => {
+                    self.take_instance(&at)?;
+                    self.world.add_instance(id, &transform, &materials)
+                }
+                None => {
+                    self.take_triangles(&at, mesh.len())?;
+                    self.world.add_mesh(&mesh, &transform, &materials)
+                }
+            };
+            added.map_err(|e| {
                 let kind = match e {
                     WorldError::VertexOutOfRange { .. } => ErrorKind::Asset(AssetKind::Mesh),
                     _ => ErrorKind::BadValue,
                 };
-                self.err(kind, path, e.to_string())
+                self.err(kind, &at, e.to_string())
             })?;
+        }
         Ok(())
+    }
+
+    /// `Err` at `path` when `transform` cannot be inverted (which the normals need).
+    fn check_invertible(
+        &self,
+        path: &KeyPath,
+        transform: &Transform,
+        scale: Option<ColorDesc>,
+    ) -> Result<()> {
+        if !transform.is_singular() {
+            return Ok(());
+        }
+        // The rotation is orthonormal: a zero factor, or factors so large or small that the
+        // inverse leaves the range of f32.
+        let zero = scale.is_some_and(|s| s.rgb().cmpeq(Vec3::ZERO).any());
+        let message = if zero {
+            "scale must not be zero"
+        } else {
+            "this transform cannot be inverted in 32-bit floats (which the normals need): a zero \
+             scale, or factors (or their products) beyond about 1e-38..1e38"
+        };
+        Err(self.bad(path, message))
+    }
+
+    /// The mesh of the OBJ `file` of the object at `path`, replacing `materials` with its MTL
+    /// materials when the object names none (`with_mtl`).
+    fn obj_with_materials(
+        &mut self,
+        path: &KeyPath,
+        file: &str,
+        with_mtl: bool,
+        materials: &mut Vec<u32>,
+    ) -> Result<Rc<Mesh>> {
+        let (mesh, mtl_materials) = self.obj(&path.key("file"), file, with_mtl)?;
+        if let Some(m) = mtl_materials {
+            *materials = m;
+        }
+        Ok(mesh)
+    }
+
+    /// The shared mesh index of the OBJ `file` when the scene places it as instances rather
+    /// than copies (see [`flatten_instances`]), adding it to the world once; `None` to copy.
+    /// `copies` is how many this object places.
+    fn shared_mesh(
+        &mut self,
+        path: &KeyPath,
+        file: &str,
+        mesh: &Rc<Mesh>,
+        copies: usize,
+    ) -> Result<Option<u32>> {
+        let key = self.file.files().identity(&self.file.resolve(file));
+        let uses = self.uses.get(&key).copied().unwrap_or(0).max(copies);
+        if flatten_instances(mesh.len(), uses) {
+            return Ok(None);
+        }
+        if let Some(id) = self.meshes.get(&key).and_then(|l| l.shared) {
+            return Ok(Some(id));
+        }
+        self.take_triangles(path, mesh.len())?;
+        let id = self
+            .world
+            .add_shared_mesh(Mesh::clone(mesh))
+            .map_err(|e| self.err(ErrorKind::Asset(AssetKind::Mesh), path, e.to_string()))?;
+        if let Some(loaded) = self.meshes.get_mut(&key) {
+            loaded.shared = Some(id);
+        }
+        Ok(Some(id))
     }
 
     /// The mesh of the OBJ `file` (read once per scene) and, when `with_mtl`, the world
@@ -129,6 +225,7 @@ impl Builder<'_> {
                     mesh: Rc::new(model.mesh),
                     mtl: model.materials,
                     world_materials: None,
+                    shared: None,
                 };
                 self.meshes.entry(key.clone()).or_insert(loaded)
             }

@@ -41,7 +41,8 @@ use serde::Deserialize;
 
 pub use lights::{AreaLightDesc, LightDesc, LightType, PointLightDesc};
 pub use objects::{
-    CubeDesc, MeshDesc, ObjectDesc, ObjectType, QuadDesc, ShapeDesc, SphereDesc, TriangleDesc,
+    CubeDesc, InstancesDesc, MeshDesc, ObjectDesc, ObjectType, PlacementDesc, QuadDesc, ShapeDesc,
+    SphereDesc, TransformsDesc, TriangleDesc,
 };
 pub use textures::{
     CheckerTextureDesc, ColorSpace, ImageTextureDesc, TextureDesc, TextureKindDesc, TextureType,

@@ -22,7 +22,9 @@
 //! assert_eq!((s.radius.0, translate.unwrap().0[1]), (1.0, 1.0));
 //! ```
 
-use serde::de::{Deserializer, MapAccess};
+use std::fmt;
+
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
 use super::tagged::{self, Tagged};
@@ -56,6 +58,8 @@ pub enum ShapeDesc {
     Sphere(SphereDesc),
     /// `type = "mesh"`: a Wavefront OBJ file.
     Mesh(MeshDesc),
+    /// `type = "instances"`: many copies of one OBJ file, built once.
+    Instances(InstancesDesc),
 }
 
 /// One triangle.
@@ -105,6 +109,63 @@ pub struct MeshDesc {
     pub file: String,
 }
 
+/// Copies of one mesh file, each placed by one of `transforms` and then by the object's own
+/// `scale`, `rotate` and `translate`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstancesDesc {
+    /// Wavefront OBJ file, relative to the scene file's folder.
+    pub file: String,
+    /// Where the copies go.
+    pub transforms: TransformsDesc,
+}
+
+/// The placements of `type = "instances"`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TransformsDesc {
+    /// An inline list, one entry per copy.
+    List(Vec<PlacementDesc>),
+    /// A `.npy` file of (N, 4, 4) float32 or float64 matrices (row-major, as numpy writes
+    /// them), relative to the scene file's folder.
+    Npy(String),
+}
+
+/// One copy's placement (`T·Rz·Ry·Rx·S`, as an object's) and, optionally, its material.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PlacementDesc {
+    /// Material name (default: the object's).
+    pub material: Option<String>,
+    /// Scale factor(s).
+    pub scale: Option<ColorDesc>,
+    /// Rotation about x, y, z in degrees.
+    pub rotate: Option<Vec3Desc>,
+    /// Translation.
+    pub translate: Option<Vec3Desc>,
+}
+
+impl<'de> Deserialize<'de> for TransformsDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct TransformsVisitor;
+        impl<'de> Visitor<'de> for TransformsVisitor {
+            type Value = TransformsDesc;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(
+                    "a list of placements ({ translate, rotate, scale, material }) or the name \
+                     of a .npy file of (N, 4, 4) matrices",
+                )
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<TransformsDesc, E> {
+                Ok(TransformsDesc::Npy(v.to_owned()))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<TransformsDesc, A::Error> {
+                let list = Vec::deserialize(de::value::SeqAccessDeserializer::new(seq))?;
+                Ok(TransformsDesc::List(list))
+            }
+        }
+        d.deserialize_any(TransformsVisitor)
+    }
+}
+
 /// The `type` of an object.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -119,6 +180,8 @@ pub enum ObjectType {
     Sphere,
     /// A Wavefront OBJ file.
     Mesh,
+    /// Copies of an OBJ file.
+    Instances,
 }
 
 #[derive(Default)]
@@ -137,6 +200,7 @@ pub(super) struct ObjectFields {
     size: Option<ColorDesc>,
     radius: Option<Num>,
     file: Option<String>,
+    transforms: Option<TransformsDesc>,
 }
 
 impl Tagged for ObjectDesc {
@@ -144,7 +208,17 @@ impl Tagged for ObjectDesc {
     type Fields = ObjectFields;
     const COMMON: &'static [&'static str] = &["material", "scale", "rotate", "translate"];
     const ALL: &'static [&'static str] = &[
-        "vertices", "uvs", "normals", "corner", "u", "v", "center", "size", "radius", "file",
+        "vertices",
+        "uvs",
+        "normals",
+        "corner",
+        "u",
+        "v",
+        "center",
+        "size",
+        "radius",
+        "file",
+        "transforms",
     ];
 
     const KINDS: &'static [ObjectType] = &[
@@ -153,6 +227,7 @@ impl Tagged for ObjectDesc {
         ObjectType::Cube,
         ObjectType::Sphere,
         ObjectType::Mesh,
+        ObjectType::Instances,
     ];
 
     fn keys(kind: ObjectType) -> &'static [&'static str] {
@@ -162,6 +237,7 @@ impl Tagged for ObjectDesc {
             ObjectType::Cube => &["center", "size"],
             ObjectType::Sphere => &["center", "radius"],
             ObjectType::Mesh => &["file"],
+            ObjectType::Instances => &["file", "transforms"],
         }
     }
 
@@ -172,6 +248,7 @@ impl Tagged for ObjectDesc {
             ObjectType::Cube => "a cube",
             ObjectType::Sphere => "a sphere",
             ObjectType::Mesh => "a mesh",
+            ObjectType::Instances => "instances of a mesh",
         }
     }
 
@@ -194,6 +271,7 @@ impl Tagged for ObjectDesc {
             "center" => f.center = Some(map.next_value()?),
             "size" => f.size = Some(map.next_value()?),
             "radius" => f.radius = Some(map.next_value()?),
+            "transforms" => f.transforms = Some(map.next_value()?),
             _ => f.file = Some(map.next_value()?),
         }
         Ok(())
@@ -221,6 +299,10 @@ impl Tagged for ObjectDesc {
             }),
             ObjectType::Mesh => ShapeDesc::Mesh(MeshDesc {
                 file: f.file.ok_or("file")?,
+            }),
+            ObjectType::Instances => ShapeDesc::Instances(InstancesDesc {
+                file: f.file.ok_or("file")?,
+                transforms: f.transforms.ok_or("transforms")?,
             }),
         };
         Ok(ObjectDesc {

@@ -20,20 +20,23 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use glam::Vec3;
 use thiserror::Error;
 
-use crate::accel::Bvh;
+use crate::accel::Levels;
 use crate::camera::Camera;
 use crate::geometry::{Geometry, Hit, Mesh, Surface};
 use crate::light::Light;
 use crate::material::Material;
-use crate::math::{Aabb, Ray, Transform};
-use crate::pool::thread_pool;
-use crate::scale;
+use crate::math::{Aabb, Ray};
 use crate::texture::Texture;
+
+mod builder;
+mod placed;
+
+pub use builder::{flatten_instances, WorldBuilder, FLATTEN_TRIANGLES, MAX_INSTANCES};
+pub(crate) use placed::Placed;
 
 /// Most triangles in a world: about 100 bytes each with the BVH, so 2^27 need some 13 GiB.
 pub const MAX_TRIANGLES: usize = 1 << 27;
@@ -83,6 +86,20 @@ pub enum WorldError {
     /// More triangles than fit in memory.
     #[error("the scene has more than {MAX_TRIANGLES} triangles, too many for memory")]
     TooManyTriangles,
+    /// More instances than fit in memory.
+    #[error("the scene has more than {MAX_INSTANCES} instances, too many for memory")]
+    TooManyInstances,
+    /// An instance names a mesh that was not added.
+    #[error("mesh {index} does not exist (the world has {meshes})")]
+    UnknownMesh {
+        /// The index given.
+        index: u32,
+        /// How many shared meshes there are.
+        meshes: usize,
+    },
+    /// An instance's transform cannot be inverted (a zero scale, or factors beyond f32).
+    #[error("the transform cannot be inverted (a zero scale, or factors beyond about 1e±38)")]
+    SingularTransform,
     /// Two cameras with one name.
     #[error("a camera named \"{0}\" already exists")]
     DuplicateCamera(String),
@@ -91,10 +108,16 @@ pub enum WorldError {
 /// Counts and timings of a built world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldStats {
-    /// Triangles.
+    /// Triangles as rays see them: each instance counts its mesh's triangles.
     pub triangles: usize,
-    /// Objects (meshes added).
+    /// Triangles in memory: the world's own, and each shared mesh's once.
+    pub unique_triangles: usize,
+    /// Objects (meshes added, instances included).
     pub objects: usize,
+    /// Meshes built once and placed by instances.
+    pub meshes: usize,
+    /// Instances of those meshes.
+    pub instances: usize,
     /// Lights.
     pub lights: usize,
     /// Materials, not counting the default one.
@@ -113,7 +136,10 @@ pub struct WorldStats {
 #[derive(Debug)]
 pub struct World {
     geometry: Geometry,
-    accel: Bvh,
+    meshes: Vec<Mesh>,
+    placed: Vec<Placed>,
+    instance_materials: Vec<u32>,
+    accel: Levels,
     materials: Vec<Material>,
     textures: Vec<Texture>,
     lights: Vec<Light>,
@@ -128,8 +154,8 @@ impl World {
         &self.geometry
     }
 
-    /// The acceleration structure over [`World::geometry`].
-    pub fn accel(&self) -> &Bvh {
+    /// The acceleration structure: the tree over [`World::geometry`] and the instances.
+    pub fn accel(&self) -> &Levels {
         &self.accel
     }
 
@@ -158,9 +184,34 @@ impl World {
         self.cameras.iter().find(|(n, _)| n == name).map(|(_, c)| c)
     }
 
-    /// Bounds of every vertex used by a triangle (empty for an empty world).
+    /// Bounds of every vertex used by a triangle of the world's own, and of each instance's
+    /// mesh box placed by the instance (which holds the placed mesh, loosely when rotated);
+    /// empty for an empty world.
     pub fn bounds(&self) -> Aabb {
-        self.geometry.bounds()
+        let mesh_bounds: Vec<Aabb> = self.meshes.iter().map(mesh_bounds).collect();
+        self.placed
+            .iter()
+            .map(|p| mesh_bounds[p.mesh as usize].transformed(&p.transform))
+            .fold(self.geometry.bounds(), Aabb::union)
+    }
+
+    /// Each instance's object id, triangles (its mesh's) and bounds (its mesh's box placed,
+    /// as [`World::bounds`] takes it), in the order they were added.
+    pub fn instance_summary(&self) -> Vec<(u32, usize, Aabb)> {
+        let mesh_bounds: Vec<Aabb> = self.meshes.iter().map(mesh_bounds).collect();
+        self.placed
+            .iter()
+            .map(|p| {
+                let mesh = p.mesh as usize;
+                let bounds = mesh_bounds[mesh].transformed(&p.transform);
+                (p.object, self.meshes[mesh].len(), bounds)
+            })
+            .collect()
+    }
+
+    /// The meshes built once and placed by instances, by index.
+    pub fn meshes(&self) -> &[Mesh] {
+        &self.meshes
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`.
@@ -168,16 +219,32 @@ impl World {
         self.accel.intersect(ray, t_min, t_max)
     }
 
-    /// The surface at `hit` (a hit of this world's geometry).
+    /// The surface at `hit` (a hit of this world's triangles or instances).
     pub fn surface(&self, hit: &Hit) -> Surface {
-        Surface::from_hit(&self.geometry, hit)
+        let Some(instance) = hit.instance else {
+            return Surface::from_hit(&self.geometry, hit);
+        };
+        let p = &self.placed[instance as usize];
+        let (first, count) = (p.materials.0 as usize, p.materials.1 as usize);
+        let materials = &self.instance_materials[first..first + count];
+        let mesh = &self.meshes[p.mesh as usize];
+        Surface::from_instance(mesh, &p.transform, hit, p.object, materials)
     }
 
     /// Counts and timings.
     pub fn stats(&self) -> WorldStats {
+        let placed: usize = self
+            .placed
+            .iter()
+            .map(|p| self.meshes[p.mesh as usize].len())
+            .sum();
+        let shared: usize = self.meshes.iter().map(Mesh::len).sum();
         WorldStats {
-            triangles: self.geometry.len(),
+            triangles: self.geometry.len() + placed,
+            unique_triangles: self.geometry.len() + shared,
             objects: self.objects as usize,
+            meshes: self.meshes.len(),
+            instances: self.placed.len(),
             lights: self.lights.len(),
             materials: self.materials.len() - 1,
             textures: self.textures.len(),
@@ -188,202 +255,21 @@ impl World {
     }
 }
 
-/// Collects a world's parts, checking each as it is added; [`WorldBuilder::build`] then
-/// builds the acceleration structure.
-#[derive(Debug)]
-pub struct WorldBuilder {
-    geometry: Geometry,
-    materials: Vec<Material>,
-    textures: Vec<Texture>,
-    lights: Vec<Light>,
-    cameras: Vec<(String, Camera)>,
-    objects: u32,
-}
-
-impl Default for WorldBuilder {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl WorldBuilder {
-    /// An empty world with only the default material.
-    pub fn new() -> Self {
-        Self {
-            geometry: Geometry::default(),
-            materials: vec![Material::default()],
-            textures: Vec::new(),
-            lights: Vec::new(),
-            cameras: Vec::new(),
-            objects: 0,
-        }
-    }
-
-    /// Adds a texture; returns its index for [`Material::texture`].
-    pub fn add_texture(&mut self, texture: Texture) -> u32 {
-        self.textures.push(texture);
-        self.textures.len() as u32 - 1
-    }
-
-    /// Adds a material; returns its index.
-    pub fn add_material(&mut self, material: Material) -> Result<u32, WorldError> {
-        if let Some(index) = material.texture {
-            if index as usize >= self.textures.len() {
-                return Err(WorldError::UnknownTexture {
-                    index,
-                    textures: self.textures.len(),
-                });
-            }
-        }
-        self.materials.push(material);
-        Ok(self.materials.len() as u32 - 1)
-    }
-
-    /// Adds a light.
-    pub fn add_light(&mut self, light: Light) {
-        self.lights.push(light);
-    }
-
-    /// Adds a camera under a name of its own.
-    pub fn add_camera(
-        &mut self,
-        name: impl Into<String>,
-        camera: Camera,
-    ) -> Result<(), WorldError> {
-        let name = name.into();
-        if self.cameras.iter().any(|(n, _)| *n == name) {
-            return Err(WorldError::DuplicateCamera(name));
-        }
-        self.cameras.push((name, camera));
-        Ok(())
-    }
-
-    /// Adds `mesh`, placed by `transform`, as a new object; returns its id. The mesh's
-    /// material slot `k` becomes the material `materials[k]` (slots past the end use the last
-    /// entry; no entries means the default material).
-    pub fn add_mesh(
-        &mut self,
-        mesh: &Mesh,
-        transform: &Transform,
-        materials: &[u32],
-    ) -> Result<u32, WorldError> {
-        for &index in materials {
-            if index as usize >= self.materials.len() {
-                return Err(WorldError::UnknownMaterial {
-                    index,
-                    materials: self.materials.len(),
-                });
-            }
-        }
-        let vertices = mesh.positions.len();
-        for (triangle, tri) in mesh.indices.iter().enumerate() {
-            if let Some(&index) = tri.iter().find(|&&i| i as usize >= vertices) {
-                return Err(WorldError::VertexOutOfRange {
-                    triangle,
-                    index,
-                    vertices,
-                });
-            }
-        }
-        if self.geometry.len() + mesh.len() > MAX_TRIANGLES {
-            return Err(WorldError::TooManyTriangles);
-        }
-        let (first_vertex, first_triangle) = (self.geometry.positions.len(), self.geometry.len());
-        let object = self.objects;
-        self.geometry.append(mesh, transform, materials, object);
-        if self.geometry.positions[first_vertex..]
-            .iter()
-            .any(|p| !p.is_finite())
-        {
-            self.geometry.truncate(first_vertex, first_triangle);
-            return Err(WorldError::NotFinite);
-        }
-        let largest = scale::largest_coordinate(&self.geometry.positions[first_vertex..]);
-        if largest > scale::MAX_COORDINATE {
-            self.geometry.truncate(first_vertex, first_triangle);
-            return Err(WorldError::OutOfRange(largest));
-        }
-        self.objects += 1;
-        Ok(object)
-    }
-
-    /// Adds the triangles `indices` over the world-space `vertices` with one material, as a
-    /// new object; returns its id.
-    pub fn add_triangles(
-        &mut self,
-        vertices: &[[f32; 3]],
-        indices: &[[u32; 3]],
-        material: u32,
-    ) -> Result<u32, WorldError> {
-        let mesh = Mesh {
-            positions: vertices.iter().map(|&p| Vec3::from(p)).collect(),
-            indices: indices.to_vec(),
-            ..Mesh::default()
-        };
-        self.add_mesh(&mesh, &Transform::IDENTITY, &[material])
-    }
-
-    /// Where the world leaves the scales it renders exactly (see [`scale`]): the first
-    /// camera (by name) or light (by index) too far from the triangles for their size, or an
-    /// extent too small. `None` when all is well, or without triangles.
-    pub(crate) fn scale_problem(&self) -> Option<scale::Problem> {
-        if self.geometry.is_empty() {
-            return None;
-        }
-        let reach = scale::Reach::of(&self.geometry);
-        let camera = self.cameras.iter().find_map(|(name, c)| {
-            let product = reach.product(c.position());
-            (product > scale::MAX_REACH).then(|| scale::Problem::Camera(name.clone(), product))
-        });
-        let light = || {
-            self.lights.iter().enumerate().find_map(|(i, l)| {
-                let product = scale::light_points(l)
-                    .map(|p| reach.product(p))
-                    .fold(0.0, f32::max);
-                (product > scale::MAX_REACH).then_some(scale::Problem::Light(i, product))
-            })
-        };
-        let extent = || {
-            let cameras = self.cameras.iter().map(|(_, c)| c.position());
-            let bounds = cameras.fold(reach.bounds, Aabb::grow);
-            let extent = (bounds.max - bounds.min).max_element();
-            (extent < scale::MIN_EXTENT).then_some(scale::Problem::Tiny(extent))
-        };
-        camera.or_else(light).or_else(extent)
-    }
-
-    /// Builds the acceleration structure with `threads` workers (0: all cores) and returns
-    /// the finished world.
-    pub fn build(self, threads: usize) -> World {
-        // Without a pool of its own (the system refused threads) the build runs serially: the
-        // library never borrows rayon's global pool.
-        let pool = thread_pool(threads).ok().map(|(pool, _)| pool);
-        self.build_on(pool.as_ref())
-    }
-
-    /// [`WorldBuilder::build`] on the threads of `pool`, or on the calling thread without one.
-    pub(crate) fn build_on(self, pool: Option<&rayon::ThreadPool>) -> World {
-        let start = Instant::now();
-        let accel = match pool {
-            Some(pool) => Bvh::build_parallel(&self.geometry, pool),
-            None => Bvh::build(&self.geometry),
-        };
-        World {
-            geometry: self.geometry,
-            accel,
-            materials: self.materials,
-            textures: self.textures,
-            lights: self.lights,
-            cameras: self.cameras,
-            objects: self.objects,
-            bvh_build_time: start.elapsed(),
-        }
-    }
+/// Bounds of the vertices `mesh`'s triangles use.
+fn mesh_bounds(mesh: &Mesh) -> Aabb {
+    mesh.indices
+        .iter()
+        .flatten()
+        .map(|&v| mesh.positions[v as usize])
+        .fold(Aabb::EMPTY, Aabb::grow)
 }
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
+    use crate::math::Transform;
 
     fn tri() -> [[f32; 3]; 3] {
         [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]

@@ -1,0 +1,189 @@
+//! The second level: meshes built once into a BVH of their own (the bottom level, in object
+//! space) and placed any number of times by instances, under a top-level BVH over the
+//! instances' world boxes.
+//!
+//! The top-level tree is a [`Bvh`] like any other: the same nodes and build, with instance
+//! indices where a mesh's tree has triangle indices, and no triangles. A ray walks it with the
+//! same walks (`traverse::walk_closest`, `traverse::walk_any`); at an instance it enters the
+//! mesh's tree in object space through the instance's precomputed inverse. The direction is
+//! mapped but not renormalized, so `t` means the same in both spaces and a hit needs no
+//! conversion: the world point is `origin + t·direction` of the world ray.
+//!
+//! Which hit is closest follows the one-level rule extended to two: the smallest `t`, then
+//! the world's own triangles before any instance, then the smaller instance index, then the
+//! smaller triangle index in the mesh, so that the answer never depends on the order of the
+//! visit.
+
+use glam::{Affine3A, DMat4, Vec3A};
+
+use super::{build, traverse, Bvh};
+use crate::geometry::{Hit, Mesh};
+use crate::math::{Aabb, Ray, Transform};
+
+/// Meshes built once, the instances that place them, and the top-level tree over those.
+#[derive(Clone, Debug, Default)]
+pub struct Instances {
+    meshes: Vec<Bvh>,
+    placements: Vec<Placement>,
+    top: Bvh,
+}
+
+/// Where an instance puts its mesh: the mesh's index and the map from world to object space.
+#[derive(Clone, Copy, Debug)]
+struct Placement {
+    mesh: u32,
+    object_from_world: Affine3A,
+}
+
+impl Instances {
+    /// Builds each of `meshes` once and the top-level tree over `instances`: for each, the
+    /// index of its mesh and its object-to-world transform, which must be invertible. On the
+    /// threads of `pool` when there is one.
+    pub(crate) fn build(
+        meshes: &[Mesh],
+        instances: &[(u32, Transform)],
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Instances {
+        if instances.is_empty() {
+            return Instances::default();
+        }
+        let meshes: Vec<Bvh> = meshes
+            .iter()
+            .map(|m| {
+                let corners = |i: usize| m.indices[i].map(|v| m.positions[v as usize]);
+                build::build(m.len(), corners, pool)
+            })
+            .collect();
+        let boxes: Vec<Aabb> = instances
+            .iter()
+            .map(|(mesh, transform)| world_box(&meshes[*mesh as usize], transform))
+            .collect();
+        let (nodes, prim_ids) = build::build_tree(boxes.len(), |i| boxes[i], pool);
+        let placements = instances
+            .iter()
+            .map(|(mesh, transform)| Placement {
+                mesh: *mesh,
+                object_from_world: inverse(transform),
+            })
+            .collect();
+        Instances {
+            meshes,
+            placements,
+            top: Bvh {
+                nodes,
+                tris: Vec::new(),
+                prim_ids,
+            },
+        }
+    }
+
+    /// True when there are no instances.
+    pub fn is_empty(&self) -> bool {
+        self.placements.is_empty()
+    }
+
+    /// Number of instances.
+    pub fn len(&self) -> usize {
+        self.placements.len()
+    }
+
+    /// Nodes of the top-level tree and of every mesh's tree.
+    pub fn node_count(&self) -> usize {
+        self.top.node_count() + self.meshes.iter().map(Bvh::node_count).sum::<usize>()
+    }
+
+    /// Triangles of the meshes, each counted once however many instances place it.
+    pub fn unique_triangles(&self) -> usize {
+        self.meshes.iter().map(|m| m.tris.len()).sum()
+    }
+
+    /// The ray in instance `index`'s object space (same `t`), and its mesh's tree.
+    #[inline(always)]
+    fn enter(&self, index: u32, ray: &Ray) -> (Ray, &Bvh) {
+        let p = &self.placements[index as usize];
+        let local = Ray::new(
+            p.object_from_world.transform_point3(ray.origin),
+            p.object_from_world.transform_vector3(ray.direction),
+        );
+        (local, &self.meshes[p.mesh as usize])
+    }
+
+    /// The closest of `best` (a hit of the world's own triangles, or `None`) and every
+    /// instance's hits with `t` in `(t_min, t_max)`.
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32, best: Option<Hit>) -> Option<Hit> {
+        if self.top.nodes.is_empty() {
+            return best;
+        }
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+        let mut best = best;
+        let mut t = best.map_or(t_max, |h| h.t);
+        traverse::walk_closest(
+            &self.top.nodes,
+            origin,
+            inv_dir,
+            t_min,
+            &mut t,
+            |slots, t| {
+                for &index in &self.top.prim_ids[slots] {
+                    let (local, mesh) = self.enter(index, ray);
+                    // Ties at the best `t` so far are looked for too: a smaller key may take them.
+                    let limit = if best.is_some() { t.next_up() } else { t_max };
+                    let Some(hit) = traverse::intersect(mesh, &local, t_min, limit) else {
+                        continue;
+                    };
+                    let hit = Hit {
+                        instance: Some(index),
+                        ..hit
+                    };
+                    if best.is_none_or(|b| closer(&hit, &b)) {
+                        *t = hit.t;
+                        best = Some(hit);
+                    }
+                }
+            },
+        );
+        best
+    }
+
+    /// True when an instance meets the ray with `t` in `(t_min, t_max)`; stops at the first.
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        if self.top.nodes.is_empty() {
+            return false;
+        }
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+        traverse::walk_any(&self.top.nodes, origin, inv_dir, t_min, t_max, |slots| {
+            self.top.prim_ids[slots].iter().any(|&index| {
+                let (local, mesh) = self.enter(index, ray);
+                traverse::occluded(mesh, &local, t_min, t_max)
+            })
+        })
+    }
+}
+
+/// True when `a` is closer than `b`: a smaller `t`, or the same `t` and a smaller key (the
+/// world's own triangles first, then by instance, then by triangle).
+fn closer(a: &Hit, b: &Hit) -> bool {
+    let key = |h: &Hit| (h.instance.map_or(0, |i| u64::from(i) + 1), h.triangle);
+    a.t < b.t || (a.t == b.t && key(a) < key(b))
+}
+
+/// The world-space box of `mesh` placed by `transform`: its root box placed, grown by a
+/// relative 2⁻¹⁶ of its size and position for the rounding of the map, so that it holds every
+/// point a ray can hit on the placed mesh.
+fn world_box(mesh: &Bvh, transform: &Transform) -> Aabb {
+    let Some(root) = mesh.nodes.first() else {
+        return Aabb::EMPTY;
+    };
+    let world = root.bounds().transformed(transform);
+    let pad = (world.max - world.min + world.max.abs().max(world.min.abs())) * (1.0 / 65536.0);
+    Aabb {
+        min: world.min - pad,
+        max: world.max + pad,
+    }
+}
+
+/// The world-to-object map of `transform`, inverted in double precision.
+fn inverse(transform: &Transform) -> Affine3A {
+    let m = transform.world_from_object.as_dmat4().inverse();
+    Affine3A::from_mat4(DMat4::as_mat4(&m))
+}

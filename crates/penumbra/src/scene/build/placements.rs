@@ -1,0 +1,149 @@
+//! Where copies of a mesh go: the placements of `type = "instances"` (an inline list or a
+//! `.npy` file of matrices), and how many copies of each OBJ file the scene places, which
+//! decides whether the file is copied per use or built once and instanced
+//! ([`flatten_instances`](crate::world::flatten_instances)).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use glam::{Mat4, Vec3};
+
+use super::budget::BYTES_PER_INSTANCE;
+use super::{Builder, Result};
+use crate::math::Transform;
+use crate::scene::desc::{ObjectDesc, PlacementDesc, ShapeDesc, TransformsDesc};
+use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
+use crate::scene::npy;
+
+/// Bytes a `.npy` file may have: 2^24 instances of float64 matrices and a header.
+const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
+
+/// One copy: its transform within the object (before the object's own) and, when it names
+/// one, its material; `at` locates it in the file.
+pub(super) struct Placement {
+    pub transform: Transform,
+    pub material: Option<String>,
+    pub at: KeyPath,
+}
+
+impl Builder<'_> {
+    /// For each OBJ file (by identity), how many copies of it the scene's objects place: one
+    /// per `mesh` object and one per placement of an `instances` object.
+    pub(super) fn count_uses(&mut self, objects: &[ObjectDesc]) -> HashMap<PathBuf, usize> {
+        let mut uses = HashMap::new();
+        for (i, o) in objects.iter().enumerate() {
+            let (file, copies) = match &o.shape {
+                ShapeDesc::Mesh(m) => (&m.file, 1),
+                ShapeDesc::Instances(d) => {
+                    let path = KeyPath::root("objects").index(i).key("transforms");
+                    let copies = match &d.transforms {
+                        TransformsDesc::List(list) => list.len(),
+                        // A file that cannot be read counts for none here; its error comes
+                        // in order when the object is built.
+                        TransformsDesc::Npy(f) => self.npy(&path, f).map_or(0, |m| m.len()),
+                    };
+                    (&d.file, copies)
+                }
+                _ => continue,
+            };
+            let key = self.file.files().identity(&self.file.resolve(file));
+            *uses.entry(key).or_insert(0) += copies;
+        }
+        uses
+    }
+
+    /// The placements of an `instances` object at `path`.
+    pub(super) fn placements(
+        &mut self,
+        path: &KeyPath,
+        transforms: &TransformsDesc,
+    ) -> Result<Vec<Placement>> {
+        let at = path.key("transforms");
+        match transforms {
+            TransformsDesc::List(list) => list
+                .iter()
+                .enumerate()
+                .map(|(i, p)| self.placement(&at.index(i), p))
+                .collect(),
+            TransformsDesc::Npy(file) => {
+                let matrices = self.npy(&at, file)?;
+                Ok(matrices
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &m)| Placement {
+                        transform: Transform::from_matrix(m),
+                        material: None,
+                        at: at.index(i),
+                    })
+                    .collect())
+            }
+        }
+    }
+
+    /// One inline placement, checked.
+    fn placement(&self, at: &KeyPath, p: &PlacementDesc) -> Result<Placement> {
+        let transform = Transform::from_srt(
+            p.scale.map_or(Vec3::ONE, |s| s.rgb()),
+            p.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
+            p.translate.map_or(Vec3::ZERO, |t| t.vec3()),
+        );
+        Ok(Placement {
+            transform,
+            material: p.material.clone(),
+            at: at.clone(),
+        })
+    }
+
+    /// The matrices of the `.npy` file `file` (named at `path`), read once per scene.
+    fn npy(&mut self, path: &KeyPath, file: &str) -> Result<Rc<[Mat4]>> {
+        let resolved = self.file.resolve(file);
+        let key = self.file.files().identity(&resolved);
+        if let Some(m) = self.transforms.get(&key) {
+            return Ok(m.clone());
+        }
+        let fail = |b: &Self, message: String| {
+            b.err(
+                ErrorKind::Asset(AssetKind::Transforms),
+                path,
+                format!(
+                    "cannot load transforms \"{}\": {message}",
+                    resolved.display()
+                ),
+            )
+        };
+        // Every matrix takes at least 64 bytes of the file; refuse before reading one that
+        // could not fit.
+        if let Some(size) = self.file.files().size(&resolved) {
+            let most = size / 64;
+            if most > crate::world::MAX_INSTANCES as u64 {
+                let message = format!(
+                    "its {size} bytes hold up to {most} matrices; a scene places at most {}",
+                    crate::world::MAX_INSTANCES
+                );
+                return Err(fail(self, message));
+            }
+            let need = size + most * BYTES_PER_INSTANCE;
+            if let Some(left) = self.budget.left().filter(|&left| need > left) {
+                let message = format!(
+                    "placing its matrices needs about {} of memory, more than the {} available",
+                    crate::memory::human(need),
+                    crate::memory::human(left)
+                );
+                return Err(fail(self, message));
+            }
+        }
+        let bytes = self
+            .file
+            .files()
+            .read(&resolved, MAX_NPY_BYTES)
+            .map_err(|e| fail(self, e.to_string()))?;
+        let matrices = npy::header(&bytes)
+            .and_then(|h| npy::matrices(&bytes, &h))
+            .map_err(|e| fail(self, e.to_string()))?;
+        self.read.insert(resolved);
+        let matrices: Rc<[Mat4]> = matrices.into();
+        self.transforms.insert(key, matrices.clone());
+        Ok(matrices)
+    }
+}

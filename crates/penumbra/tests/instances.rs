@@ -1,0 +1,325 @@
+//! Two-level instancing against copies: random meshes placed by random instances (nested
+//! transforms composed, mirrored, scaled non-uniformly) must answer every query as the same
+//! scene with every instance copied into the world does: the same hit, `t` within 1e-5
+//! relative, the same ids, uvs and normals; the same occlusion for single rays, shared-origin
+//! packets, bundles of segments and shafts, on every SIMD path.
+
+use glam::{Vec2, Vec3};
+use penumbra::{
+    supported_paths, Hit, Material, Mesh, Pairs, Ray, Segments, Transform, World, WorldBuilder,
+};
+use proptest::prelude::*;
+
+/// A small random mesh near the origin, with uvs and (sometimes) vertex normals.
+fn arb_mesh() -> impl Strategy<Value = Mesh> {
+    (
+        prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 3..30),
+        any::<bool>(),
+    )
+        .prop_map(|(points, smooth)| {
+            let positions: Vec<Vec3> = points.into_iter().map(Vec3::from).collect();
+            let n = positions.len() as u32;
+            let indices = (0..n / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+            let uvs = positions.iter().map(|p| Vec2::new(p.x, p.y)).collect();
+            let normals = if smooth {
+                positions
+                    .iter()
+                    .map(|p| (*p + Vec3::Z).normalize_or(Vec3::Z))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            Mesh {
+                material_slots: (0..n / 3).map(|t| t % 2).collect(),
+                positions,
+                normals,
+                uvs,
+                indices,
+            }
+        })
+}
+
+/// One placement: non-uniform scale (a negative factor mirrors), rotation and translation.
+fn arb_transform() -> impl Strategy<Value = Transform> {
+    (
+        prop::array::uniform3((0.3f32..3.0, any::<bool>())),
+        prop::array::uniform3(-180.0f32..180.0),
+        prop::array::uniform3(-6.0f32..6.0),
+    )
+        .prop_map(|(s, r, t)| {
+            let scale = Vec3::from(s.map(|(v, mirror)| if mirror { -v } else { v }));
+            Transform::from_srt(scale, Vec3::from(r), Vec3::from(t))
+        })
+}
+
+/// A node path of one to three placements composed, as a scene graph nests them.
+fn arb_nested() -> impl Strategy<Value = Transform> {
+    prop::collection::vec(arb_transform(), 1..4).prop_map(|chain| {
+        chain
+            .into_iter()
+            .reduce(|outer, inner| outer.then_after(inner))
+            .unwrap()
+    })
+}
+
+#[derive(Debug, Clone)]
+struct Case {
+    own: Vec<Mesh>,
+    meshes: Vec<Mesh>,
+    instances: Vec<(usize, Transform, u32)>,
+}
+
+fn arb_case() -> impl Strategy<Value = Case> {
+    (
+        prop::collection::vec(arb_mesh(), 0..3),
+        prop::collection::vec(arb_mesh(), 1..4),
+    )
+        .prop_flat_map(|(own, meshes)| {
+            let n = meshes.len();
+            let instances = prop::collection::vec((0..n, arb_nested(), 1u32..3), 1..24);
+            (Just(own), Just(meshes), instances)
+        })
+        .prop_map(|(own, meshes, instances)| Case {
+            own,
+            meshes,
+            instances,
+        })
+}
+
+/// The scene with its instances placed (`instanced`) or copied.
+fn world(case: &Case, instanced: bool) -> World {
+    let mut b = WorldBuilder::new();
+    let red = b.add_material(Material::default()).unwrap();
+    let green = b.add_material(Material::default()).unwrap();
+    for mesh in &case.own {
+        b.add_mesh(mesh, &Transform::IDENTITY, &[red]).unwrap();
+    }
+    let ids: Vec<u32> = case
+        .meshes
+        .iter()
+        .map(|m| b.add_shared_mesh(m.clone()).unwrap())
+        .collect();
+    for (mesh, transform, material) in &case.instances {
+        let materials = [*material, green];
+        if instanced {
+            b.add_instance(ids[*mesh], transform, &materials).unwrap();
+        } else {
+            b.add_mesh(&case.meshes[*mesh], transform, &materials)
+                .unwrap();
+        }
+    }
+    b.build(1)
+}
+
+fn arb_rays() -> impl Strategy<Value = Vec<Ray>> {
+    let point = || prop::array::uniform3(-9.0f32..9.0).prop_map(Vec3::from);
+    prop::collection::vec((point(), point()), 1..64).prop_map(|v| {
+        v.into_iter()
+            .map(|(o, target)| Ray::new(o, target - o))
+            .filter(|r| r.direction.length() > 1e-2)
+            .collect()
+    })
+}
+
+/// The object and the triangle's index within its object, for either world: a copy's
+/// triangle index counts from its object's first triangle.
+fn ids(world: &World, hit: &Hit) -> (u32, u32) {
+    let s = world.surface(hit);
+    if hit.instance.is_some() {
+        return (s.object, s.triangle);
+    }
+    let first = world
+        .geometry()
+        .triangles
+        .iter()
+        .position(|t| t.object == s.object)
+        .unwrap() as u32;
+    (s.object, s.triangle - first)
+}
+
+fn same_hit(a: (&World, Option<Hit>), b: (&World, Option<Hit>)) -> Result<(), TestCaseError> {
+    let (wa, ha) = a;
+    let (wb, hb) = b;
+    match (ha, hb) {
+        (None, None) => Ok(()),
+        (Some(x), Some(y)) => {
+            prop_assert!(
+                (x.t - y.t).abs() <= 1e-5 * x.t.abs().max(1.0),
+                "t {} vs {}",
+                x.t,
+                y.t
+            );
+            prop_assert_eq!(ids(wa, &x), ids(wb, &y));
+            let (sa, sb) = (wa.surface(&x), wb.surface(&y));
+            prop_assert_eq!(sa.material, sb.material);
+            prop_assert!((sa.uv - sb.uv).length() < 1e-4, "uv {} vs {}", sa.uv, sb.uv);
+            let close = |p: Vec3, q: Vec3| (p - q).length() < 1e-3;
+            prop_assert!(close(sa.geometric_normal, sb.geometric_normal));
+            prop_assert!(close(sa.shading_normal, sb.shading_normal));
+            prop_assert!(
+                (sa.position - sb.position).length() < 1e-4 * sa.position.length().max(1.0)
+            );
+            Ok(())
+        }
+        (x, y) => Err(TestCaseError::fail(format!("hit {x:?} vs {y:?}"))),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn instanced_scenes_answer_as_their_copies(case in arb_case(), rays in arb_rays()) {
+        let (inst, flat) = (world(&case, true), world(&case, false));
+        prop_assert_eq!(inst.stats().triangles, flat.stats().triangles);
+        prop_assert_eq!(inst.stats().instances, case.instances.len());
+        for ray in &rays {
+            let (a, b) = (inst.intersect(ray, 0.0, f32::INFINITY), flat.intersect(ray, 0.0, f32::INFINITY));
+            same_hit((&inst, a), (&flat, b))?;
+            for t_max in [0.3f32, 1.0] {
+                prop_assert_eq!(inst.accel().occluded(ray, 0.0, t_max), flat.accel().occluded(ray, 0.0, t_max));
+            }
+        }
+        // Batched queries from one origin, between the rays' origins and their ends.
+        let origin = rays[0].origin;
+        let dirs: Vec<Vec3> = rays.iter().map(|r| r.direction).collect();
+        let ends: Vec<Vec3> = rays.iter().map(|r| r.origin + r.direction).collect();
+        let expected_from: Vec<bool> = ends.iter().map(|&e| flat.accel().occluded(&Ray::new(origin, e - origin), 0.0, 1.0)).collect();
+        let axes = |p: &[Vec3]| [0, 1, 2].map(|a| p.iter().map(|v| v[a]).collect::<Vec<f32>>());
+        let starts: Vec<Vec3> = rays.iter().map(|r| r.origin).collect();
+        let (o, e) = (axes(&starts), axes(&ends));
+        let expected_segments: Vec<bool> = rays.iter().map(|r| flat.accel().occluded(r, 0.0, 1.0)).collect();
+        let few = &ends[..ends.len().min(4)];
+        let f = axes(few);
+        let mut expected_pairs = Vec::new();
+        for &end in few {
+            for &start in &starts {
+                expected_pairs.push(flat.accel().occluded(&Ray::new(start, end - start), 0.0, 1.0));
+            }
+        }
+        for path in supported_paths() {
+            let mut a = vec![None; dirs.len()];
+            let mut b = vec![None; dirs.len()];
+            inst.accel().intersect_from_on(path, origin, &dirs, 0.0, f32::INFINITY, &mut a);
+            flat.accel().intersect_from_on(path, origin, &dirs, 0.0, f32::INFINITY, &mut b);
+            for (x, y) in a.into_iter().zip(b) {
+                same_hit((&inst, x), (&flat, y))?;
+            }
+            let mut blocked = vec![false; ends.len()];
+            inst.accel().occlude_from_on(path, origin, &ends, 1.0, &mut blocked);
+            prop_assert_eq!(&blocked, &expected_from, "{:?}", path);
+            let segments = Segments { origin: [&o[0], &o[1], &o[2]], end: [&e[0], &e[1], &e[2]] };
+            let mut blocked = vec![false; rays.len()];
+            inst.accel().occlude_segments_on(path, segments, 1.0, &mut blocked);
+            prop_assert_eq!(&blocked, &expected_segments, "{:?}", path);
+            let pairs = Pairs { origins: [&o[0], &o[1], &o[2]], ends: [&f[0], &f[1], &f[2]] };
+            let mut blocked = vec![false; expected_pairs.len()];
+            inst.accel().occlude_pairs_on(path, pairs, 1.0, &mut blocked);
+            prop_assert_eq!(&blocked, &expected_pairs, "{:?}", path);
+        }
+    }
+}
+
+#[test]
+fn a_mirrored_instance_keeps_its_normals_facing_out() {
+    // A unit cube mirrored in x: its faces' geometric normals still point out of the box.
+    let mut b = WorldBuilder::new();
+    let cube = b
+        .add_shared_mesh(penumbra::shapes::cube(Vec3::ONE))
+        .unwrap();
+    let mirror = Transform::from_srt(Vec3::new(-1.0, 1.0, 1.0), Vec3::ZERO, Vec3::ZERO);
+    b.add_instance(cube, &mirror, &[0]).unwrap();
+    let world = b.build(1);
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X] {
+        let ray = Ray::new(axis * 5.0, -axis);
+        let hit = world.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        assert!((hit.t - 4.5).abs() < 1e-5);
+        let s = world.surface(&hit);
+        let (n_geom, _) = s.facing(ray.direction);
+        assert!((n_geom - axis).length() < 1e-5, "{axis}: {n_geom}");
+    }
+}
+
+/// A lit room holding `copies` spheres (with vertex normals) and cubes, mirrored ones among
+/// them: placed as instances or copied.
+fn room(copies: usize, instanced: bool) -> World {
+    use penumbra::shapes::{cube, quad, sphere};
+    use penumbra::{AreaLight, Camera, Light};
+    let mut b = WorldBuilder::new();
+    let white = b.add_material(Material::default()).unwrap();
+    let shiny = b
+        .add_material(Material {
+            diffuse: Vec3::new(0.7, 0.3, 0.2),
+            specular: Vec3::splat(0.4),
+            shininess: 40.0,
+            ..Material::default()
+        })
+        .unwrap();
+    let floor = quad(
+        Vec3::new(-5.0, 0.0, 5.0),
+        Vec3::new(10.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, -10.0),
+    );
+    b.add_mesh(&floor, &Transform::IDENTITY, &[white]).unwrap();
+    b.add_light(Light::Area(AreaLight {
+        center: Vec3::new(0.0, 6.0, 0.0),
+        u: Vec3::new(1.5, 0.0, 0.0),
+        v: Vec3::new(0.0, 0.0, 1.5),
+        radiance: Vec3::splat(1.0),
+        n: 3,
+        jitter: false,
+    }));
+    let camera = Camera::new(
+        Vec3::new(0.0, 4.0, 9.0),
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::Y,
+        50.0,
+    )
+    .unwrap();
+    b.add_camera("main", camera).unwrap();
+    let meshes = [sphere(0.6), cube(Vec3::ONE)];
+    let ids = meshes.clone().map(|m| b.add_shared_mesh(m).unwrap());
+    for k in 0..copies {
+        let (x, z) = ((k % 5) as f32 * 1.8 - 3.6, (k / 5) as f32 * 1.8 - 3.0);
+        let mirror = if k % 3 == 0 { -1.0 } else { 1.0 };
+        let t = Transform::from_srt(
+            Vec3::new(mirror, 1.0 + 0.2 * (k % 2) as f32, 1.0),
+            Vec3::new(0.0, 17.0 * k as f32, 0.0),
+            Vec3::new(x, 0.6, z),
+        );
+        let (mesh, material) = (k % 2, if k % 2 == 0 { shiny } else { white });
+        if instanced {
+            b.add_instance(ids[mesh], &t, &[material]).unwrap();
+        } else {
+            b.add_mesh(&meshes[mesh], &t, &[material]).unwrap();
+        }
+    }
+    b.build(2)
+}
+
+#[test]
+fn an_instanced_room_renders_as_its_copies() {
+    use penumbra::{render, RenderOptions, RenderSettings};
+    let settings = RenderSettings {
+        width: 96,
+        height: 64,
+        ..RenderSettings::default()
+    };
+    let options = RenderOptions::default();
+    let (a, _) = render(&room(15, true), &settings, &options).unwrap();
+    let (b, _) = render(&room(15, false), &settings, &options).unwrap();
+    let mut differ = 0;
+    for y in 0..settings.height {
+        for x in 0..settings.width {
+            let d = (a.get(x, y) - b.get(x, y)).abs().max_element();
+            assert!(d < 0.05, "pixel ({x}, {y}) differs by {d}");
+            differ += usize::from(d > 1e-4);
+        }
+    }
+    // Hit points are the copies' bit for bit; only `t` (and so a shadow ray grazing an
+    // edge) may round differently.
+    assert!(
+        differ * 200 < (settings.width * settings.height) as usize,
+        "{differ} pixels differ"
+    );
+}
