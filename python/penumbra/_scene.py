@@ -177,12 +177,11 @@ class Scene:
         if isinstance(aovs, str):
             aovs = (aovs,)
         names = [str(a) for a in aovs]
-        camera_name = explicit = None
+        # A name, or an explicit camera as its (position, look_at, up, fov).
+        view: Union[None, str, tuple] = camera
         if isinstance(camera, Camera):
-            explicit = camera._args()
-        elif isinstance(camera, str):
-            camera_name = camera
-        elif camera is not None:
+            view = camera._args()
+        elif camera is not None and not isinstance(camera, str):
             raise TypeError(
                 f"{call}: camera must be a camera name or a penumbra.Camera, "
                 f"not {type(camera).__name__}"
@@ -213,19 +212,18 @@ class Scene:
             raise TypeError("progress must be True, False, None or a callable (done, total)")
         try:
             return self._core.render(
-                camera_name,
-                explicit,
-                spp,
-                sampler,
-                light_samples,
-                seed,
-                width,
-                height,
-                region,
-                threads,
-                callback,
-                names,
-                stats,
+                camera=view,
+                spp=spp,
+                sampler=sampler,
+                light_samples=light_samples,
+                seed=seed,
+                width=width,
+                height=height,
+                region=region,
+                threads=threads,
+                progress=callback,
+                aovs=names,
+                stats=stats,
             )
         finally:
             if bar is not None:

@@ -1,5 +1,6 @@
 //! `--aov`: passes (arbitrary output variables) beside the colour image, from the library's
-//! [`render_with_aovs`](penumbra::render_with_aovs) (see its module for how each is filtered).
+//! [`render_with_aovs`](penumbra::render_with_aovs) (see its module for how each is filtered),
+//! each pass's values as [`AovFilm::values`] gives them (Python's arrays hold the same).
 //!
 //! Where they go:
 //! - EXR output: one multi-layer file instead of the colour-only one. The colour is `R`, `G`,
@@ -22,110 +23,60 @@ use std::path::{Path, PathBuf};
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage,
 };
-use penumbra::{check_finite, AovFilm, AovPixel, Film, OutputFormat, StagedFile};
+use penumbra::{check_finite, Aov, AovFilm, AovValues, Film, OutputFormat, StagedFile};
 
 use crate::failure::{invalid, runtime, Failure};
 use crate::signals::Interrupt;
 
-/// One pass.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pass {
-    Depth,
-    Normal,
-    Albedo,
-    Position,
-    ObjectId,
-    PrimitiveId,
-}
-
-/// Every pass, in the order files and channels list them.
-pub const ALL: [Pass; 6] = [
-    Pass::Depth,
-    Pass::Normal,
-    Pass::Albedo,
-    Pass::Position,
-    Pass::ObjectId,
-    Pass::PrimitiveId,
-];
-
-impl Pass {
-    /// Its name on the command line, in file names and in EXR layer names.
-    pub fn name(self) -> &'static str {
-        match self {
-            Pass::Depth => "depth",
-            Pass::Normal => "normal",
-            Pass::Albedo => "albedo",
-            Pass::Position => "position",
-            Pass::ObjectId => "object_id",
-            Pass::PrimitiveId => "primitive_id",
-        }
-    }
-
-    /// The channels of its layer in a multi-layer EXR.
-    fn channels(self) -> &'static [&'static str] {
-        match self {
-            Pass::Depth => &["Z"],
-            Pass::Normal | Pass::Position => &["X", "Y", "Z"],
-            Pass::Albedo => &["R", "G", "B"],
-            Pass::ObjectId | Pass::PrimitiveId => &[],
-        }
-    }
-
-    /// The float values of channel `c` of one pixel (not for ids).
-    fn float(self, p: &AovPixel, c: usize) -> f32 {
-        match self {
-            Pass::Depth => p.depth,
-            Pass::Normal => p.normal[c],
-            Pass::Albedo => p.albedo[c],
-            Pass::Position => p.position[c],
-            Pass::ObjectId | Pass::PrimitiveId => id_of(p, self) as f32,
-        }
-    }
-
-    fn is_id(self) -> bool {
-        matches!(self, Pass::ObjectId | Pass::PrimitiveId)
+/// The channels of a float pass's layer in a multi-layer EXR (an id's layer is one unnamed
+/// channel).
+fn channels(p: Aov) -> &'static [&'static str] {
+    match p {
+        Aov::Depth => &["Z"],
+        Aov::Normal | Aov::Position => &["X", "Y", "Z"],
+        Aov::Albedo => &["R", "G", "B"],
+        Aov::ObjectId | Aov::PrimitiveId => &[],
     }
 }
 
-/// The id pass `pass` of one pixel.
-fn id_of(px: &AovPixel, pass: Pass) -> u32 {
-    if pass == Pass::ObjectId {
-        px.object_id
-    } else {
-        px.primitive_id
-    }
-}
-
-/// The passes `--aov` asks for, without repeats, in [`ALL`]'s order.
+/// The passes `--aov` asks for, without repeats, in [`Aov::ALL`]'s order.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Passes(pub Vec<Pass>);
+pub struct Passes(pub Vec<Aov>);
 
 /// Parses `--aov`: a comma list of pass names, or `all`.
 pub fn parse(s: &str) -> Result<Passes, String> {
     let mut wanted = Vec::new();
     for item in s.split(',').map(str::trim) {
         if item == "all" {
-            wanted.extend(ALL);
+            wanted.extend(Aov::ALL);
             continue;
         }
-        match ALL.iter().find(|p| p.name() == item) {
-            Some(&p) => wanted.push(p),
-            None => {
-                let names: Vec<&str> = ALL.iter().map(|p| p.name()).collect();
+        match item.parse::<Aov>() {
+            Ok(p) => wanted.push(p),
+            Err(e) => {
                 return Err(format!(
                     "unknown pass `{item}` (known: {}, or all)",
-                    names.join(", ")
+                    e.known.join(", ")
                 ));
             }
         }
     }
     Ok(Passes(
-        ALL.into_iter().filter(|p| wanted.contains(p)).collect(),
+        Aov::ALL
+            .into_iter()
+            .filter(|p| wanted.contains(p))
+            .collect(),
     ))
 }
 
+/// The values of pass `p`, or a runtime failure when there is no memory for them.
+fn values(aovs: &AovFilm, p: Aov) -> Result<AovValues, Failure> {
+    aovs.values(p)
+        .map_err(|_| runtime(format!("not enough memory for the {} pass", p.name())))
+}
+
 /// `out.png` with pass `p`: `out.depth.pfm`, or `out.object_id.exr` for ids.
-pub fn pass_path(image: &Path, p: Pass) -> PathBuf {
+pub fn pass_path(image: &Path, p: Aov) -> PathBuf {
     let stem = image.file_stem().unwrap_or_default().to_string_lossy();
     let ext = if p.is_id() { "exr" } else { "pfm" };
     image.with_file_name(format!("{stem}.{}.{ext}", p.name()))
@@ -145,14 +96,16 @@ pub fn stage_exr(
         channels.push(AnyChannel::new(name, FlatSamples::F32(v)));
     }
     for &p in &passes.0 {
-        if p.is_id() {
-            let v = aovs.pixels.iter().map(|px| id_of(px, p)).collect();
-            channels.push(AnyChannel::new(p.name(), FlatSamples::U32(v)));
-        }
-        for (c, ch) in p.channels().iter().enumerate() {
-            let v = aovs.pixels.iter().map(|px| p.float(px, c)).collect();
-            let name = format!("{}.{ch}", p.name());
-            channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(v)));
+        match values(aovs, p)? {
+            AovValues::Ids(v) => channels.push(AnyChannel::new(p.name(), FlatSamples::U32(v))),
+            AovValues::Floats(v) => {
+                let n = p.components();
+                for (c, ch) in self::channels(p).iter().enumerate() {
+                    let plane = v.iter().skip(c).step_by(n).copied().collect();
+                    let name = format!("{}.{ch}", p.name());
+                    channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(plane)));
+                }
+            }
         }
     }
     let bytes = exr_bytes(film.width, film.height, channels).map_err(runtime)?;
@@ -169,18 +122,12 @@ pub fn stage_files(
 ) -> Result<Vec<StagedFile>, Failure> {
     let mut staged = Vec::with_capacity(passes.0.len());
     for &p in &passes.0 {
-        let bytes = if p.is_id() {
-            let v = aovs.pixels.iter().map(|px| id_of(px, p)).collect();
-            let channel = AnyChannel::new("Y", FlatSamples::U32(v));
-            exr_bytes(aovs.width, aovs.height, vec![channel]).map_err(runtime)?
-        } else {
-            let n = if p == Pass::Depth { 1 } else { 3 };
-            let v: Vec<f32> = aovs
-                .pixels
-                .iter()
-                .flat_map(|px| (0..n).map(move |c| p.float(px, c)))
-                .collect();
-            pfm_bytes(aovs.width, aovs.height, n, &v)
+        let bytes = match values(aovs, p)? {
+            AovValues::Ids(v) => {
+                let channel = AnyChannel::new("Y", FlatSamples::U32(v));
+                exr_bytes(aovs.width, aovs.height, vec![channel]).map_err(runtime)?
+            }
+            AovValues::Floats(v) => pfm_bytes(aovs.width, aovs.height, p.components(), &v),
         };
         interrupt.check()?;
         staged.push(StagedFile::write_bytes(&pass_path(image, p), &bytes).map_err(runtime)?);
@@ -232,20 +179,22 @@ mod tests {
     fn lists_parse_in_a_fixed_order_without_repeats() {
         assert_eq!(
             parse("normal, depth,normal").unwrap(),
-            Passes(vec![Pass::Depth, Pass::Normal])
+            Passes(vec![Aov::Depth, Aov::Normal])
         );
-        assert_eq!(parse("all").unwrap(), Passes(ALL.to_vec()));
+        assert_eq!(parse("all").unwrap(), Passes(Aov::ALL.to_vec()));
         let e = parse("depth,zdepth").unwrap_err();
-        assert!(e.contains("unknown pass `zdepth`"), "{e}");
-        assert!(e.contains("primitive_id"), "{e}");
+        assert_eq!(
+            e,
+            "unknown pass `zdepth` (known: depth, normal, albedo, position, object_id, primitive_id, or all)"
+        );
     }
 
     #[test]
     fn pass_files_sit_beside_the_image() {
         let p = Path::new("out/shot.png");
-        assert_eq!(pass_path(p, Pass::Depth), Path::new("out/shot.depth.pfm"));
+        assert_eq!(pass_path(p, Aov::Depth), Path::new("out/shot.depth.pfm"));
         assert_eq!(
-            pass_path(p, Pass::ObjectId),
+            pass_path(p, Aov::ObjectId),
             Path::new("out/shot.object_id.exr")
         );
     }

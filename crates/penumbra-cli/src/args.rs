@@ -3,8 +3,9 @@
 
 use std::path::PathBuf;
 
-use clap::{ArgAction, Parser, Subcommand, ValueEnum};
-use penumbra::{Override, PixelBounds};
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{ArgAction, Parser, Subcommand};
+use penumbra::{OutputFormat, Override, PixelBounds, Sampler};
 
 use crate::aov::Passes;
 
@@ -45,14 +46,6 @@ pub struct CheckArgs {
     pub json: bool,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-pub enum SamplerArg {
-    Center,
-    Grid,
-    Rgss,
-    Jittered,
-}
-
 /// `penumbra render`.
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -66,8 +59,8 @@ pub struct RenderArgs {
     #[arg(short, long, visible_alias = "outfile", value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Image format: required with -o -, else it must agree with the extension.
-    #[arg(long, value_enum, value_name = "F")]
-    pub format: Option<FormatArg>,
+    #[arg(long, value_name = "F", value_parser = format_parser())]
+    pub format: Option<OutputFormat>,
     /// Override a scene key, as if the file said so: KEY.PATH=VALUE, such as film.width=640,
     /// render.sampler=rgss or objects[0].material=red. Repeatable; the VALUE is read as TOML,
     /// else taken as a string.
@@ -80,8 +73,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "H")]
     pub height: Option<u32>,
     /// Pixel sampler (center means 1 sample unless --spp is given).
-    #[arg(long, value_enum, value_name = "S")]
-    pub sampler: Option<SamplerArg>,
+    #[arg(long, value_name = "S", value_parser = sampler_parser())]
+    pub sampler: Option<Sampler>,
     /// Samples per pixel, a perfect square.
     // pbrt's flag; the alias is the scene key's name (`render.samples`), which clap would
     // otherwise answer with a suggestion of --sampler.
@@ -144,14 +137,19 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-/// Output formats for --format.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum FormatArg {
-    Png,
-    #[value(alias = "jpeg")]
-    Jpg,
-    Exr,
-    Pfm,
+/// `--sampler`: the library's names, listed in help and completions.
+fn sampler_parser() -> impl TypedValueParser<Value = Sampler> {
+    let names = Sampler::ALL.map(|s| PossibleValue::new(s.name()));
+    PossibleValuesParser::new(names).try_map(|s| s.parse::<Sampler>())
+}
+
+/// `--format`: the library's names (`jpeg` too, unlisted), listed in help and completions.
+fn format_parser() -> impl TypedValueParser<Value = OutputFormat> {
+    let names = OutputFormat::ALL.map(|f| match f {
+        OutputFormat::Jpeg => PossibleValue::new(f.extension()).alias("jpeg"),
+        _ => PossibleValue::new(f.extension()),
+    });
+    PossibleValuesParser::new(names).try_map(|s| s.parse::<OutputFormat>())
 }
 
 /// A crop window in fractions of the film: [x0, x1) × [y0, y1), y down.

@@ -9,7 +9,6 @@ use penumbra::{
     StagedFile,
 };
 
-use crate::args::FormatArg;
 use crate::failure::{invalid, runtime, Failure};
 use crate::signals::Interrupt;
 
@@ -83,36 +82,16 @@ pub struct Output {
     pub format: OutputFormat,
 }
 
-/// The format `--format` names.
-pub fn format_of(arg: FormatArg) -> OutputFormat {
-    match arg {
-        FormatArg::Png => OutputFormat::Png,
-        FormatArg::Jpg => OutputFormat::Jpeg,
-        FormatArg::Exr => OutputFormat::Exr,
-        FormatArg::Pfm => OutputFormat::Pfm,
-    }
-}
-
-/// The `--format` value that names `f`, as users type it.
-fn flag_value(f: OutputFormat) -> &'static str {
-    match f {
-        OutputFormat::Png => "png",
-        OutputFormat::Jpeg => "jpg",
-        OutputFormat::Exr => "exr",
-        OutputFormat::Pfm => "pfm",
-    }
-}
-
 impl Output {
     /// The output of the expanded name `path` (`-`: standard output) and `--format`.
-    pub fn new(path: PathBuf, format: Option<FormatArg>) -> Result<Output, Failure> {
+    pub fn new(path: PathBuf, format: Option<OutputFormat>) -> Result<Output, Failure> {
         if path.as_os_str() == "-" {
             let format = format.ok_or_else(|| {
                 invalid("-o -: give the image format with --format png|jpg|exr|pfm")
             })?;
             return Ok(Output {
                 target: Target::Stdout,
-                format: format_of(format),
+                format,
             });
         }
         let name = path.display().to_string();
@@ -121,8 +100,8 @@ impl Output {
                 "{name}: unknown image format (use .png, .jpg, .exr or .pfm)"
             )));
         };
-        if let Some(f) = format.map(format_of).filter(|&f| f != by_name) {
-            let (asked, named) = (flag_value(f), flag_value(by_name));
+        if let Some(f) = format.filter(|&f| f != by_name) {
+            let (asked, named) = (f.extension(), by_name.extension());
             return Err(invalid(format!(
                 "--format {asked} disagrees with the extension of {name} ({named}): drop --format, or name the file .{asked}"
             )));

@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile, View,
-    World, MAX_THREADS,
+    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile,
+    SettingsError, View, World, MAX_THREADS,
 };
 
 use crate::aov;
@@ -17,7 +17,7 @@ use crate::cameras;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
 use crate::output::{self, expand, names_camera, scene_stem, Fields, Output, Target};
-use crate::settings::{flag_of, region, settings};
+use crate::settings::{flag_of, patch, region};
 use crate::signals::Interrupt;
 use crate::summary::Report;
 
@@ -139,11 +139,12 @@ fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, 
     let stem = scene_stem(&args.scene, is_stdin(&args.scene));
     let mut jobs: Vec<Job> = Vec::new();
     for view in &views {
-        let settings = settings(args, file, scene, view.as_deref());
         // Settings from flags are checked before anything is written or rendered.
-        settings
-            .check(&scene.world)
-            .map_err(|e| invalid(format!("{}: {e}", flag_of(&e))))?;
+        let bad = |e: SettingsError| invalid(format!("{}: {e}", flag_of(&e)));
+        let settings = patch(args, &scene.settings, view.as_deref())
+            .apply(&scene.settings, file.samples())
+            .map_err(bad)?;
+        settings.check(&scene.world).map_err(bad)?;
         let name = match pattern.to_str() {
             Some(p) => {
                 let fields = Fields {

@@ -1,64 +1,42 @@
-//! The render flags applied to the scene file's settings, and the flag each settings error is
-//! about.
+//! The render flags as a [`SettingsPatch`] of the scene file's settings (the library applies
+//! it, as it applies Python's keywords), the region to render, and the flag each settings
+//! error is about.
 
-use penumbra::{PixelBounds, RenderSettings, Sampler, Scene, SceneFile, SettingsError, View};
+use penumbra::{PixelBounds, RenderSettings, Sampler, SettingsError, SettingsPatch, View};
 
-use crate::args::{CropWindow, RenderArgs, SamplerArg};
+use crate::args::{CropWindow, RenderArgs};
 
-/// The scene file's settings with the command line's flags applied, looking through `camera`
-/// (`None`: the file's default).
+/// The change the command line's flags make to the scene file's settings `base` (with
+/// `--set`), looking through `camera` (`None`: the file's default); apply it with the file's
+/// samples.
 ///
-/// In order: the file (with `--set`), `--width`/`--height`, `--quick` (a quarter of each
-/// side, as pbrt: `max(1, side / 4)`; center sampling with 1 spp unless `--spp` is given, 1
-/// light sample per area light), then `--sampler`, `--spp`, `--light-samples` and `--seed`.
-pub fn settings(
-    args: &RenderArgs,
-    file: &SceneFile,
-    scene: &Scene,
-    camera: Option<&str>,
-) -> RenderSettings {
-    let mut s = scene.settings.clone();
-    if let Some(w) = args.width {
-        s.width = w;
-    }
-    if let Some(h) = args.height {
-        s.height = h;
-    }
+/// `--width`/`--height`, then `--quick` (a quarter of each side, as pbrt: `max(1, side / 4)`;
+/// center sampling with 1 spp unless `--spp` is given, 1 light sample per area light), then
+/// `--sampler`, `--spp`, `--light-samples` and `--seed`.
+pub fn patch(args: &RenderArgs, base: &RenderSettings, camera: Option<&str>) -> SettingsPatch {
+    let (mut width, mut height) = (args.width, args.height);
+    let (mut sampler, mut light_samples) = (args.sampler, args.light_samples);
     if args.quick {
-        s.width = (s.width / 4).max(1);
-        s.height = (s.height / 4).max(1);
+        let quarter = |side: Option<u32>, of: u32| Some((side.unwrap_or(of) / 4).max(1));
+        width = quarter(width, base.width);
+        height = quarter(height, base.height);
         // Center sampling is the preview's 1 sample: a count from --spp keeps the scene's
         // sampler instead, which center (1 sample only) would refuse.
         if args.spp.is_none() {
-            s.sampler = Sampler::Center;
-            s.spp = 1;
+            sampler = sampler.or(Some(Sampler::Center));
         }
-        s.light_samples = Some(1);
+        light_samples = light_samples.or(Some(1));
     }
-    if let Some(sampler) = args.sampler {
-        s.sampler = match sampler {
-            SamplerArg::Center => Sampler::Center,
-            SamplerArg::Grid => Sampler::Grid,
-            SamplerArg::Rgss => Sampler::Rgss,
-            SamplerArg::Jittered => Sampler::Jittered,
-        };
-        // Without --spp the sampler takes its own count, by the rule an override of
-        // `render.sampler` alone follows: 1 for center, else the file's `samples`, else 4.
-        s.spp = file.spp_for_sampler(s.sampler);
+    SettingsPatch {
+        view: camera.map(|name| View::Named(name.to_owned())),
+        width,
+        height,
+        sampler,
+        spp: args.spp,
+        light_samples,
+        seed: args.seed,
+        ..SettingsPatch::default()
     }
-    if let Some(spp) = args.spp {
-        s.spp = spp;
-    }
-    if args.light_samples.is_some() {
-        s.light_samples = args.light_samples;
-    }
-    if let Some(seed) = args.seed {
-        s.seed = seed;
-    }
-    if let Some(name) = camera {
-        s.view = View::Named(name.to_owned());
-    }
-    s
 }
 
 /// The pixels to render: `--pixelbounds`, or `--cropwindow` over this film; `None`: all.

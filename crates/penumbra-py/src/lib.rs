@@ -37,7 +37,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
-    m.add("AOV_NAMES", render::AOV_NAMES.to_vec())?;
+    m.add(
+        "AOV_NAMES",
+        penumbra::Aov::ALL.map(penumbra::Aov::name).to_vec(),
+    )?;
     m.add("NO_ID", penumbra::NO_ID)?;
     m.add("MAX_THREADS", penumbra::MAX_THREADS)?;
     // The workspace's version, which maturin also gives the Python package.

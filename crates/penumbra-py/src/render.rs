@@ -9,133 +9,149 @@ use std::time::Duration;
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use penumbra::{
-    render, render_with_aovs, AovFilm, Film, PixelBounds, RenderOptions, RenderSettings, Sampler,
-    View, World,
+    render, render_with_aovs, Aov, AovFilm, AovValues, Film, PixelBounds, RenderError,
+    RenderOptions, RenderSettings, Sampler, SettingsPatch, View, World,
 };
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::camera::camera;
-use crate::errors::{buffer, render_error};
+use crate::errors::{no_memory, render_error};
 
 /// How often the calling thread checks for signals and reports progress while a render runs.
 const POLL: Duration = Duration::from_millis(20);
-
-/// The names of the AOVs, as `render(aovs=...)` takes them.
-pub const AOV_NAMES: [&str; 6] = [
-    "depth",
-    "normal",
-    "albedo",
-    "position",
-    "object_id",
-    "primitive_id",
-];
 
 /// An explicit pinhole camera as Python passes it: position, look_at, up, vertical fov in
 /// degrees.
 pub type CameraArgs = ([f32; 3], [f32; 3], [f32; 3], f32);
 
-/// The arguments of one render call.
+/// The keyword arguments of a render call. Python has checked their types; `None` is the
+/// same as absent.
+const KEYWORDS: [&str; 12] = [
+    "camera",
+    "spp",
+    "sampler",
+    "light_samples",
+    "seed",
+    "width",
+    "height",
+    "region",
+    "threads",
+    "progress",
+    "aovs",
+    "stats",
+];
+
+/// One render call: the settings it changes and how to run it.
 pub struct Request<'py> {
-    pub camera_name: Option<String>,
-    pub camera: Option<CameraArgs>,
-    pub spp: Option<u32>,
-    pub sampler: Option<String>,
-    pub light_samples: Option<u32>,
-    pub seed: Option<u64>,
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub region: Option<(u32, u32, u32, u32)>,
+    /// Applied to the scene file's settings.
+    pub patch: SettingsPatch,
+    pub region: Option<PixelBounds>,
     pub threads: usize,
     pub progress: Option<Bound<'py, PyAny>>,
-    pub aovs: Vec<String>,
+    /// The AOVs asked for, in the order asked (repeats are one key of the result).
+    pub aovs: Vec<Aov>,
     /// A dict to fill with the render's counts and time, when given.
     pub stats: Option<Bound<'py, PyDict>>,
 }
 
-/// The sampler of this name.
-fn sampler(name: &str) -> PyResult<Sampler> {
-    [
-        Sampler::Center,
-        Sampler::Grid,
-        Sampler::Rgss,
-        Sampler::Jittered,
-    ]
-    .into_iter()
-    .find(|s| s.name() == name)
-    .ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "unknown sampler {name:?} (use \"center\", \"grid\", \"rgss\" or \"jittered\")"
-        ))
-    })
-}
-
-/// The file's settings with the request's applied, as the command line applies its flags: a
-/// sampler without `spp` takes its own default count (1 for center, else the file's
-/// `samples`, else 4).
-fn settings(
-    defaults: &RenderSettings,
-    file_samples: Option<i64>,
-    r: &Request,
-) -> PyResult<RenderSettings> {
-    let mut s = defaults.clone();
-    if let Some(w) = r.width {
-        s.width = w;
-    }
-    if let Some(h) = r.height {
-        s.height = h;
-    }
-    if let Some(name) = &r.sampler {
-        s.sampler = sampler(name)?;
-        s.spp = match (s.sampler, file_samples) {
-            (Sampler::Center, _) => 1,
-            (_, Some(n)) => u32::try_from(n).unwrap_or(u32::MAX),
-            (_, None) => 4,
+impl<'py> Request<'py> {
+    /// The request `Scene.render`'s keyword arguments make. Names are checked in this order:
+    /// the AOVs, the sampler, the camera.
+    pub fn from_kwargs(kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Request<'py>> {
+        for key in kwargs.iter().flat_map(|d| d.keys()) {
+            let key: String = key.extract()?;
+            if !KEYWORDS.contains(&key.as_str()) {
+                return Err(PyTypeError::new_err(format!(
+                    "render got an unexpected keyword argument {key:?}"
+                )));
+            }
+        }
+        // The value of a keyword; None when absent or None.
+        let item = |key: &str| -> PyResult<Option<Bound<'py, PyAny>>> {
+            match kwargs {
+                Some(d) => Ok(d.get_item(key)?.filter(|v| !v.is_none())),
+                None => Ok(None),
+            }
         };
+        let aovs: Vec<String> = item("aovs")?
+            .map(|v| v.extract())
+            .transpose()?
+            .unwrap_or_default();
+        let aovs = aovs
+            .iter()
+            .map(|name| {
+                name.parse::<Aov>().map_err(|e| {
+                    PyValueError::new_err(format!(
+                        "unknown AOV {name:?} (the AOVs are: {})",
+                        e.known.join(", ")
+                    ))
+                })
+            })
+            .collect::<PyResult<_>>()?;
+        let sampler = match item("sampler")? {
+            Some(v) => Some(
+                v.extract::<String>()?
+                    .parse::<Sampler>()
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?,
+            ),
+            None => None,
+        };
+        let view = match item("camera")? {
+            None => None,
+            Some(v) => Some(match v.extract::<String>() {
+                Ok(name) => View::Named(name),
+                Err(_) => {
+                    let (position, look_at, up, fov) = v.extract::<CameraArgs>()?;
+                    View::Camera(camera(position, look_at, up, fov)?)
+                }
+            }),
+        };
+        let region: Option<(u32, u32, u32, u32)> =
+            item("region")?.map(|v| v.extract()).transpose()?;
+        Ok(Request {
+            patch: SettingsPatch {
+                view,
+                width: item("width")?.map(|v| v.extract()).transpose()?,
+                height: item("height")?.map(|v| v.extract()).transpose()?,
+                sampler,
+                spp: item("spp")?.map(|v| v.extract()).transpose()?,
+                light_samples: item("light_samples")?.map(|v| v.extract()).transpose()?,
+                seed: item("seed")?.map(|v| v.extract()).transpose()?,
+                ..SettingsPatch::default()
+            },
+            region: region.map(|(x0, x1, y0, y1)| PixelBounds { x0, x1, y0, y1 }),
+            threads: item("threads")?
+                .map(|v| v.extract())
+                .transpose()?
+                .unwrap_or(0),
+            progress: item("progress")?,
+            aovs,
+            stats: item("stats")?
+                .map(|v| v.cast_into::<PyDict>())
+                .transpose()?,
+        })
     }
-    if let Some(spp) = r.spp {
-        s.spp = spp;
-    }
-    if r.light_samples.is_some() {
-        s.light_samples = r.light_samples;
-    }
-    if let Some(seed) = r.seed {
-        s.seed = seed;
-    }
-    if let Some(name) = &r.camera_name {
-        s.view = View::Named(name.clone());
-    }
-    if let Some((position, look_at, up, fov)) = r.camera {
-        s.view = View::Camera(camera(position, look_at, up, fov)?);
-    }
-    Ok(s)
 }
 
 /// What the render thread hands back.
 type Rendered = Result<(Film, Option<AovFilm>, penumbra::RenderStats), penumbra::RenderError>;
 
-/// Renders `world` as the request says and returns the image, or `(image, aovs)` when AOVs
-/// were asked for.
+/// Renders `world` with the scene file's settings `base` (and its `render.samples`,
+/// `file_samples`) changed as the request says; returns the image, or `(image, aovs)` when
+/// AOVs were asked for.
 pub fn render_scene<'py>(
     py: Python<'py>,
     world: &World,
-    defaults: &RenderSettings,
-    file_samples: Option<i64>,
+    base: &RenderSettings,
+    file_samples: Option<u32>,
     r: Request<'py>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    for name in &r.aovs {
-        if !AOV_NAMES.contains(&name.as_str()) {
-            return Err(PyValueError::new_err(format!(
-                "unknown AOV {name:?} (the AOVs are: {})",
-                AOV_NAMES.join(", ")
-            )));
-        }
-    }
-    let settings = settings(defaults, file_samples, &r)?;
-    let region = r
-        .region
-        .map(|(x0, x1, y0, y1)| PixelBounds { x0, x1, y0, y1 });
+    let settings = r
+        .patch
+        .apply(base, file_samples)
+        .map_err(|e| render_error(RenderError::Settings(e)))?;
     let cancel = AtomicBool::new(false);
     let done = AtomicU64::new(0);
     let total = AtomicU64::new(0);
@@ -145,7 +161,7 @@ pub fn render_scene<'py>(
     };
     let options = RenderOptions {
         threads: r.threads,
-        region,
+        region: r.region,
         cancel: Some(&cancel),
         progress: Some(&report),
     };
@@ -220,12 +236,6 @@ pub fn render_scene<'py>(
     }
 }
 
-/// A `MemoryError`-checked buffer for `len` values of the render's result, an image of
-/// `w × h` pixels.
-fn result_buffer<T>(len: usize, (w, h): (usize, usize)) -> PyResult<Vec<T>> {
-    buffer("Scene.render", &format!("the {w}x{h} result arrays"), len)
-}
-
 /// The channels of `pixels` in order, in the same memory: a pixel and an `[f32; 3]` have one
 /// size and alignment, so the standard library collects them in place, and a film as large
 /// as memory allows needs no second copy to become an array.
@@ -245,48 +255,29 @@ fn image_array(py: Python<'_>, film: Film) -> PyResult<Bound<'_, PyAny>> {
 
 /// The requested AOVs as a dict of arrays: (H, W) float32 depth, (H, W, 3) float32 normal,
 /// albedo and position, (H, W) uint32 ids.
-fn aov_dict<'py>(
-    py: Python<'py>,
-    aovs: &AovFilm,
-    names: &[String],
-) -> PyResult<Bound<'py, PyDict>> {
+fn aov_dict<'py>(py: Python<'py>, aovs: &AovFilm, asked: &[Aov]) -> PyResult<Bound<'py, PyDict>> {
     let (w, h) = (aovs.width as usize, aovs.height as usize);
     let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
     let dict = PyDict::new(py);
-    for name in names {
-        let px = &aovs.pixels;
-        let vec3 = |f: fn(&penumbra::AovPixel) -> glam::Vec3| -> PyResult<Bound<'py, PyAny>> {
-            let mut data = result_buffer(w * h * 3, (w, h))?;
-            data.extend(px.iter().flat_map(|p| f(p).to_array()));
-            Ok(Array3::from_shape_vec((h, w, 3), data)
+    for &aov in asked {
+        let values = aovs
+            .values(aov)
+            .map_err(|_| no_memory("Scene.render", &format!("the {w}x{h} result arrays")))?;
+        let value = match (values, aov.components()) {
+            (AovValues::Floats(v), 1) => Array2::from_shape_vec((h, w), v)
                 .map_err(err)?
                 .into_pyarray(py)
-                .into_any())
-        };
-        let ids = |f: fn(&penumbra::AovPixel) -> u32| -> PyResult<Bound<'py, PyAny>> {
-            let mut data = result_buffer(w * h, (w, h))?;
-            data.extend(px.iter().map(f));
-            Ok(Array2::from_shape_vec((h, w), data)
+                .into_any(),
+            (AovValues::Floats(v), n) => Array3::from_shape_vec((h, w, n), v)
                 .map_err(err)?
                 .into_pyarray(py)
-                .into_any())
+                .into_any(),
+            (AovValues::Ids(v), _) => Array2::from_shape_vec((h, w), v)
+                .map_err(err)?
+                .into_pyarray(py)
+                .into_any(),
         };
-        let value = match name.as_str() {
-            "depth" => {
-                let mut data = result_buffer(w * h, (w, h))?;
-                data.extend(px.iter().map(|p| p.depth));
-                Array2::from_shape_vec((h, w), data)
-                    .map_err(err)?
-                    .into_pyarray(py)
-                    .into_any()
-            }
-            "normal" => vec3(|p| p.normal)?,
-            "albedo" => vec3(|p| p.albedo)?,
-            "position" => vec3(|p| p.position)?,
-            "object_id" => ids(|p| p.object_id)?,
-            _ => ids(|p| p.primitive_id)?,
-        };
-        dict.set_item(name, value)?;
+        dict.set_item(aov.name(), value)?;
     }
     Ok(dict)
 }

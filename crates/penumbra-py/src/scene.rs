@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 
 use crate::errors::scene_error;
 use crate::raycast::CoreRaycastingScene;
-use crate::render::{render_scene, CameraArgs, Request};
+use crate::render::{render_scene, Request};
 
 /// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
 /// scene file's default render settings.
@@ -20,7 +20,7 @@ pub struct CoreScene {
     world: Arc<World>,
     settings: RenderSettings,
     /// The file's `render.samples`, the sample count a sampler change falls back to.
-    file_samples: Option<i64>,
+    file_samples: Option<u32>,
     load_seconds: f64,
     /// The parsed file and the files its build read: what a pack of the scene holds.
     pub(crate) file: SceneFile,
@@ -43,7 +43,7 @@ pub(crate) fn build(
     Ok(CoreScene {
         world: scene.world,
         settings: scene.settings,
-        file_samples: file.desc.render.samples,
+        file_samples: file.samples(),
         load_seconds: scene.load_time.as_secs_f64(),
         file,
         files: scene.files,
@@ -85,41 +85,15 @@ pub fn loads(
 
 #[pymethods]
 impl CoreScene {
-    /// Renders with the file's settings changed by the given ones; see `penumbra.Scene.render`.
-    #[pyo3(signature = (camera_name, camera, spp, sampler, light_samples, seed, width, height, region, threads, progress, aovs, stats = None))]
-    #[allow(clippy::too_many_arguments)]
+    /// Renders with the file's settings changed by the keyword arguments given; see
+    /// `penumbra.Scene.render`.
+    #[pyo3(signature = (**kwargs))]
     fn render<'py>(
         &self,
         py: Python<'py>,
-        camera_name: Option<String>,
-        camera: Option<CameraArgs>,
-        spp: Option<u32>,
-        sampler: Option<String>,
-        light_samples: Option<u32>,
-        seed: Option<u64>,
-        width: Option<u32>,
-        height: Option<u32>,
-        region: Option<(u32, u32, u32, u32)>,
-        threads: usize,
-        progress: Option<Bound<'py, PyAny>>,
-        aovs: Vec<String>,
-        stats: Option<Bound<'py, PyDict>>,
+        kwargs: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let request = Request {
-            camera_name,
-            camera,
-            spp,
-            sampler,
-            light_samples,
-            seed,
-            width,
-            height,
-            region,
-            threads,
-            progress,
-            aovs,
-            stats,
-        };
+        let request = Request::from_kwargs(kwargs)?;
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
     }
 

@@ -12,71 +12,8 @@ use image::{ImageBuffer, ImageEncoder, Rgb32FImage, RgbImage};
 use crate::encode8::encode_all;
 use crate::film::Film;
 use crate::image_error::ImageError;
+use crate::image_format::OutputFormat;
 use crate::staged::StagedFile;
-
-/// Output file formats, chosen by extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OutputFormat {
-    /// 8-bit sRGB (or gamma-encoded) PNG.
-    Png,
-    /// 8-bit sRGB (or gamma-encoded) JPEG.
-    Jpeg,
-    /// Linear float OpenEXR.
-    Exr,
-    /// Linear float Portable Float Map.
-    Pfm,
-}
-
-impl OutputFormat {
-    /// The largest width and height the format can store (JPEG: 65535), or `None` when only
-    /// memory limits it.
-    pub fn max_dimension(self) -> Option<u32> {
-        match self {
-            OutputFormat::Jpeg => Some(u16::MAX as u32),
-            OutputFormat::Png | OutputFormat::Exr | OutputFormat::Pfm => None,
-        }
-    }
-
-    /// Its name in messages: "PNG", "JPEG", "EXR" or "PFM".
-    pub fn name(self) -> &'static str {
-        match self {
-            OutputFormat::Png => "PNG",
-            OutputFormat::Jpeg => "JPEG",
-            OutputFormat::Exr => "EXR",
-            OutputFormat::Pfm => "PFM",
-        }
-    }
-
-    /// Memory that writing one pixel takes beyond the film, at most: the 8-bit codes (PNG,
-    /// JPEG) and the compressed copy PNG's encoder keeps whole until it writes, or the float
-    /// copy EXR's encoder reads; plus the encoded bytes when they are kept `in_memory`.
-    fn bytes_per_pixel(self, in_memory: bool) -> u64 {
-        let working = match self {
-            OutputFormat::Png => 3 + 4,
-            OutputFormat::Jpeg => 3,
-            OutputFormat::Exr => 12,
-            OutputFormat::Pfm => 0,
-        };
-        let encoded = match self {
-            OutputFormat::Png | OutputFormat::Jpeg => 4,
-            OutputFormat::Exr | OutputFormat::Pfm => 13,
-        };
-        working + if in_memory { encoded } else { 0 }
-    }
-
-    /// The format named by `path`'s extension (case-insensitive).
-    pub fn from_path(path: &Path) -> Option<OutputFormat> {
-        Some(
-            match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
-                "png" => OutputFormat::Png,
-                "jpg" | "jpeg" => OutputFormat::Jpeg,
-                "exr" => OutputFormat::Exr,
-                "pfm" => OutputFormat::Pfm,
-                _ => return None,
-            },
-        )
-    }
-}
 
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not
 /// at all.
@@ -451,28 +388,6 @@ mod tests {
             }
         }
         std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn output_formats_by_extension() {
-        assert_eq!(
-            OutputFormat::from_path(Path::new("a.PNG")),
-            Some(OutputFormat::Png)
-        );
-        assert_eq!(
-            OutputFormat::from_path(Path::new("a.jpeg")),
-            Some(OutputFormat::Jpeg)
-        );
-        assert_eq!(
-            OutputFormat::from_path(Path::new("a.exr")),
-            Some(OutputFormat::Exr)
-        );
-        assert_eq!(
-            OutputFormat::from_path(Path::new("a.pfm")),
-            Some(OutputFormat::Pfm)
-        );
-        assert_eq!(OutputFormat::from_path(Path::new("a.bmp")), None);
-        assert_eq!(OutputFormat::from_path(Path::new("a")), None);
     }
 
     #[test]

@@ -53,6 +53,7 @@ mod files;
 mod film;
 mod geometry;
 mod image_error;
+mod image_format;
 mod image_io;
 mod integrator;
 mod light;
@@ -86,23 +87,22 @@ pub use files::Files;
 pub use film::Film;
 pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
 pub use image_error::ImageError;
-pub use image_io::{
-    check_finite, encode_image, stage_image, write_image, write_image_unless, OutputFormat,
-};
+pub use image_format::OutputFormat;
+pub use image_io::{check_finite, encode_image, stage_image, write_image, write_image_unless};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
 pub use material::Material;
 pub use math::{Aabb, Ray, Rgb, Transform};
-pub use names::{escape_controls, file_name_part};
+pub use names::{escape_controls, file_name_part, UnknownName};
 pub use pool::MAX_THREADS;
 pub use raycast::{
     create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
 };
 pub use render::{
-    render, render_with_aovs, AovFilm, AovPixel, PixelBounds, RenderError, RenderOptions,
-    RenderSettings, RenderStats, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP,
-    NO_ID,
+    render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, PixelBounds, RenderError,
+    RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch, View,
+    MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP, NO_ID,
 };
 pub use sampling::{Rng, Sampler};
 pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};

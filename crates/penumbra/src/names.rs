@@ -1,4 +1,5 @@
-//! Names from files made safe where they go: inside file names and inside messages.
+//! Names from files made safe where they go: inside file names and inside messages; and the
+//! error for a name outside a closed set (a sampler, an image format).
 //!
 //! A camera's or a view's name put into an output pattern such as `out/{camera}.png` must stay
 //! one file name in the pattern's folder, whatever the scene or the jobs file calls it: one rule
@@ -55,9 +56,65 @@ pub fn file_name_part(name: &str) -> String {
         .collect()
 }
 
+/// A name that is none of a closed set's, such as `"sobol"` for a sampler: the error of the
+/// `FromStr` of [`Sampler`](crate::Sampler), [`OutputFormat`](crate::OutputFormat),
+/// [`Shading`](crate::Shading) and [`LightModel`](crate::LightModel). The message lists the
+/// names there are.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} {name:?} (use {})", quoted_list(known))]
+pub struct UnknownName {
+    /// What the name was meant to name ("sampler", "image format", ...).
+    pub what: &'static str,
+    /// The name given.
+    pub name: String,
+    /// The names there are, in their usual order.
+    pub known: Vec<&'static str>,
+}
+
+/// The member of `all` that `name_of` calls `name`, else an [`UnknownName`] of `what`.
+pub(crate) fn parse_name<T: Copy>(
+    what: &'static str,
+    name: &str,
+    all: &[T],
+    name_of: impl Fn(T) -> &'static str,
+) -> Result<T, UnknownName> {
+    all.iter()
+        .copied()
+        .find(|&t| name_of(t) == name)
+        .ok_or_else(|| UnknownName {
+            what,
+            name: name.to_owned(),
+            known: all.iter().map(|&t| name_of(t)).collect(),
+        })
+}
+
+/// `"a", "b" or "c"`.
+fn quoted_list(names: &[&str]) -> String {
+    let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+    match quoted.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::file_name_part;
+    use super::*;
+
+    #[test]
+    fn an_unknown_name_lists_the_known_ones() {
+        let e = UnknownName {
+            what: "sampler",
+            name: "so\"bol".into(),
+            known: vec!["center", "grid", "rgss"],
+        };
+        assert_eq!(
+            e.to_string(),
+            r#"unknown sampler "so\"bol" (use "center", "grid" or "rgss")"#
+        );
+        assert_eq!(quoted_list(&["png"]), "\"png\"");
+    }
 
     #[test]
     fn names_stay_one_file_name() {

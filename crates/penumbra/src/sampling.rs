@@ -3,6 +3,8 @@
 
 use glam::Vec2;
 
+use crate::names::{parse_name, UnknownName};
+
 /// How pixel samples are placed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -18,7 +20,16 @@ pub enum Sampler {
 }
 
 impl Sampler {
-    /// The name used in scene files and on the command line.
+    /// Every sampler, in the order messages list them.
+    pub const ALL: [Sampler; 4] = [
+        Sampler::Center,
+        Sampler::Grid,
+        Sampler::Rgss,
+        Sampler::Jittered,
+    ];
+
+    /// The name used in scene files, on the command line and in Python; [`str::parse`] takes
+    /// it back.
     pub fn name(self) -> &'static str {
         match self {
             Sampler::Center => "center",
@@ -26,6 +37,23 @@ impl Sampler {
             Sampler::Rgss => "rgss",
             Sampler::Jittered => "jittered",
         }
+    }
+}
+
+/// A sampler by its [`Sampler::name`]; an unknown name is an error listing the names.
+///
+/// ```
+/// use penumbra::Sampler;
+///
+/// assert_eq!("rgss".parse(), Ok(Sampler::Rgss));
+/// let e = "sobol".parse::<Sampler>().unwrap_err();
+/// assert_eq!(e.to_string(), r#"unknown sampler "sobol" (use "center", "grid", "rgss" or "jittered")"#);
+/// ```
+impl std::str::FromStr for Sampler {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<Sampler, UnknownName> {
+        parse_name("sampler", name, &Sampler::ALL, Sampler::name)
     }
 }
 
@@ -125,6 +153,22 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sampler_names_round_trip() {
+        for s in Sampler::ALL {
+            assert_eq!(s.name().parse::<Sampler>(), Ok(s));
+            // The scene file's reader (serde) knows each by the same name.
+            let quoted = format!("\"{}\"", s.name());
+            assert_eq!(serde_json::from_str::<Sampler>(&quoted).unwrap(), s);
+        }
+        // Names are exact: no other case, no spaces.
+        for bad in ["Rgss", " grid", "", "random"] {
+            let e = bad.parse::<Sampler>().unwrap_err();
+            assert_eq!(e.name, bad);
+            assert_eq!(e.known, ["center", "grid", "rgss", "jittered"]);
+        }
+    }
 
     #[test]
     fn rgss_4_matches_the_spec() {

@@ -6,7 +6,7 @@ mod support;
 
 use std::path::Path;
 
-use penumbra::{ErrorKind, Override, Sampler, SceneError, SceneFile, SceneFormat};
+use penumbra::{ErrorKind, Override, Sampler, SceneError, SceneFile, SceneFormat, SettingsPatch};
 use support::{line_of, BASE_JSON, BASE_TOML as BASE};
 
 fn load(text: &str, format: SceneFormat, set: &[&str]) -> Result<SceneFile, SceneError> {
@@ -231,10 +231,17 @@ fn a_sampler_overridden_alone_takes_its_own_count_as_the_flag_does() {
     assert_eq!(sampling(&text, &set), (Sampler::Grid, 9));
     let set = ["render.samples=1", "render.sampler=center"];
     assert_eq!(sampling(&text, &set), (Sampler::Center, 1));
-    // The command line's --sampler gets the same counts from the same file.
+    // The command line's --sampler (a settings patch) gets the same counts from the same file.
     let file = load(&text, SceneFormat::Toml, &[]).unwrap();
-    assert_eq!(file.spp_for_sampler(Sampler::Center), 1);
-    assert_eq!(file.spp_for_sampler(Sampler::Grid), 16);
+    let scene = file.build(1).unwrap();
+    for (sampler, spp) in [(Sampler::Center, 1), (Sampler::Grid, 16)] {
+        let patch = SettingsPatch {
+            sampler: Some(sampler),
+            ..SettingsPatch::default()
+        };
+        let patched = patch.apply(&scene.settings, file.samples()).unwrap();
+        assert_eq!((patched.sampler, patched.spp), (sampler, spp));
+    }
     // A file without [render]: center alone is 1, as a file saying center without samples.
     assert_eq!(
         sampling(BASE, &["render.sampler=center"]),

@@ -12,6 +12,23 @@
 //!
 //! On a miss: depth is `+inf`, position, normal and albedo are zero, and both ids are
 //! [`NO_ID`].
+//!
+//! What is written or returned of them is one conversion, [`AovFilm::values`]: the values of
+//! one [`Aov`] pixel by pixel, as the command line writes them to files and Python returns
+//! them as arrays.
+//!
+//! ```
+//! use penumbra::{Aov, AovFilm, AovPixel, AovValues};
+//!
+//! let film = AovFilm { width: 2, height: 1, pixels: vec![AovPixel::MISS; 2] };
+//! let depth: Aov = "depth".parse()?;
+//! assert_eq!(film.values(depth)?, AovValues::Floats(vec![f32::INFINITY; 2]));
+//! assert_eq!(Aov::Normal.components(), 3);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::collections::TryReserveError;
+use std::str::FromStr;
 
 use glam::Vec3;
 
@@ -19,6 +36,7 @@ use crate::camera::PinholeCamera;
 use crate::geometry::Surface;
 use crate::integrator::CAMERA_T_MIN;
 use crate::math::{Ray, Rgb};
+use crate::names::{parse_name, UnknownName};
 use crate::world::World;
 
 /// The id of "nothing hit" in [`AovPixel::object_id`] and [`AovPixel::primitive_id`].
@@ -73,6 +91,110 @@ impl AovFilm {
     pub fn get(&self, x: u32, y: u32) -> AovPixel {
         self.pixels[(y as usize) * (self.width as usize) + x as usize]
     }
+}
+
+/// One AOV of [`AovPixel`], by the name the command line's `--aov` and Python's `aovs=` take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Aov {
+    /// [`AovPixel::depth`].
+    Depth,
+    /// [`AovPixel::normal`].
+    Normal,
+    /// [`AovPixel::albedo`].
+    Albedo,
+    /// [`AovPixel::position`].
+    Position,
+    /// [`AovPixel::object_id`].
+    ObjectId,
+    /// [`AovPixel::primitive_id`].
+    PrimitiveId,
+}
+
+impl Aov {
+    /// Every AOV, in the order files, channels and messages list them.
+    pub const ALL: [Aov; 6] = [
+        Aov::Depth,
+        Aov::Normal,
+        Aov::Albedo,
+        Aov::Position,
+        Aov::ObjectId,
+        Aov::PrimitiveId,
+    ];
+
+    /// Its name: "depth", "normal", "albedo", "position", "object_id" or "primitive_id";
+    /// [`str::parse`] takes it back.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Depth => "depth",
+            Aov::Normal => "normal",
+            Aov::Albedo => "albedo",
+            Aov::Position => "position",
+            Aov::ObjectId => "object_id",
+            Aov::PrimitiveId => "primitive_id",
+        }
+    }
+
+    /// Values per pixel: 3 for normal, albedo and position, else 1.
+    pub fn components(self) -> usize {
+        match self {
+            Aov::Normal | Aov::Albedo | Aov::Position => 3,
+            Aov::Depth | Aov::ObjectId | Aov::PrimitiveId => 1,
+        }
+    }
+
+    /// True for the ids, whose values are integers ([`AovValues::Ids`]).
+    pub fn is_id(self) -> bool {
+        matches!(self, Aov::ObjectId | Aov::PrimitiveId)
+    }
+}
+
+/// An AOV by its [`Aov::name`]; an unknown name is an error listing the names.
+impl FromStr for Aov {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<Aov, UnknownName> {
+        parse_name("AOV", name, &Aov::ALL, Aov::name)
+    }
+}
+
+/// The values of one [`Aov`] over a film, row-major from the top: [`Aov::components`] per
+/// pixel, one after another.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AovValues {
+    /// Depth, normal, albedo or position.
+    Floats(Vec<f32>),
+    /// An id; exact, which floats could not promise above 2^24.
+    Ids(Vec<u32>),
+}
+
+impl AovFilm {
+    /// The values of `aov` at every pixel, in a buffer of their own; an error when its memory
+    /// cannot be had.
+    pub fn values(&self, aov: Aov) -> Result<AovValues, TryReserveError> {
+        let px = &self.pixels;
+        let vec3 = |f: fn(&AovPixel) -> Vec3| {
+            let values = px.iter().flat_map(move |p| f(p).to_array());
+            collect(px.len() * 3, values).map(AovValues::Floats)
+        };
+        match aov {
+            Aov::Depth => collect(px.len(), px.iter().map(|p| p.depth)).map(AovValues::Floats),
+            Aov::Normal => vec3(|p| p.normal),
+            Aov::Albedo => vec3(|p| p.albedo),
+            Aov::Position => vec3(|p| p.position),
+            Aov::ObjectId => collect(px.len(), px.iter().map(|p| p.object_id)).map(AovValues::Ids),
+            Aov::PrimitiveId => {
+                collect(px.len(), px.iter().map(|p| p.primitive_id)).map(AovValues::Ids)
+            }
+        }
+    }
+}
+
+/// `len` values in a vector of their own, allocated before any is computed.
+fn collect<T>(len: usize, values: impl Iterator<Item = T>) -> Result<Vec<T>, TryReserveError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)?;
+    v.extend(values);
+    Ok(v)
 }
 
 /// What a render needs to compute AOVs: the first triangle of every object, to number
@@ -176,6 +298,57 @@ mod tests {
         let hit = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY).unwrap();
         let s = world.surface(&hit);
         assert_eq!(albedo(&world, &s), Rgb::new(0.5, 0.25, 1.0));
+    }
+
+    #[test]
+    fn aov_names_round_trip() {
+        for a in Aov::ALL {
+            assert_eq!(a.name().parse::<Aov>(), Ok(a));
+        }
+        let e = "zdepth".parse::<Aov>().unwrap_err();
+        assert_eq!((e.name.as_str(), e.known.len()), ("zdepth", 6));
+        assert!(e
+            .to_string()
+            .starts_with(r#"unknown AOV "zdepth" (use "depth", "normal""#));
+    }
+
+    #[test]
+    fn values_come_pixel_by_pixel_in_film_order() {
+        let px = |i: u32| AovPixel {
+            depth: i as f32,
+            position: Vec3::new(1.0, 2.0, 3.0) * i as f32,
+            normal: Vec3::new(0.0, 0.0, i as f32),
+            albedo: Rgb::new(0.5, i as f32, 0.25),
+            object_id: 10 + i,
+            // Above 2^24: exact as an id, not as a float.
+            primitive_id: (1 << 24) + 1 + i,
+        };
+        let film = AovFilm {
+            width: 2,
+            height: 1,
+            pixels: vec![px(0), px(1)],
+        };
+        let floats = |a| match film.values(a).unwrap() {
+            AovValues::Floats(v) => v,
+            AovValues::Ids(_) => panic!("{a:?} gave ids"),
+        };
+        let ids = |a| match film.values(a).unwrap() {
+            AovValues::Ids(v) => v,
+            AovValues::Floats(_) => panic!("{a:?} gave floats"),
+        };
+        assert_eq!(floats(Aov::Depth), [0.0, 1.0]);
+        assert_eq!(floats(Aov::Normal), [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(floats(Aov::Albedo), [0.5, 0.0, 0.25, 0.5, 1.0, 0.25]);
+        assert_eq!(floats(Aov::Position), [0.0, 0.0, 0.0, 1.0, 2.0, 3.0]);
+        assert_eq!(ids(Aov::ObjectId), [10, 11]);
+        assert_eq!(ids(Aov::PrimitiveId), [(1 << 24) + 1, (1 << 24) + 2]);
+        for a in Aov::ALL {
+            let len = match film.values(a).unwrap() {
+                AovValues::Floats(v) => v.len(),
+                AovValues::Ids(v) => v.len(),
+            };
+            assert_eq!(len, 2 * a.components(), "{a:?}");
+        }
     }
 
     #[test]

@@ -6,6 +6,7 @@
 
 mod aov;
 mod job;
+mod patch;
 mod settings;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -25,7 +26,9 @@ use crate::world::World;
 use aov::AovContext;
 use job::{Buffers, Job};
 
-pub use aov::{AovFilm, AovPixel, NO_ID};
+pub use aov::{Aov, AovFilm, AovPixel, AovValues, NO_ID};
+pub(crate) use patch::implied_spp;
+pub use patch::SettingsPatch;
 pub use settings::{RenderSettings, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 
 /// A half-open pixel rectangle `[x0, x1) × [y0, y1)` of the full film (pbrt's

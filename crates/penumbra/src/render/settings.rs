@@ -2,12 +2,14 @@
 //! pinhole), film size, sampler and samples per pixel, light samples, seed and shading model.
 //! A scene file supplies defaults for all of them; a caller changes any per call.
 
+use std::str::FromStr;
+
 use thiserror::Error;
 
 use crate::camera::Camera;
 use crate::integrator::{LightModel, Shading, ShadingSettings};
 use crate::math::Rgb;
-use crate::names::escape_controls;
+use crate::names::{escape_controls, parse_name, UnknownName};
 use crate::sampling::{perfect_square_root, Sampler};
 use crate::world::World;
 
@@ -132,6 +134,28 @@ impl RenderSettings {
 
     /// Checks every setting and returns the camera to look through.
     pub fn check(&self, world: &World) -> Result<Camera, SettingsError> {
+        self.check_values()?;
+        match &self.view {
+            View::Camera(camera) => Ok(*camera),
+            View::First => world
+                .cameras()
+                .first()
+                .map(|(_, c)| *c)
+                .ok_or(SettingsError::NoCamera),
+            View::Named(name) => world.camera(name).copied().ok_or_else(|| {
+                let known: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
+                SettingsError::UnknownCamera {
+                    name: name.clone(),
+                    known: known.join(", "),
+                }
+            }),
+        }
+    }
+
+    /// Checks every setting but the view, which only a world can check: film size, samples
+    /// per pixel against the sampler, light samples. [`RenderSettings::check`] checks these
+    /// first, in this order.
+    pub fn check_values(&self) -> Result<(), SettingsError> {
         let (width, height) = (self.width, self.height);
         if width == 0 || height == 0 {
             return Err(SettingsError::EmptyFilm { width, height });
@@ -150,21 +174,7 @@ impl RenderSettings {
                 return Err(SettingsError::LightSamples(n));
             }
         }
-        match &self.view {
-            View::Camera(camera) => Ok(*camera),
-            View::First => world
-                .cameras()
-                .first()
-                .map(|(_, c)| *c)
-                .ok_or(SettingsError::NoCamera),
-            View::Named(name) => world.camera(name).copied().ok_or_else(|| {
-                let known: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
-                SettingsError::UnknownCamera {
-                    name: name.clone(),
-                    known: known.join(", "),
-                }
-            }),
-        }
+        Ok(())
     }
 
     /// What the integrator needs of these settings.
@@ -175,6 +185,50 @@ impl RenderSettings {
             ambient: self.ambient,
             light_samples: self.light_samples,
         }
+    }
+}
+
+// The names of the shading choices, as scene files spell them (`render.shading`,
+// `render.light_model`); the integrator owns the types, the settings their names.
+impl Shading {
+    /// Both lobes, in the order messages list them.
+    pub const ALL: [Shading; 2] = [Shading::Phong, Shading::BlinnPhong];
+
+    /// Its name in scene files: "phong" or "blinn-phong"; [`str::parse`] takes it back.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Phong => "phong",
+            Shading::BlinnPhong => "blinn-phong",
+        }
+    }
+}
+
+impl FromStr for Shading {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<Shading, UnknownName> {
+        parse_name("shading", name, &Shading::ALL, Shading::name)
+    }
+}
+
+impl LightModel {
+    /// Both models, in the order messages list them.
+    pub const ALL: [LightModel; 2] = [LightModel::Phong, LightModel::Physical];
+
+    /// Its name in scene files: "phong" or "physical"; [`str::parse`] takes it back.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightModel::Phong => "phong",
+            LightModel::Physical => "physical",
+        }
+    }
+}
+
+impl FromStr for LightModel {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<LightModel, UnknownName> {
+        parse_name("light model", name, &LightModel::ALL, LightModel::name)
     }
 }
 
@@ -248,5 +302,30 @@ mod tests {
             Err(SettingsError::FilmTooLarge { .. })
         ));
         assert_eq!(with(|s| s.spp = 16), Ok(()));
+    }
+
+    #[test]
+    fn shading_names_round_trip_as_scene_files_spell_them() {
+        for s in Shading::ALL {
+            assert_eq!(s.name().parse::<Shading>(), Ok(s));
+            // The scene file's reader (serde) knows each by the same name.
+            let quoted = format!("\"{}\"", s.name());
+            assert_eq!(serde_json::from_str::<Shading>(&quoted).unwrap(), s);
+        }
+        for m in LightModel::ALL {
+            assert_eq!(m.name().parse::<LightModel>(), Ok(m));
+            let quoted = format!("\"{}\"", m.name());
+            assert_eq!(serde_json::from_str::<LightModel>(&quoted).unwrap(), m);
+        }
+        let e = "blinn".parse::<Shading>().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            r#"unknown shading "blinn" (use "phong" or "blinn-phong")"#
+        );
+        let e = "pbr".parse::<LightModel>().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            r#"unknown light model "pbr" (use "phong" or "physical")"#
+        );
     }
 }

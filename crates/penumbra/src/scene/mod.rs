@@ -18,7 +18,6 @@ use std::time::Duration;
 
 use crate::files::{read_bounded, Files};
 use crate::render::RenderSettings;
-use crate::sampling::Sampler;
 use crate::world::World;
 
 pub use desc::SceneDesc;
@@ -188,34 +187,38 @@ impl SceneFile {
         build::build(self, threads)
     }
 
-    /// Samples per pixel for `sampler` chosen without a count of its own, as the command
-    /// line's `--sampler` chooses it: 1 for [`Sampler::Center`], its only count; else the
-    /// file's `render.samples` (with overrides), else 4. An override of `render.sampler`
-    /// without one of `render.samples` follows the same rule when the file is built.
+    /// The file's `render.samples` (with overrides), when it gives one: the count a sampler
+    /// chosen without one takes, unless it is center (see
+    /// [`SettingsPatch::apply`](crate::SettingsPatch::apply)).
     ///
     /// ```
-    /// use penumbra::{Override, Sampler, SceneFile, SceneFormat};
+    /// use penumbra::{Sampler, SceneFile, SceneFormat, SettingsPatch};
     ///
-    /// let text = "[film]\nwidth = 8\nheight = 8\n[render]\nsampler = \"rgss\"\nsamples = 16\n";
+    /// let text = "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0, 0, 3]\n\
+    ///             look_at = [0, 0, 0]\nfov = 40\n[render]\nsampler = \"rgss\"\nsamples = 16\n";
     /// let file = SceneFile::from_str(text, SceneFormat::Toml, "s.toml", ".")?;
-    /// assert_eq!(file.spp_for_sampler(Sampler::Center), 1);
-    /// assert_eq!(file.spp_for_sampler(Sampler::Grid), 16);
+    /// assert_eq!(file.samples(), Some(16));
+    /// let scene = file.build(1)?;
+    /// let spp = |sampler| {
+    ///     let patch = SettingsPatch { sampler: Some(sampler), ..SettingsPatch::default() };
+    ///     patch.apply(&scene.settings, file.samples()).map(|s| s.spp)
+    /// };
+    /// assert_eq!(spp(Sampler::Center)?, 1);
+    /// assert_eq!(spp(Sampler::Grid)?, 16);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn spp_for_sampler(&self, sampler: Sampler) -> u32 {
+    pub fn samples(&self) -> Option<u32> {
         // A count out of range cannot come from a file that builds; it is passed on as
         // u32::MAX for the settings check to refuse.
-        let samples = self
-            .desc
+        self.desc
             .render
             .samples
-            .map(|n| u32::try_from(n).unwrap_or(u32::MAX));
-        build::implied_spp(sampler, samples)
+            .map(|n| u32::try_from(n).unwrap_or(u32::MAX))
     }
 
     /// True when an override set `render.sampler` and none set `render.samples`: the file's
-    /// count was written for another sampler, so the new one takes its own (see
-    /// [`SceneFile::spp_for_sampler`]).
+    /// count was written for another sampler, so the new one takes its own (as a
+    /// [`SettingsPatch`](crate::SettingsPatch) of the sampler alone does).
     pub(crate) fn sampler_set_alone(&self) -> bool {
         self.source.sampler_set_alone()
     }

@@ -11,8 +11,6 @@ mod objects;
 mod placements;
 mod settings;
 
-pub(super) use settings::implied_spp;
-
 use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use super::{Builder, Result};
 use crate::camera::{Camera, CameraError};
-use crate::image_io::OutputFormat;
-use crate::render::{RenderSettings, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
+use crate::image_format::OutputFormat;
+use crate::render::{implied_spp, RenderSettings, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 use crate::sampling::{perfect_square_root, Sampler};
 use crate::scene::desc::{CameraDesc, Num};
 use crate::scene::error::{ErrorKind, KeyPath};
@@ -195,17 +195,5 @@ impl Builder<'_> {
                     format!("light samples N must be between 1 and {MAX_LIGHT_SAMPLES}, not {n}"),
                 )
             })
-    }
-}
-
-/// Samples per pixel of `sampler` chosen without a count of its own: 1 for
-/// [`Sampler::Center`], its only count; else `samples`, the count the file gives; else the
-/// default, 4. A file's `sampler` without `samples`, an override of `render.sampler` alone and
-/// the command line's `--sampler` all follow this one rule.
-pub(in crate::scene) fn implied_spp(sampler: Sampler, samples: Option<u32>) -> u32 {
-    match (sampler, samples) {
-        (Sampler::Center, _) => 1,
-        (_, Some(n)) => n,
-        (_, None) => RenderSettings::default().spp,
     }
 }
