@@ -83,11 +83,29 @@ impl Builder<'_> {
 
     /// One inline placement, checked.
     fn placement(&self, at: &KeyPath, p: &PlacementDesc) -> Result<Placement> {
-        let transform = Transform::from_srt(
-            p.scale.map_or(Vec3::ONE, |s| s.rgb()),
-            p.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
-            p.translate.map_or(Vec3::ZERO, |t| t.vec3()),
-        );
+        let transform = match p.matrix {
+            None => Transform::from_srt(
+                p.scale.map_or(Vec3::ONE, |s| s.rgb()),
+                p.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
+                p.translate.map_or(Vec3::ZERO, |t| t.vec3()),
+            ),
+            Some(_) if p.scale.is_some() || p.rotate.is_some() || p.translate.is_some() => {
+                return Err(self.bad(
+                    &at.key("matrix"),
+                    "a matrix replaces scale, rotate and translate: give one or the other",
+                ));
+            }
+            Some(rows) => {
+                if rows[3].map(|v| v.0) != [0.0, 0.0, 0.0, 1.0] {
+                    return Err(self.bad(
+                        &at.key("matrix"),
+                        "the matrix is not affine: its last row must be [0, 0, 0, 1]",
+                    ));
+                }
+                let by_rows: Vec<f32> = rows.iter().flatten().map(|v| v.f32()).collect();
+                Transform::from_matrix(Mat4::from_cols_slice(&by_rows).transpose())
+            }
+        };
         Ok(Placement {
             transform,
             material: p.material.clone(),

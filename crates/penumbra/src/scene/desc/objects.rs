@@ -129,7 +129,8 @@ pub enum TransformsDesc {
     Npy(String),
 }
 
-/// One copy's placement (`T·Rz·Ry·Rx·S`, as an object's) and, optionally, its material.
+/// One copy's placement (`T·Rz·Ry·Rx·S`, as an object's, or a 4×4 `matrix`) and, optionally,
+/// its material.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct PlacementDesc {
@@ -141,6 +142,9 @@ pub struct PlacementDesc {
     pub rotate: Option<Vec3Desc>,
     /// Translation.
     pub translate: Option<Vec3Desc>,
+    /// An object-to-world matrix, by rows (the last must be 0, 0, 0, 1), instead of `scale`,
+    /// `rotate` and `translate`.
+    pub matrix: Option<[[Num; 4]; 4]>,
 }
 
 impl<'de> Deserialize<'de> for TransformsDesc {
