@@ -35,6 +35,14 @@ fn argument(e: &RaycastError) -> Option<&'static str> {
             "vertex_positions"
         }
         RaycastError::Beyond { what: "ray", .. } => "rays",
+        RaycastError::UnknownGeometry { .. } => "geometry_id",
+        RaycastError::TransformNotFinite { .. }
+        | RaycastError::TransformNotAffine
+        | RaycastError::SingularTransform
+        | RaycastError::Beyond {
+            what: "placed vertex",
+            ..
+        } => "transform",
         RaycastError::Beyond { .. } => "query_points",
         RaycastError::InvalidSamples(_) => "nsamples",
         _ => return None,
@@ -58,12 +66,12 @@ pub(crate) fn call_error(call: &str, e: RaycastError) -> PyErr {
 }
 
 impl CoreRaycastingScene {
-    /// The triangles of a built world, geometry id = object index.
-    pub fn from_world(world: &World) -> CoreRaycastingScene {
-        CoreRaycastingScene {
-            scene: RwLock::new(RaycastingScene::from_world(world)),
+    /// The triangles of a built world, instances included, geometry id = object index.
+    pub fn from_world(world: &World) -> Result<CoreRaycastingScene, RaycastError> {
+        Ok(CoreRaycastingScene {
+            scene: RwLock::new(RaycastingScene::from_world(world)?),
             threads: 0,
-        }
+        })
     }
 
     /// The scene, shared with other queries.
@@ -185,6 +193,20 @@ impl CoreRaycastingScene {
         scene
             .add_triangles(v, t)
             .map_err(|e| call_error("add_triangles", e))
+    }
+
+    /// Adds a copy of geometry `geometry_id` placed by a row-major 4×4 object-to-world
+    /// matrix; returns the copy's id.
+    fn add_instance(
+        &self,
+        py: Python<'_>,
+        geometry_id: u32,
+        transform: [[f32; 4]; 4],
+    ) -> PyResult<u32> {
+        let mut scene = self.write(py)?;
+        scene
+            .add_instance(geometry_id, &transform)
+            .map_err(|e| call_error("add_instance", e))
     }
 
     /// Number of geometries added.

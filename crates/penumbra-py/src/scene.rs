@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::scene_error;
-use crate::raycast::CoreRaycastingScene;
+use crate::raycast::{call_error, CoreRaycastingScene};
 use crate::render::{render_scene, Request};
 
 /// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
@@ -97,9 +97,11 @@ impl CoreScene {
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
     }
 
-    /// A ray-casting scene of the world's triangles, geometry id = object index.
-    fn raycasting_scene(&self, py: Python<'_>) -> CoreRaycastingScene {
+    /// A ray-casting scene of the world's triangles, instances included (copied), geometry
+    /// id = object index.
+    fn raycasting_scene(&self, py: Python<'_>) -> PyResult<CoreRaycastingScene> {
         py.detach(|| CoreRaycastingScene::from_world(&self.world))
+            .map_err(|e| call_error("Scene.raycasting_scene", e))
     }
 
     /// The files the build read besides the scene file (meshes, MTL libraries, images).

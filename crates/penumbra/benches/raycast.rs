@@ -47,7 +47,7 @@ fn scene() -> RaycastingScene {
         path.to_str().unwrap()
     );
     let file = SceneFile::from_str(&text, SceneFormat::Toml, "bench.toml", ".").unwrap();
-    let scene = RaycastingScene::from_world(&file.build(2).unwrap().world);
+    let scene = RaycastingScene::from_world(&file.build(2).unwrap().world).unwrap();
     scene.commit(2).unwrap();
     scene
 }

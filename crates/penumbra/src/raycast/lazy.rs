@@ -5,6 +5,7 @@
 //! is answered at once; the build, left to finish, then serves the next query. A small one
 //! runs on the caller's thread.
 
+use std::ops::Range;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -28,6 +29,19 @@ pub(crate) struct Triangles {
     pub geometry: Geometry,
     /// For each triangle of `geometry`, its index within its own geometry.
     pub local_ids: Vec<u32>,
+    /// For each geometry id, where its vertices and triangles lie in `geometry`.
+    pub spans: Vec<Span>,
+}
+
+/// Where one geometry lies in [`Triangles::geometry`]: its vertices are `vertices` (each
+/// geometry's are contiguous), and its triangles are those of `triangles` whose `object` is
+/// its id.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Span {
+    /// Its vertices.
+    pub vertices: Range<u32>,
+    /// A range of triangles that holds all of its own.
+    pub triangles: Range<u32>,
 }
 
 /// Where a build stands.

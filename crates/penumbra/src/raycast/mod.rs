@@ -2,7 +2,8 @@
 //! watertight: a ray aimed exactly at an edge shared by two triangles, or at a vertex, hits
 //! the surface; it never slips through and never leaks to the far side.
 //!
-//! Meshes are added with [`RaycastingScene::add_triangles`] (geometry ids 0, 1, … in order);
+//! Meshes are added with [`RaycastingScene::add_triangles`] (geometry ids 0, 1, … in order),
+//! placed copies of them with [`RaycastingScene::add_instance`] (see `instances`);
 //! a BVH over all of them is built on the first query (or by [`RaycastingScene::commit`]).
 //! Every batch query takes flat arrays (`[f32; 6]` rays `[ox, oy, oz, dx, dy, dz]`,
 //! `[f32; 3]` points) and returns flat arrays in the same order, running on a pool of the
@@ -48,6 +49,7 @@ mod batch;
 mod boundary;
 mod closest;
 mod group;
+mod instances;
 mod lazy;
 mod packet;
 mod pinhole;
@@ -64,6 +66,8 @@ mod tests_border;
 #[cfg(test)]
 mod tests_edges;
 #[cfg(test)]
+mod tests_instances;
+#[cfg(test)]
 mod tests_meshes;
 #[cfg(test)]
 mod tests_packets;
@@ -72,10 +76,9 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::geometry::{Geometry, Triangle};
 use crate::memory::human;
 use crate::scale::MAX_COORDINATE;
-use crate::world::{World, MAX_TRIANGLES};
+use crate::world::MAX_TRIANGLES;
 
 pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
 pub use queries::{CastRays, ClosestPoints, Intersections};
@@ -149,9 +152,40 @@ pub enum RaycastError {
         /// The bytes asked for when memory ran out.
         bytes: u64,
     },
+    /// [`RaycastingScene::add_instance`] names a geometry that was not added.
+    #[error("geometry {id} does not exist (the scene has {geometries} geometries)")]
+    UnknownGeometry {
+        /// The id given.
+        id: u32,
+        /// How many geometries the scene has.
+        geometries: u32,
+    },
+    /// An entry of an instance's transform is NaN or infinite.
+    #[error("the matrix entry [{row}][{column}] is not a finite 32-bit float")]
+    TransformNotFinite {
+        /// Its row.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
+    /// An instance's transform is not affine: its last row is not `[0, 0, 0, 1]`.
+    #[error("the matrix's last row must be [0, 0, 0, 1] (an affine map)")]
+    TransformNotAffine,
+    /// An instance's transform cannot be inverted.
+    #[error("the matrix cannot be inverted (a zero scale, or factors beyond about 1e±38)")]
+    SingularTransform,
     /// A [`RaycastingScene::list_intersections`] result would hold more than 2³² − 1 hits.
     #[error("more than 2^32 - 1 intersections to list; pass fewer rays at a time")]
     TooManyIntersections,
+}
+
+/// `Err(TooManyTriangles)` unless a scene of `vertices` vertices and `triangles` triangles
+/// fits: at most [`MAX_TRIANGLES`] triangles, and vertices numbered by `u32`.
+fn fits(vertices: usize, triangles: usize) -> Result<(), RaycastError> {
+    if triangles > MAX_TRIANGLES || vertices > u32::MAX as usize {
+        return Err(RaycastError::TooManyTriangles);
+    }
+    Ok(())
 }
 
 /// A set of triangle meshes to cast rays against, with Open3D's `RaycastingScene` queries.
@@ -175,41 +209,6 @@ impl RaycastingScene {
     /// An empty scene: every ray misses.
     pub fn new() -> RaycastingScene {
         RaycastingScene::default()
-    }
-
-    /// The triangles of `world`, one geometry per object of the world (geometry id = object
-    /// id; primitive ids count the object's triangles in the order it added them).
-    pub fn from_world(world: &World) -> RaycastingScene {
-        let geometry = world.geometry();
-        let objects = geometry
-            .triangles
-            .iter()
-            .map(|t| t.object + 1)
-            .max()
-            .unwrap_or(0);
-        let mut counts = vec![0u32; objects as usize];
-        let local_ids = geometry
-            .triangles
-            .iter()
-            .map(|t| {
-                let c = &mut counts[t.object as usize];
-                *c += 1;
-                *c - 1
-            })
-            .collect();
-        let geometry = Geometry {
-            positions: geometry.positions.clone(),
-            triangles: geometry.triangles.clone(),
-            ..Geometry::default()
-        };
-        RaycastingScene {
-            triangles: Arc::new(Triangles {
-                geometry,
-                local_ids,
-            }),
-            geometries: objects,
-            ..RaycastingScene::default()
-        }
     }
 
     /// Adds a mesh: `vertices` are positions, `triangles` index triples into them. Returns
@@ -247,29 +246,19 @@ impl RaycastingScene {
             }
         }
         let all = &self.triangles.geometry;
-        if all.len() + triangles.len() > MAX_TRIANGLES
-            || all.positions.len() + vertices.len() > u32::MAX as usize
-        {
-            return Err(RaycastError::TooManyTriangles);
-        }
+        fits(
+            all.positions.len() + vertices.len(),
+            all.len() + triangles.len(),
+        )?;
         let id = self.geometries;
         // Forget the structure first: a build still running then holds the only other
         // reference, and the triangles are copied once at most.
         self.accel.reset();
-        let all = Arc::make_mut(&mut self.triangles);
-        let base = all.geometry.positions.len() as u32;
-        all.geometry
-            .positions
-            .extend(vertices.iter().map(|&v| Vec3::from(v)));
-        all.geometry
-            .triangles
-            .extend(triangles.iter().map(|t| Triangle {
-                vertices: t.map(|i| base + i),
-                material: 0,
-                object: id,
-                smooth: false,
-            }));
-        all.local_ids.extend(0..triangles.len() as u32);
+        Arc::make_mut(&mut self.triangles).push(
+            vertices.iter().map(|&v| Vec3::from(v)),
+            triangles.iter().copied(),
+            id,
+        );
         self.geometries += 1;
         Ok(id)
     }

@@ -443,7 +443,7 @@ fn a_world_becomes_one_geometry_per_object() {
     builder
         .add_triangles(&far, &[[0, 1, 2], [2, 1, 0]], 0)
         .unwrap();
-    let s = RaycastingScene::from_world(&builder.build(1));
+    let s = RaycastingScene::from_world(&builder.build(1)).unwrap();
     assert_eq!((s.geometry_count(), s.triangle_count()), (2, 3));
     let rays = [
         [0.0, 0.0, 1.0, 0.0, 0.0, -1.0],

@@ -214,6 +214,11 @@ impl World {
         &self.meshes
     }
 
+    /// The instances (mesh index, transform, object id), in the order they were added.
+    pub(crate) fn placed(&self) -> &[Placed] {
+        &self.placed
+    }
+
     /// The closest hit with `t` in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         self.accel.intersect(ray, t_min, t_max)
