@@ -206,6 +206,24 @@ class RaycastingScene:
         indices = np.ascontiguousarray(indices, dtype=np.uint32)
         return self._core.add_triangles(vertices, indices)
 
+    def add_instance(self, geometry_id: Any, transform: Any) -> int:
+        """Adds a copy of geometry ``geometry_id`` placed by ``transform``, a (4, 4)
+        row-major object-to-world matrix (numpy array of any real dtype, nested list or
+        Open3D tensor) whose last row is ``[0, 0, 0, 1]``; mirrors and non-uniform scales
+        are allowed. Returns the copy's geometry id, which the queries report for its
+        triangles; its primitive ids are those of ``geometry_id``'s triangles.
+
+        An extension of Open3D's API (Open3D has no instances). The triangles are copied,
+        so a copy costs the memory of its geometry. A ``geometry_id`` that is not a
+        geometry, a matrix entry that is not finite, a last row that is not
+        ``[0, 0, 0, 1]``, a matrix that cannot be inverted, or a placed vertex beyond
+        ±1e12 raises ``ValueError`` and adds nothing.
+        """
+        call = "add_instance"
+        geometry_id = _args.integer(call, "geometry_id", geometry_id, 0, _args.U32_MAX)
+        matrix = _matrix(transform, (4, 4), call, "transform")
+        return self._core.add_instance(geometry_id, matrix)
+
     def cast_rays(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """The closest hit (t >= 0) of each ray: a dict of :class:`Tensor` arrays, ``t_hit``
         (...) float32 in units of
@@ -327,16 +345,17 @@ def _pinhole(*args: Any, **kwargs: Any) -> np.ndarray:
     w = _args.integer(call, "width_px", bound["width_px"], 0, _args.U32_MAX)
     h = _args.integer(call, "height_px", bound["height_px"], 0, _args.U32_MAX)
     if use_fov:
-        vec = [_vector(bound[n], (3,), n) for n in ("center", "eye", "up")]
+        vec = [_matrix(bound[n], (3,), call, n) for n in ("center", "eye", "up")]
         fov = _real(call, "fov_deg", bound["fov_deg"])
         return _core.create_rays_pinhole_fov(fov, *vec, w, h)
-    k = _vector(bound["intrinsic_matrix"], (3, 3), "intrinsic_matrix")
-    e = _vector(bound["extrinsic_matrix"], (4, 4), "extrinsic_matrix")
+    k = _matrix(bound["intrinsic_matrix"], (3, 3), call, "intrinsic_matrix")
+    e = _matrix(bound["extrinsic_matrix"], (4, 4), call, "extrinsic_matrix")
     return _core.create_rays_pinhole(k, e, w, h)
 
 
-def _vector(value: Any, shape: Tuple[int, ...], name: str) -> Any:
-    call = "create_rays_pinhole"
+def _matrix(value: Any, shape: Tuple[int, ...], call: str, name: str) -> Any:
+    """A vector or matrix of real numbers of exactly ``shape`` (an array, nested lists or an
+    Open3D tensor) as nested lists of floats."""
     array = _numpy(value, call, name)
     if array.dtype.kind not in "fiu":
         raise TypeError(

@@ -97,8 +97,12 @@ class Scene:
 
     @property
     def stats(self) -> Dict[str, Any]:
-        """Counts (``triangles``, ``objects``, ``lights``, ``materials``, ``textures``,
-        ``cameras``, ``bvh_nodes``) and times (``load_seconds``, ``bvh_build_seconds``)."""
+        """Counts (``triangles``, as rays see them: each instance counts its mesh's;
+        ``unique_triangles``, those in memory: each instanced mesh once; ``objects``, every
+        copy of an ``instances`` object counted; ``meshes`` built once and placed by
+        ``instances``, the ``instances`` placing them, ``lights``, ``materials``,
+        ``textures``, ``cameras``, ``bvh_nodes``) and times (``load_seconds``,
+        ``bvh_build_seconds``)."""
         return self._core.stats
 
     @property
@@ -124,9 +128,11 @@ class Scene:
 
     def raycasting_scene(self) -> RaycastingScene:
         """A :class:`RaycastingScene` of the scene's triangles (spheres tessellated as they
-        are rendered), one geometry per object: geometry id = the object's index in the file, primitive
-        ids count the object's triangles in order. Its queries use every core unless they
-        pass ``nthreads``."""
+        are rendered), one geometry per object: geometry id = the object's id (its index in
+        the file's ``objects``, where every copy of an ``instances`` object counts as one
+        object), primitive ids count the object's triangles in order (a copy's: its mesh's).
+        Instanced meshes are copied into it, placed as they are rendered. Its queries use
+        every core unless they pass ``nthreads``."""
         return RaycastingScene._wrap(self._core.raycasting_scene())
 
     def render(
@@ -262,9 +268,13 @@ def load_dict(
     threads: int = 0,
 ) -> Scene:
     """Load and build a scene from a dict with the scene file's schema (the JSON form of a
-    scene file, Mitsuba's ``load_dict`` habit). Tuples and numpy arrays are taken as lists.
-    Errors as in :func:`load`, with ``file`` ``"<dict>"``; their ``key`` names the entry,
-    such as ``objects[2].material``.
+    scene file, Mitsuba's ``load_dict`` habit). Tuples and numpy arrays are taken as lists;
+    the ``transforms`` of a ``{"type": "instances", "file": ...}`` object may also be an
+    (N, 4, 4) array of row-major object-to-world matrices, one per copy (besides a list of
+    ``{"translate", "rotate", "scale", "material"}`` or ``{"matrix"}`` dicts, or the path
+    of a ``.npy`` file of such matrices). Errors as in :func:`load`, with ``file``
+    ``"<dict>"``; their ``key`` names the entry, such as ``objects[2].material`` (or
+    ``objects[1].transforms`` for an array of the wrong shape).
 
     >>> scene = load_dict({
     ...     "film": {"width": 4, "height": 4},
@@ -282,7 +292,7 @@ def load_dict(
         raise _scene_error(
             f"<dict>: {key}: {_args.float_name(value)} is not a finite number", key, "bad_value"
         )
-    text = json.dumps(scene, indent=1, default=_to_json)
+    text = json.dumps(_with_placements(scene), indent=1, default=_to_json)
     return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
 
 
@@ -304,6 +314,45 @@ def load_pack(pack: PackedScene, threads: int = 0) -> Scene:
     if not isinstance(pack, PackedScene):
         raise TypeError(f"load_pack takes a penumbra.PackedScene, not {type(pack).__name__}")
     return Scene(_core.load_pack(pack._data, _args.threads("load_pack", threads)))
+
+
+def _with_placements(scene: Mapping[str, Any]) -> Mapping[str, Any]:
+    """``scene`` with the ``transforms`` of each ``instances`` object that are an (N, 4, 4)
+    array written as the scene format's inline list, ``[{"matrix": rows}, ...]``; the dict
+    itself when there are none (it is never changed in place)."""
+    objects = scene.get("objects") if isinstance(scene, Mapping) else None
+    if not isinstance(objects, (list, tuple)):
+        return scene
+    placed = [_placements(o, f"objects[{i}].transforms") for i, o in enumerate(objects)]
+    if all(p is o for p, o in zip(placed, objects)):
+        return scene
+    return {**scene, "objects": placed}
+
+
+def _placements(obj: Any, key: str) -> Any:
+    """The object ``obj`` with array ``transforms`` (at ``key``) as a list of
+    ``{"matrix": rows}`` entries; ``obj`` itself when they are not an array."""
+    if not isinstance(obj, Mapping) or obj.get("type") != "instances":
+        return obj
+    transforms = obj.get("transforms")
+    if not isinstance(transforms, np.ndarray):
+        return obj
+    if transforms.dtype.kind not in "fiu":
+        raise _scene_error(
+            f"<dict>: {key}: an array of transforms must hold real numbers, not dtype "
+            f"{transforms.dtype}",
+            key,
+            "bad_value",
+        )
+    if transforms.ndim != 3 or transforms.shape[1:] != (4, 4):
+        raise _scene_error(
+            f"<dict>: {key}: an array of transforms must have shape (N, 4, 4), one "
+            f"row-major 4x4 matrix per copy, not {transforms.shape}",
+            key,
+            "bad_value",
+        )
+    rows = transforms.astype(np.float64).tolist()
+    return {**obj, "transforms": [{"matrix": m} for m in rows]}
 
 
 def _scene_error(message: str, key: str, kind: str) -> SceneError:

@@ -149,7 +149,10 @@ impl CoreScene {
         let st = self.world.stats();
         let d = PyDict::new(py);
         d.set_item("triangles", st.triangles)?;
+        d.set_item("unique_triangles", st.unique_triangles)?;
         d.set_item("objects", st.objects)?;
+        d.set_item("meshes", st.meshes)?;
+        d.set_item("instances", st.instances)?;
         d.set_item("lights", st.lights)?;
         d.set_item("materials", st.materials)?;
         d.set_item("textures", st.textures)?;
