@@ -97,6 +97,33 @@ impl Instances {
         self.meshes.iter().map(|m| m.tris.len()).sum()
     }
 
+    /// Instance `index`'s map from world to object space, and its mesh's tree.
+    pub(super) fn placement(&self, index: u32) -> (&Affine3A, &Bvh) {
+        let p = &self.placements[index as usize];
+        (&p.object_from_world, &self.meshes[p.mesh as usize])
+    }
+
+    /// Appends to `out` every instance whose (padded) box meets `bounds`, in the tree's order.
+    pub(super) fn overlapping(&self, bounds: &Aabb, out: &mut Vec<u32>) {
+        if self.top.nodes.is_empty() || bounds.is_empty() {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(index) = stack.pop() {
+            let node = &self.top.nodes[index as usize];
+            let b = node.bounds();
+            if b.min.cmpgt(bounds.max).any() || b.max.cmplt(bounds.min).any() {
+                continue;
+            }
+            if node.is_leaf() {
+                let first = node.first as usize;
+                out.extend_from_slice(&self.top.prim_ids[first..first + node.count as usize]);
+            } else {
+                stack.extend([node.first + 1, node.first]);
+            }
+        }
+    }
+
     /// The ray in instance `index`'s object space (same `t`), and its mesh's tree.
     #[inline(always)]
     fn enter(&self, index: u32, ray: &Ray) -> (Ray, &Bvh) {

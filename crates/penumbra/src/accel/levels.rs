@@ -3,12 +3,14 @@
 //! times. Every query asks the first, then the second with what the first found.
 //!
 //! A world without instances is exactly the one-level [`Bvh`]: the same queries on the same
-//! tree, so the same answers, bit for bit. The instances answer the renderer's batched
-//! queries (packets sharing an origin, bundles of segments, shafts) one ray at a time, lane by
-//! lane, after the first level's kernels have run.
+//! tree, so the same answers, bit for bit. After the first level's kernels have run, the
+//! instances answer the renderer's batched shadow queries (fans, bundles of segments, shafts)
+//! with the same kernels inside each instance the batch may meet (see `instance_batches`),
+//! and its camera-ray packets one ray at a time, lane by lane.
 
 use glam::Vec3;
 
+use super::instance_batches;
 use super::instances::Instances;
 use super::{Bvh, Pairs, Segments};
 use crate::geometry::{Geometry, Hit};
@@ -105,7 +107,9 @@ impl Levels {
     ) {
         self.flat
             .occlude_from_on(path, origin, ends, t_max, blocked);
-        self.occlude_rest(blocked, |i| (origin, ends[i]), t_max);
+        if !self.instances.is_empty() {
+            instance_batches::occlude_from(&self.instances, path, origin, ends, t_max, blocked);
+        }
     }
 
     /// [`Bvh::occlude_from`] over both levels, on this process's SIMD path.
@@ -129,45 +133,16 @@ impl Levels {
     ) {
         self.flat
             .occlude_segments_on(path, segments, t_max, blocked);
-        let point = |c: &[&[f32]; 3], i: usize| Vec3::new(c[0][i], c[1][i], c[2][i]);
-        self.occlude_rest(
-            blocked,
-            |i| (point(&segments.origin, i), point(&segments.end, i)),
-            t_max,
-        );
+        if !self.instances.is_empty() {
+            instance_batches::occlude_segments(&self.instances, path, segments, t_max, blocked);
+        }
     }
 
     /// [`Bvh::occlude_pairs_on`] over both levels.
     pub fn occlude_pairs_on(&self, path: SimdPath, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
         self.flat.occlude_pairs_on(path, pairs, t_max, blocked);
-        let m = pairs.origins[0].len().max(1);
-        let point = |c: &[&[f32]; 3], i: usize| Vec3::new(c[0][i], c[1][i], c[2][i]);
-        self.occlude_rest(
-            blocked,
-            |k| (point(&pairs.origins, k % m), point(&pairs.ends, k / m)),
-            t_max,
-        );
-    }
-
-    /// Marks blocked each segment `segment(i)` not yet `blocked` that an instance meets for
-    /// some `t` in `(0, t_max)`, as the first level's kernels define it: the ray from the
-    /// origin along `end − origin`.
-    fn occlude_rest(
-        &self,
-        blocked: &mut [bool],
-        segment: impl Fn(usize) -> (Vec3, Vec3),
-        t_max: f32,
-    ) {
-        if self.instances.is_empty() {
-            return;
-        }
-        for (i, b) in blocked.iter_mut().enumerate() {
-            if !*b {
-                let (origin, end) = segment(i);
-                *b = self
-                    .instances
-                    .occluded(&Ray::new(origin, end - origin), 0.0, t_max);
-            }
+        if !self.instances.is_empty() {
+            instance_batches::occlude_pairs(&self.instances, path, pairs, t_max, blocked);
         }
     }
 }

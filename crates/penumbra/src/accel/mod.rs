@@ -20,7 +20,8 @@
 //! - `shaft`: shaft culling for those bundles when every point has the same light samples:
 //!   the few triangles in the hull of a batch's points and samples, tested without the tree;
 //! - `instances` and `levels`: the second level (meshes built once and placed by instances
-//!   under a top-level tree) and the pair of levels a world queries;
+//!   under a top-level tree) and the pair of levels a world queries; `instance_batches`: the
+//!   batched shadow queries inside each instance a batch meets;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with.
 
 use glam::Vec3;
@@ -31,6 +32,7 @@ use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
 mod closest;
+mod instance_batches;
 mod instances;
 mod levels;
 mod packet;

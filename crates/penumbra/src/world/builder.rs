@@ -39,6 +39,8 @@ pub fn flatten_instances(triangles: usize, uses: usize) -> bool {
 pub struct WorldBuilder {
     geometry: Geometry,
     meshes: Vec<Mesh>,
+    /// Bounds of each shared mesh's vertices, in object space.
+    mesh_boxes: Vec<Aabb>,
     placed: Vec<Placed>,
     instance_materials: Vec<u32>,
     materials: Vec<Material>,
@@ -60,6 +62,7 @@ impl WorldBuilder {
         Self {
             geometry: Geometry::default(),
             meshes: Vec::new(),
+            mesh_boxes: Vec::new(),
             placed: Vec::new(),
             instance_materials: Vec::new(),
             materials: vec![Material::default()],
@@ -150,6 +153,7 @@ impl WorldBuilder {
         if mesh.positions.iter().any(|p| !p.is_finite()) {
             return Err(WorldError::NotFinite);
         }
+        self.mesh_boxes.push(mesh_bounds(&mesh));
         self.meshes.push(mesh);
         Ok(self.meshes.len() as u32 - 1)
     }
@@ -163,7 +167,7 @@ impl WorldBuilder {
         transform: &Transform,
         materials: &[u32],
     ) -> Result<u32, WorldError> {
-        let Some(shared) = self.meshes.get(mesh as usize) else {
+        let Some(&bounds) = self.mesh_boxes.get(mesh as usize) else {
             return Err(WorldError::UnknownMesh {
                 index: mesh,
                 meshes: self.meshes.len(),
@@ -176,7 +180,7 @@ impl WorldBuilder {
         if self.placed.len() >= MAX_INSTANCES {
             return Err(WorldError::TooManyInstances);
         }
-        let placed = mesh_bounds(shared).transformed(transform);
+        let placed = bounds.transformed(transform);
         if !placed.is_empty() {
             if !(placed.min.is_finite() && placed.max.is_finite()) {
                 return Err(WorldError::NotFinite);
@@ -186,8 +190,15 @@ impl WorldBuilder {
                 return Err(WorldError::OutOfRange(largest));
             }
         }
-        let first = self.instance_materials.len() as u32;
-        self.instance_materials.extend_from_slice(materials);
+        // Copies of one object share their materials' entry.
+        let last = self.placed.last().map(|p| p.materials);
+        let first = match last {
+            Some((first, count)) if self.materials_at(first, count) == materials => first,
+            _ => {
+                self.instance_materials.extend_from_slice(materials);
+                (self.instance_materials.len() - materials.len()) as u32
+            }
+        };
         let object = self.objects;
         self.placed.push(Placed {
             mesh,
@@ -202,6 +213,11 @@ impl WorldBuilder {
     /// Objects added so far: the id the next one takes.
     pub fn object_count(&self) -> u32 {
         self.objects
+    }
+
+    /// The instance materials `first .. first + count`.
+    fn materials_at(&self, first: u32, count: u32) -> &[u32] {
+        &self.instance_materials[first as usize..(first + count) as usize]
     }
 
     /// `Err` naming the first of `materials` that does not exist.
@@ -242,13 +258,13 @@ impl WorldBuilder {
             return None;
         }
         let mut reach = scale::Reach::of(&self.geometry);
-        for (mesh, uses) in self.meshes.iter().zip(self.mesh_uses()) {
+        let uses = self.mesh_uses();
+        for ((mesh, bounds), uses) in self.meshes.iter().zip(&self.mesh_boxes).zip(uses) {
             let edge = scale::longest_edge(
                 mesh.indices
                     .iter()
                     .map(|t| t.map(|v| mesh.positions[v as usize])),
             );
-            let bounds = mesh_bounds(mesh);
             for p in uses {
                 reach = reach.with(
                     bounds.transformed(&p.transform),

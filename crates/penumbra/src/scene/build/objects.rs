@@ -85,38 +85,42 @@ impl Builder<'_> {
                 self.obj_with_materials(path, &d.file, material.is_none(), &mut materials)?
             }
         };
-        if placements.is_empty() && !matches!(o.shape, ShapeDesc::Instances(_)) {
+        let instances = matches!(o.shape, ShapeDesc::Instances(_));
+        if !instances {
             placements.push(Placement {
                 transform: Transform::IDENTITY,
                 material: None,
-                at: path.clone(),
             });
         }
-        // Each copy: its placement, then the object's transform; its material, or the
-        // object's materials.
-        let mut copies = Vec::with_capacity(placements.len());
-        for p in placements {
-            let transform = world.then_after(p.transform);
-            self.check_invertible(&p.at, &transform, None)?;
-            let materials = match &p.material {
-                Some(name) => vec![self.material_index(&p.at.key("material"), name)?],
-                None => materials.clone(),
-            };
-            copies.push((transform, materials, p.at));
-        }
+        let at = |i: usize| match instances {
+            true => path.key("transforms").index(i),
+            false => path.clone(),
+        };
         let shared = match file {
-            Some(file) => self.shared_mesh(path, file, &mesh, copies.len())?,
+            Some(file) => self.shared_mesh(path, file, &mesh, placements.len())?,
             None => None,
         };
-        for (transform, materials, at) in copies {
+        // Each copy: its placement, then the object's transform; its material, or the
+        // object's materials.
+        for (i, p) in placements.iter().enumerate() {
+            let transform = world.then_after(p.transform);
+            self.check_invertible(&at(i), &transform, None)?;
+            let own;
+            let materials = match &p.material {
+                Some(name) => {
+                    own = [self.material_index(&at(i).key("material"), name)?];
+                    &own[..]
+                }
+                None => &materials[..],
+            };
             let added = match shared {
                 Some(id) => {
-                    self.take_instance(&at)?;
-                    self.world.add_instance(id, &transform, &materials)
+                    self.take_instance(&at(i))?;
+                    self.world.add_instance(id, &transform, materials)
                 }
                 None => {
-                    self.take_triangles(&at, mesh.len())?;
-                    self.world.add_mesh(&mesh, &transform, &materials)
+                    self.take_triangles(&at(i), mesh.len())?;
+                    self.world.add_mesh(&mesh, &transform, materials)
                 }
             };
             added.map_err(|e| {
@@ -124,7 +128,7 @@ impl Builder<'_> {
                     WorldError::VertexOutOfRange { .. } => ErrorKind::Asset(AssetKind::Mesh),
                     _ => ErrorKind::BadValue,
                 };
-                self.err(kind, &at, e.to_string())
+                self.err(kind, &at(i), e.to_string())
             })?;
         }
         Ok(())

@@ -20,11 +20,10 @@ use crate::scene::npy;
 const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
 
 /// One copy: its transform within the object (before the object's own) and, when it names
-/// one, its material; `at` locates it in the file.
+/// one, its material.
 pub(super) struct Placement {
     pub transform: Transform,
     pub material: Option<String>,
-    pub at: KeyPath,
 }
 
 impl Builder<'_> {
@@ -70,11 +69,9 @@ impl Builder<'_> {
                 let matrices = self.npy(&at, file)?;
                 Ok(matrices
                     .iter()
-                    .enumerate()
-                    .map(|(i, &m)| Placement {
+                    .map(|&m| Placement {
                         transform: Transform::from_matrix(m),
                         material: None,
-                        at: at.index(i),
                     })
                     .collect())
             }
@@ -109,7 +106,6 @@ impl Builder<'_> {
         Ok(Placement {
             transform,
             material: p.material.clone(),
-            at: at.clone(),
         })
     }
 
