@@ -63,13 +63,13 @@ impl Surface {
     pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
         let tri = &geometry.triangles[hit.triangle as usize];
         let [i0, i1, i2] = tri.vertices.map(|v| v as usize);
-        let corner = |i: usize| Corner {
-            position: geometry.positions[i],
-            normal: geometry.normals[i],
-            uv: geometry.uvs[i],
-        };
+        let p = [i0, i1, i2].map(|i| geometry.positions[i]);
+        let n = tri
+            .smooth
+            .then(|| [i0, i1, i2].map(|i| geometry.normals[i]));
+        let uv = [i0, i1, i2].map(|i| geometry.uvs[i]);
         let ids = (hit.triangle, tri.object, tri.material);
-        Surface::interpolate([corner(i0), corner(i1), corner(i2)], tri.smooth, hit, ids)
+        Surface::interpolate(p, n, uv, hit, ids)
     }
 
     /// The surface at `hit` of `mesh` placed in the world by `world` as object `object`, its
@@ -83,40 +83,39 @@ impl Surface {
         materials: &[u32],
     ) -> Surface {
         let index = hit.triangle as usize;
-        let smooth = mesh.is_smooth();
-        let corner = |v: u32| {
-            let v = v as usize;
-            Corner {
-                position: world.point(mesh.positions[v]),
-                normal: if smooth {
-                    world.normal(mesh.normals[v])
-                } else {
-                    Vec3::ZERO
-                },
-                uv: if mesh.has_uvs() {
-                    mesh.uvs[v]
-                } else {
-                    Vec2::ZERO
-                },
-            }
+        let corners = mesh.indices[index].map(|v| v as usize);
+        let p = corners.map(|v| world.point(mesh.positions[v]));
+        let n = mesh
+            .is_smooth()
+            .then(|| corners.map(|v| world.normal(mesh.normals[v])));
+        let uv = match mesh.has_uvs() {
+            true => corners.map(|v| mesh.uvs[v]),
+            false => [Vec2::ZERO; 3],
         };
-        let corners = mesh.indices[index].map(corner);
         let material = material_of(mesh.slot(index), materials);
-        Surface::interpolate(corners, smooth, hit, (hit.triangle, object, material))
+        Surface::interpolate(p, n, uv, hit, (hit.triangle, object, material))
     }
 
-    /// The surface at `hit`'s barycentrics of the triangle with world-space `corners`; `ids`
-    /// are its triangle, object and material.
-    fn interpolate(corners: [Corner; 3], smooth: bool, hit: &Hit, ids: (u32, u32, u32)) -> Surface {
-        let [c0, c1, c2] = corners;
-        let (p0, p1, p2) = (c0.position, c1.position, c2.position);
+    /// The surface at `hit`'s barycentrics of the triangle with world-space corners `p`,
+    /// vertex normals `n` (a smooth triangle's) and texture coordinates `uv`; `ids` are its
+    /// triangle, object and material.
+    #[inline(always)]
+    fn interpolate(
+        p: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: [Vec2; 3],
+        hit: &Hit,
+        ids: (u32, u32, u32),
+    ) -> Surface {
+        let [p0, p1, p2] = p;
         let b0 = 1.0 - hit.b1 - hit.b2;
         let geometric_normal = unit_cross(p1 - p0, p2 - p0);
-        let shading_normal = if smooth {
-            let ns = b0 * c0.normal + hit.b1 * c1.normal + hit.b2 * c2.normal;
-            ns.try_normalize().unwrap_or(geometric_normal)
-        } else {
-            geometric_normal
+        let shading_normal = match n {
+            Some([n0, n1, n2]) => {
+                let ns = b0 * n0 + hit.b1 * n1 + hit.b2 * n2;
+                ns.try_normalize().unwrap_or(geometric_normal)
+            }
+            None => geometric_normal,
         };
         let (triangle, object, material) = ids;
         Surface {
@@ -125,20 +124,12 @@ impl Surface {
                 + Vec3::splat(GAMMA_3 * ((p1 - p0).length() + (p2 - p0).length())),
             geometric_normal,
             shading_normal,
-            uv: b0 * c0.uv + hit.b1 * c1.uv + hit.b2 * c2.uv,
+            uv: b0 * uv[0] + hit.b1 * uv[1] + hit.b2 * uv[2],
             triangle,
             object,
             material,
         }
     }
-}
-
-/// A triangle corner in world space.
-#[derive(Clone, Copy)]
-struct Corner {
-    position: Vec3,
-    normal: Vec3,
-    uv: Vec2,
 }
 
 #[cfg(test)]
