@@ -3,6 +3,7 @@
 //! materials and textures never used, objects no camera sees.
 
 use glam::Vec3;
+use penumbra::desc::{InstancesDesc, ShapeDesc, TransformsDesc};
 use penumbra::{Aabb, Camera, Light, LightModel, SceneDesc, World};
 
 /// The warnings of `world` under `model`, each naming the light (`lights[i]`).
@@ -41,17 +42,23 @@ pub fn light_warnings(world: &World, model: LightModel) -> Vec<String> {
     out
 }
 
-/// `[materials.NAME]` that no object's `material` names, and `[textures.NAME]` that no
-/// material's `texture` names (a texture named only by an unused material counts as used:
-/// that material gets the warning).
+/// `[materials.NAME]` that no object's (or inline placement's) `material` names, and
+/// `[textures.NAME]` that no material's `texture` names (a texture named only by an unused
+/// material counts as used: that material gets the warning).
 pub fn unused_warnings(desc: &SceneDesc) -> Vec<String> {
     let mut out = Vec::new();
+    let placements = desc.objects.iter().flat_map(|o| match &o.shape {
+        ShapeDesc::Instances(InstancesDesc {
+            transforms: TransformsDesc::List(list),
+            ..
+        }) => list.as_slice(),
+        _ => &[],
+    });
+    let named: Vec<&String> = (desc.objects.iter().filter_map(|o| o.material.as_ref()))
+        .chain(placements.filter_map(|p| p.material.as_ref()))
+        .collect();
     for (name, _) in &desc.materials.0 {
-        if !desc
-            .objects
-            .iter()
-            .any(|o| o.material.as_ref() == Some(name))
-        {
+        if !named.contains(&name) {
             out.push(format!(
                 "materials.{name}: the material is never used (no object's `material` names it)"
             ));

@@ -256,3 +256,44 @@ fn an_object_one_camera_sees_is_not_outside() {
         ["objects[2]: the object is outside the view of every camera (front, back)"]
     );
 }
+
+#[test]
+fn check_counts_instances_and_a_placement_material_is_used() {
+    let dir = TempDir::new("check-instances");
+    // A strip of 1,025 triangles placed 1,025 times (more than 2^20 triangles in all):
+    // instanced, not copied.
+    let k = 1025;
+    let mut obj = String::new();
+    for i in 0..k + 2 {
+        obj += &format!("v {} {} 0\n", i / 2, i % 2);
+    }
+    for i in 1..=k {
+        obj += &format!("f {} {} {}\n", i, i + 1, i + 2);
+    }
+    dir.write("tri.obj", obj);
+    let n = 1025;
+    let mut list = vec!["{ translate = [0, 0, 0], material = \"blue\" }".to_owned()];
+    list.extend((1..n).map(|i| format!("{{ translate = [{}, 0, -20] }}", i as f32 * 0.001)));
+    let scene = format!(
+        "{BASE_TOML}\n[materials.blue]\ndiffuse = [0.1, 0.1, 0.8]\n\n[[objects]]\n\
+         type = \"instances\"\nfile = \"tri.obj\"\ntransforms = [{}]\n",
+        list.join(", ")
+    );
+    dir.write("s.toml", &scene);
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let v = json(&r);
+    assert_eq!(v["triangles"], 14 + k * n);
+    assert_eq!(v["unique_triangles"], 14 + k);
+    assert_eq!(
+        (v["meshes"].clone(), v["instances"].clone()),
+        (1.into(), n.into())
+    );
+    let objects = v["objects"].as_array().unwrap();
+    assert_eq!(objects[2]["type"], "instances tri.obj");
+    assert_eq!(objects[2]["triangles"], k * n);
+    // "blue" is named by a placement only: not reported unused.
+    assert_eq!(v["warnings"], serde_json::json!([]));
+    let r = ok(run_in(dir.path(), ["check", "s.toml"]));
+    let line = format!("({} in memory: {n} instances of 1 mesh)", 14 + k);
+    assert!(r.out().contains(&line), "{}", r.out());
+}
