@@ -7,13 +7,15 @@
 //! a shaft gathers the few triangles of the instance's mesh between the points and the light.
 //!
 //! A segment is blocked when any instance blocks it, whatever the order the instances are
-//! asked in; each instance answers as its mesh tree does for the mapped end points.
+//! asked in; each instance answers as its mesh tree's `occluded` does for the segment between
+//! the mapped end points, on every path (batched, or one segment at a time through
+//! `Instances::occludes_segment`), so the image does not depend on how rays were grouped.
 
 use glam::{Affine3A, Vec3};
 
 use super::instances::Instances;
 use super::{Bvh, Pairs, Segments};
-use crate::math::{Aabb, Ray};
+use crate::math::Aabb;
 use crate::simd::SimdPath;
 
 /// Points by axis, mapped into an instance's object space: the buffers of one batch.
@@ -75,7 +77,7 @@ fn each_instance(
         for (i, b) in blocked.iter_mut().enumerate() {
             if !*b {
                 let (origin, end) = segment(i);
-                *b = instances.occluded(&Ray::new(origin, end - origin), 0.0, t_max);
+                *b = instances.occludes_segment(origin, end, t_max);
             }
         }
         return;

@@ -14,7 +14,7 @@
 //! smaller triangle index in the mesh, so that the answer never depends on the order of the
 //! visit.
 
-use glam::{Affine3A, DMat4, Vec3A};
+use glam::{Affine3A, DMat4, Vec3, Vec3A};
 
 use super::{build, traverse, Bvh};
 use crate::geometry::{Hit, Mesh};
@@ -182,6 +182,28 @@ impl Instances {
             self.top.prim_ids[slots].iter().any(|&index| {
                 let (local, mesh) = self.enter(index, ray);
                 traverse::occluded(mesh, &local, t_min, t_max)
+            })
+        })
+    }
+}
+
+impl Instances {
+    /// True when an instance meets the segment from `origin` to `end` for some `t` in
+    /// `(0, t_max)`, as the renderer's shadow queries define it. Each instance maps the two end
+    /// points into its space and traces the segment between them there, exactly as the batched
+    /// queries of `instance_batches` do, so a shadow ray gets the same answer whichever way it
+    /// was grouped.
+    pub(super) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
+        if self.top.nodes.is_empty() {
+            return false;
+        }
+        let world = Vec3A::from(end - origin);
+        let (o, inv_dir) = (Vec3A::from(origin), world.recip());
+        traverse::walk_any(&self.top.nodes, o, inv_dir, 0.0, t_max, |slots| {
+            self.top.prim_ids[slots].iter().any(|&index| {
+                let (map, mesh) = self.placement(index);
+                let (a, b) = (map.transform_point3(origin), map.transform_point3(end));
+                traverse::occluded(mesh, &Ray::new(a, b - a), 0.0, t_max)
             })
         })
     }
