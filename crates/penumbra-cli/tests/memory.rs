@@ -152,3 +152,44 @@ fn large_films_under_one_gib_render_or_are_refused_in_one_line() {
         let _ = std::fs::remove_file(&out);
     }
 }
+
+/// A `.npy` file whose header declares `rows` float32 4×4 matrices, made as large as they need
+/// but sparse (no data is written).
+fn sparse_npy(path: &Path, rows: u64) {
+    let mut text = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, 4, 4), }}");
+    while (10 + text.len() + 1) % 64 != 0 {
+        text.push(' ');
+    }
+    text.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((text.len() as u16).to_le_bytes());
+    bytes.extend(text.as_bytes());
+    let header = bytes.len() as u64;
+    std::fs::write(path, bytes).unwrap();
+    let file = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+    file.set_len(header + rows * 64).unwrap();
+}
+
+#[test]
+fn transforms_beyond_the_memory_limit_or_the_instance_limit_are_refused_before_reading() {
+    let sb = TempDir::new("memory-instances");
+    sb.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let text = format!(
+        "{HEAD}\n[[objects]]\ntype = \"instances\"\nfile = \"tri.obj\"\ntransforms = \"t.npy\"\n"
+    );
+    let scene = sb.write("instances.toml", text);
+    let out = sb.join("out.png");
+    // 10^7 instances: about 5 GB to place, beyond a 2 GB address space.
+    sparse_npy(&sb.join("t.npy"), 10_000_000);
+    let got = render_limited(&scene, &out, 2_000_000);
+    assert_refused("10^7 instances", got, ": objects[0].transforms", &out);
+    // 10^8: beyond the most a scene places, whatever the memory.
+    sparse_npy(&sb.join("t.npy"), 100_000_000);
+    let (code, stderr) = render_limited(&scene, &out, 2_000_000);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("objects[0].transforms") && stderr.contains("at most 16777216"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "an image was written");
+}
