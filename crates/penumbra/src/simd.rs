@@ -1,7 +1,7 @@
 //! Instruction-set dispatch: the crate's only `unsafe` code.
 #![allow(unsafe_code)]
 //!
-//! The hot kernels (shadow packets in `accel::packet`, the light-sample lanes of the
+//! The hot kernels (shadow packets in `accel::shadow_fans`, the light-sample lanes of the
 //! integrator) are plain safe Rust over fixed-size lane arrays and slices. A [`Kernel`] is
 //! compiled once per instruction set here (`#[target_feature]` functions into which its
 //! `run::<N>` is inlined: 16 lanes for AVX-512, 8 for AVX2, 8 on the portable baseline, which

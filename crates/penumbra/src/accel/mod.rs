@@ -1,20 +1,44 @@
-//! Bounding volume hierarchy over all triangles of a scene: a binned-SAH build (Wald, "On fast
-//! Construction of SAH-based Bounding Volume Hierarchies", 2007) into a flat array of 32-byte
-//! nodes, closest-hit traversal for camera rays and any-hit traversal for shadow rays.
+//! The acceleration engine: one bounding volume hierarchy over all triangles of a scene, built
+//! once by binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies",
+//! 2007), and every query over it: the renderer's (closest hit for camera rays, any hit for
+//! shadow rays, single and in SIMD packets, with Möller–Trumbore) and ray casting's (closest,
+//! any and every hit on an eight-wide view of the same tree, with the watertight test).
 //!
-//! The hot loop touches only [`BvhNode`]s and a copy of the triangles in leaf order, stored as
-//! `v0, e1, e2` ready for Möller–Trumbore; shading data stays in [`Geometry`] and is read once
-//! per hit through the primitive permutation.
+//! # Node layout and leaf format (the contract every traversal reads)
 //!
-//! This file owns the data layout ([`Bvh`], [`BvhNode`], `TriAccel`), the tuning constants and
-//! the public API, whose methods delegate to the submodules:
+//! Binary tree ([`Bvh`]): a flat array of 32-byte [`BvhNode`]s `{ min: [f32; 3], first: u32,
+//! max: [f32; 3], count: u32 }`, root at 0 (empty for an empty scene). An interior node has
+//! `count == 0` and its two children at `first` and `first + 1`, always after it in the array;
+//! a leaf holds `count` (1 to `MAX_LEAF`) triangles, the leaf slots `first .. first + count`.
+//! A subtree's slots are contiguous, the left child's first. Boxes are padded outward (see
+//! `build`) so that `bound − origin` is never zero for a ray that touches the true box. Leaf
+//! slot `i` holds scene triangle `prim_ids[i]`, stored for Möller–Trumbore as `TriAccel`
+//! (`v0`, `e1 = v1 − v0`, `e2 = v2 − v0`); the depth is at most `MAX_DEPTH`, so the fixed
+//! stacks of `STACK_SIZE` entries never overflow.
+//!
+//! Eight-wide view (`wide::node::WideNode`, 256 bytes, 64-aligned), collapsed from the binary
+//! tree: `min[axis][child]`, `max[axis][child]` (the binary nodes' padded boxes, bit for bit),
+//! `child[8]`, `count[8]`. A lane with `count == 0` is an interior child (`child` is a wide
+//! node's index), `count == u32::MAX` is unused (unused lanes come last), else the lane is a
+//! leaf of `count` triangles: the leaf slots of one binary subtree, as `TriangleGroup`s of
+//! eight by coordinate starting at group `child` (the group's `first` is its lane 0's leaf
+//! slot; lanes past the leaf repeat its last triangle and are masked). Ray casting keeps each
+//! slot's exact corners (`SoaTriangle`) and its geometry and primitive ids beside them.
+//!
+//! # Files
+//!
+//! This file owns the binary layout ([`Bvh`], [`BvhNode`], `TriAccel`), the tuning constants
+//! and the renderer's public API, whose methods delegate to the submodules:
 //!
 //! - `build`: binned-SAH construction, serial and parallel;
 //! - `split`: one node's split: binning (in parallel chunks for large nodes), the SAH sweep
 //!   and the partition;
-//! - `traverse`: the slab test and the closest-hit, any-hit and batch queries;
-//! - `closest` and `packet`: closest-hit and any-hit SIMD packets of rays sharing an origin
-//!   (`packet` also holds the any-hit walk of every packet kind);
+//! - `traverse`: single rays on the binary tree: the slab test, the closest-first and any-hit
+//!   walks (generic over what a leaf holds), and the closest-hit, any-hit and batch queries;
+//! - `closest_fans`: closest-hit SIMD packets of rays sharing an origin (camera rays);
+//! - `shadow_fans`: any-hit SIMD packets of segments sharing an origin (a point and its light
+//!   samples), the any-hit packet walk every packet kind uses, and the per-lane
+//!   Möller–Trumbore;
 //! - `segments`: any-hit packets of segments with origins of their own (bundles of shadow rays
 //!   from neighbouring points to one light sample);
 //! - `shaft`: shaft culling for those bundles when every point has the same light samples:
@@ -22,7 +46,14 @@
 //! - `instances` and `levels`: the second level (meshes built once and placed by instances
 //!   under a top-level tree) and the pair of levels a world queries; `instance_batches`: the
 //!   batched shadow queries inside each instance a batch meets;
-//! - `validate`: the structural check and the brute-force references the BVH must agree with.
+//! - `validate`: the structural check and the brute-force references the BVH must agree with;
+//! - `prim`: ray casting's triangle test: `watertight` (Woop, Benthin and Wald 2013) and
+//!   `boundary` (which triangle owns a point of the surface's border, for counting);
+//! - `wide`: the ray-casting engine: `node` (the wide node and the collapse), `group` (a
+//!   leaf's triangles by eight and the watertight test on them), `tree` ([`wide::WideBvh`]
+//!   and its single-ray walks), `packets` (closest-hit packets of neighbouring rays),
+//!   `kernels` (batches of single-ray queries per instruction set), `nearest` (the closest
+//!   point of the surface).
 
 use glam::Vec3;
 
@@ -31,17 +62,21 @@ use crate::math::{Aabb, Ray};
 use crate::simd::{dispatch, simd_path, SimdPath};
 
 mod build;
-mod closest;
+mod closest_fans;
 mod instance_batches;
 mod instances;
 mod levels;
-mod packet;
+pub(crate) mod prim;
 mod segments;
+mod shadow_fans;
 mod shaft;
 mod split;
 mod traverse;
 mod validate;
+pub(crate) mod wide;
 
+#[cfg(test)]
+pub(crate) mod test_meshes;
 #[cfg(test)]
 mod tests;
 
@@ -227,7 +262,7 @@ impl Bvh {
         t_max: f32,
         hits: &mut [Option<Hit>],
     ) {
-        let kernel = closest::Closest {
+        let kernel = closest_fans::Closest {
             bvh: self,
             origin,
             dirs,
@@ -269,7 +304,7 @@ impl Bvh {
         t_max: f32,
         blocked: &mut [bool],
     ) {
-        let kernel = packet::Occlude {
+        let kernel = shadow_fans::Occlude {
             bvh: self,
             origin,
             ends,

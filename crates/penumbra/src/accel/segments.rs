@@ -3,7 +3,7 @@
 //! through the BVH, `N` lanes at a time.
 //!
 //! This is the other way to find coherence among shadow rays (Embree's renderers bundle
-//! them so): where [`super::packet`] fans out from one shading point toward the N×N samples
+//! them so): where [`super::shadow_fans`] fan out from one shading point toward the N×N samples
 //! of a light, these rays start a pixel apart and meet at a light point, so the finer the
 //! image, the closer they run. On deep trees (fine meshes) the bundles visit far fewer nodes
 //! than the fans, whose rays spread over the light's whole extent.
@@ -17,7 +17,7 @@ use std::marker::PhantomData;
 
 use glam::Vec3;
 
-use super::packet::{inside, walk, ShadowLanes};
+use super::shadow_fans::{inside, walk, ShadowLanes};
 use super::shaft::{self, Shaft};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;

@@ -18,7 +18,7 @@
 
 use glam::Vec3;
 
-use super::packet::{determinant, inside};
+use super::shadow_fans::{determinant, inside};
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
 

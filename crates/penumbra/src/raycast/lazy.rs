@@ -9,10 +9,10 @@ use std::ops::Range;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
-use super::boundary::Boundary;
 use super::run::QueryOptions;
-use super::traverse::Accel;
 use super::RaycastError;
+use crate::accel::prim::boundary::Boundary;
+use crate::accel::wide::WideBvh;
 use crate::geometry::Geometry;
 
 /// Triangles below this many are built on the calling thread (a few milliseconds).
@@ -48,7 +48,7 @@ pub(crate) struct Span {
 #[derive(Debug)]
 enum State {
     Building,
-    Built(Arc<Accel>),
+    Built(Arc<WideBvh>),
     /// The build's thread ended without a result (it panicked).
     Lost,
 }
@@ -71,7 +71,7 @@ impl Build {
     }
 
     /// The built structure, waiting for it while `options` is not cancelled.
-    fn wait(&self, options: &QueryOptions) -> Result<Arc<Accel>, RaycastError> {
+    fn wait(&self, options: &QueryOptions) -> Result<Arc<WideBvh>, RaycastError> {
         let mut state = self.state();
         loop {
             match &*state {
@@ -126,7 +126,7 @@ impl LazyAccel {
         triangles: &Arc<Triangles>,
         pool: &Arc<rayon::ThreadPool>,
         options: &QueryOptions,
-    ) -> Result<Arc<Accel>, RaycastError> {
+    ) -> Result<Arc<WideBvh>, RaycastError> {
         let build = {
             let mut slot = self.build.lock().unwrap_or_else(|e| e.into_inner());
             match &*slot {
@@ -154,7 +154,7 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
         move || {
             let finish = Finish(build);
             let t = &triangles;
-            let accel = Accel::build(&t.geometry, &t.local_ids, Some(&pool));
+            let accel = WideBvh::build(&t.geometry, &t.local_ids, Some(&pool));
             finish.0.finish(State::Built(Arc::new(accel)));
         }
     };
@@ -170,12 +170,12 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
     }
 }
 
-/// [`Accel::border`] for a counting query: made on a thread of its own for a large scene
+/// [`WideBvh::border`] for a counting query: made on a thread of its own for a large scene
 /// (a sort of every edge: a few tenths of a second for a million triangles) while the query
 /// waits watching its cancel flag; a cancelled query returns at once, and the work, left to
 /// finish, serves the next one.
 pub(crate) fn border<'a>(
-    accel: &'a Arc<Accel>,
+    accel: &'a Arc<WideBvh>,
     pool: &Arc<rayon::ThreadPool>,
     options: &QueryOptions,
 ) -> Result<&'a [Boundary], RaycastError> {

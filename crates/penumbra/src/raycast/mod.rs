@@ -42,22 +42,14 @@
 //! touches the surface at a fold (a silhouette edge) it counts 0 or 2, so the parity stays
 //! right. On the border of an open mesh (an edge that only one triangle has, a vertex of such
 //! an edge: all of a lone triangle's) a ray counts once, as in Open3D, so every ray that the
-//! closest-hit query finds there is counted and listed too. See `watertight` and `boundary`
-//! for the rule.
+//! closest-hit query finds there is counted and listed too. See `accel::prim::watertight`
+//! and `accel::prim::boundary` for the rule.
 
-mod batch;
-mod boundary;
-mod closest;
-mod group;
 mod instances;
 mod lazy;
-mod packet;
 mod pinhole;
 mod queries;
 mod run;
-mod traverse;
-mod watertight;
-mod wide;
 
 #[cfg(test)]
 mod tests;
@@ -67,8 +59,6 @@ mod tests_border;
 mod tests_edges;
 #[cfg(test)]
 mod tests_instances;
-#[cfg(test)]
-mod tests_meshes;
 #[cfg(test)]
 mod tests_packets;
 
@@ -84,9 +74,9 @@ pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
 pub use queries::{CastRays, ClosestPoints, Intersections};
 pub use run::QueryOptions;
 
+use crate::accel::wide::WideBvh;
 use lazy::{LazyAccel, Triangles};
 use run::Pools;
-use traverse::Accel;
 
 /// The id of nothing: the geometry and primitive id of a miss (Open3D's `INVALID_ID`,
 /// 4294967295).
@@ -286,7 +276,7 @@ impl RaycastingScene {
     fn prepare(
         &self,
         options: &QueryOptions,
-    ) -> Result<(Arc<Accel>, Arc<rayon::ThreadPool>), RaycastError> {
+    ) -> Result<(Arc<WideBvh>, Arc<rayon::ThreadPool>), RaycastError> {
         let pool = self.pools.get(options.threads)?;
         let accel = self.accel.get(&self.triangles, &pool, options)?;
         Ok((accel, pool))
@@ -302,7 +292,7 @@ impl RaycastingScene {
 
     /// Corners of scene triangle `triangle`.
     #[cfg(test)]
-    fn corners(&self, triangle: u32) -> watertight::Corners {
+    fn corners(&self, triangle: u32) -> crate::accel::prim::watertight::Corners {
         self.triangles
             .geometry
             .corners(triangle as usize)

@@ -4,12 +4,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::batch::{prepare, Counts, Listing, Occlusions};
 use super::lazy;
-use super::packet::CastPackets;
 use super::run::{beyond, budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
-use super::watertight::PreparedRay;
 use super::{RaycastError, RaycastingScene, INVALID_ID};
+use crate::accel::prim::watertight::PreparedRay;
+use crate::accel::wide::kernels::{prepare, Counts, Listing, Occlusions};
+use crate::accel::wide::packets::CastPackets;
 use crate::simd::{dispatch, simd_path};
 
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets

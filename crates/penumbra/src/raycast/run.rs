@@ -1,7 +1,7 @@
 //! How a batch query runs: on a pool of the scene's own (never rayon's global pool), in
 //! chunks of rays, with a cancel flag checked between chunks (and by the kernels every few
-//! rays, see `batch`); results allocated fallibly within the memory the process may take;
-//! ray origins checked against the largest coordinate.
+//! rays, see `accel::wide::kernels`); results allocated fallibly within the memory the
+//! process may take; ray origins checked against the largest coordinate.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -9,6 +9,7 @@ use std::sync::{Arc, Mutex};
 use rayon::prelude::*;
 
 use super::RaycastError;
+use crate::accel::wide::kernels::Control;
 use crate::pool::thread_pool;
 use crate::scale::MAX_COORDINATE;
 
@@ -43,6 +44,28 @@ impl QueryOptions<'_> {
     /// True when the caller asked the query to stop.
     pub(crate) fn cancelled(&self) -> bool {
         self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+/// The engine's batch kernels stop, and grow their results, as the options say.
+impl Control for QueryOptions<'_> {
+    type Error = RaycastError;
+
+    fn cancelled(&self) -> bool {
+        QueryOptions::cancelled(self)
+    }
+
+    fn cancel_error(&self) -> RaycastError {
+        RaycastError::Cancelled
+    }
+
+    fn grow<T>(
+        &self,
+        v: &mut Vec<T>,
+        additional: usize,
+        what: &'static str,
+    ) -> Result<(), RaycastError> {
+        grow(v, additional, what)
     }
 }
 

@@ -8,11 +8,11 @@ use std::sync::atomic::AtomicBool;
 use glam::{DVec3, Vec3};
 use proptest::prelude::*;
 
-use super::boundary::{boundaries, Boundary};
-use super::closest::closest_on_triangle;
-use super::tests_meshes::MeshData;
-use super::watertight::{EdgeRule, PreparedRay, SoaTriangle};
 use super::*;
+use crate::accel::prim::boundary::{boundaries, Boundary};
+use crate::accel::prim::watertight::{EdgeRule, PreparedRay, SoaTriangle};
+use crate::accel::test_meshes::MeshData;
+use crate::accel::wide::nearest::closest_on_triangle;
 
 /// Options with `threads` workers.
 fn on(threads: usize) -> QueryOptions<'static> {
@@ -32,7 +32,7 @@ fn scene_of(meshes: &[MeshData]) -> RaycastingScene {
 }
 
 /// Every triangle of the scene as (geometry, primitive, corners).
-fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, super::watertight::Corners)> {
+fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, crate::accel::prim::watertight::Corners)> {
     (0..s.triangle_count() as u32)
         .map(|i| {
             let (g, p) = s.ids(i);
@@ -42,7 +42,7 @@ fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, super::watertight::Corne
 }
 
 /// The `f64` Möller–Trumbore distance of a ray to a triangle, edges inclusive.
-fn hit_f64(ray: &[f32; 6], tri: &super::watertight::Corners) -> Option<f64> {
+fn hit_f64(ray: &[f32; 6], tri: &crate::accel::prim::watertight::Corners) -> Option<f64> {
     let o = DVec3::new(ray[0] as f64, ray[1] as f64, ray[2] as f64);
     let d = DVec3::new(ray[3] as f64, ray[4] as f64, ray[5] as f64);
     let [a, b, c] = tri.map(|p| Vec3::from(p).as_dvec3());

@@ -15,8 +15,8 @@
 use glam::Vec3;
 use proptest::prelude::*;
 
-use super::tests_meshes::MeshData;
 use super::*;
+use crate::accel::test_meshes::MeshData;
 
 /// A height field: `heights[j][i]` (in quarters) at grid point `(i, j)`, each cell's diagonal
 /// from `diagonal`, and the cell triangles kept where `keep` says.
@@ -214,7 +214,7 @@ fn check_agreement(a: &Answers, rays: &[[f32; 6]]) {
 /// Rays that pass exactly through an edge or vertex of the closed `mesh`: more than one
 /// triangle holds a hit under the inclusive rule.
 fn on_edges(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
-    use super::watertight::{EdgeRule, PreparedRay, SoaTriangle};
+    use crate::accel::prim::watertight::{EdgeRule, PreparedRay, SoaTriangle};
     let tris: Vec<SoaTriangle> = mesh
         .1
         .iter()

@@ -16,7 +16,7 @@ use crate::math::Ray;
 use crate::sampling::Rng;
 use crate::world::WorldBuilder;
 
-use super::tests_meshes::{
+use crate::accel::test_meshes::{
     aimed_rays, edges, icosphere, read_obj, subdivided_cube, targets, MeshData,
 };
 

@@ -4,12 +4,12 @@
 
 use glam::{Mat3, Vec3};
 
-use super::packet::{CastPackets, ClosestHit};
-use super::watertight::PreparedRay;
 use super::*;
+use crate::accel::prim::watertight::PreparedRay;
+use crate::accel::wide::packets::{CastPackets, ClosestHit};
 use crate::simd::{dispatch, supported_paths, SimdPath};
 
-use super::tests_meshes::{icosphere, subdivided_cube, targets, MeshData};
+use crate::accel::test_meshes::{icosphere, subdivided_cube, targets, MeshData};
 
 /// A hit as comparable bits: t, b1, b2, ids and slot (the slot gives the normal).
 fn bits(hit: &ClosestHit) -> Option<[u32; 6]> {

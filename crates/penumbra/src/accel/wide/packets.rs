@@ -14,27 +14,29 @@
 //! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
 //! visit.
 
-use super::boundary::Boundary;
-use super::run::QueryOptions;
-use super::traverse::{tie_bound, Accel, SlotHit, Stack, EXIT_SCALE};
-use super::watertight::{overflows, Crossing, EdgeRule, PreparedRay, T_LIMIT};
-use super::wide::WIDTH;
+use super::kernels::Control;
+use super::node::WIDTH;
+use super::tree::{tie_bound, SlotHit, Stack, WideBvh, EXIT_SCALE};
+use crate::accel::prim::boundary::Boundary;
+use crate::accel::prim::watertight::{
+    overflows, Corners, Crossing, EdgeRule, PreparedRay, T_LIMIT,
+};
 use crate::simd::{max, min, Isa, Kernel};
 
 /// The closest hit of a ray.
 pub(crate) type ClosestHit = Option<SlotHit>;
 
-/// [`Accel::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that hits
+/// [`WideBvh::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that hits
 /// nothing), written to `hits`, as a [`Kernel`].
-pub(crate) struct CastPackets<'a> {
-    pub accel: &'a Accel,
+pub(crate) struct CastPackets<'a, C> {
+    pub accel: &'a WideBvh,
     /// Checked before each packet: a cancelled query stops there.
-    pub options: &'a QueryOptions<'a>,
+    pub options: &'a C,
     pub rays: &'a [Option<PreparedRay>],
     pub hits: &'a mut [ClosestHit],
 }
 
-impl Kernel for CastPackets<'_> {
+impl<C: Control> Kernel for CastPackets<'_, C> {
     type Output = ();
 
     #[inline(always)]
@@ -127,7 +129,7 @@ struct Best<const N: usize> {
 /// Traces the packet and writes each lane's closest hit to `hits`.
 #[inline(always)]
 fn trace<const N: usize, I: Isa>(
-    accel: &Accel,
+    accel: &WideBvh,
     lanes: &Lanes<'_, N>,
     stack: &mut Vec<(u32, u32, u32)>,
     hits: &mut [ClosestHit],
@@ -202,7 +204,7 @@ fn trace<const N: usize, I: Isa>(
 }
 
 /// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
-/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance: the single-ray test of `wide`, per lane.
+/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance: the single-ray test of `node`, per lane.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
@@ -231,9 +233,9 @@ fn slab<const N: usize, I: Isa>(
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
-    accel: &Accel,
+    accel: &WideBvh,
     lanes: &Lanes<'_, N>,
-    corners: &super::watertight::Corners,
+    corners: &Corners,
     slot: u32,
     mask: u32,
     best: &mut Best<N>,
@@ -309,7 +311,7 @@ impl<const N: usize> Best<N> {
     /// Keeps the hit `c` of leaf slot `slot` as lane `i`'s best when it is closer; ids decide
     /// exact ties.
     #[inline(always)]
-    fn keep(&mut self, accel: &Accel, i: usize, c: Crossing, slot: u32) {
+    fn keep(&mut self, accel: &WideBvh, i: usize, c: Crossing, slot: u32) {
         let closer = self.hit >> i & 1 == 0
             || c.t < self.t[i]
             || (c.t == self.t[i] && accel.key(slot as usize) < accel.key(self.slot[i] as usize));
@@ -329,7 +331,7 @@ impl<const N: usize> Best<N> {
 /// one by one on every lane.
 #[inline(always)]
 fn leaf_by_lane<const N: usize, I: Isa>(
-    accel: &Accel,
+    accel: &WideBvh,
     lanes: &Lanes<'_, N>,
     (index, count): (u32, u32),
     mask: u32,

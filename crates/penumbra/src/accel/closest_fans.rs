@@ -8,12 +8,12 @@
 //! order in which the packet visits nodes, because both follow one rule for what "closest"
 //! means: the smallest `t`, and among triangles at exactly that `t` the one with the smallest
 //! index in the scene (as the brute-force reference finds it). Every lane runs the scalar
-//! Möller–Trumbore test operation for operation (see `packet::moller_trumbore`), and the box
+//! Möller–Trumbore test operation for operation (see `shadow_fans::moller_trumbore`), and the box
 //! tests only prune, conservatively.
 
 use glam::Vec3;
 
-use super::packet::{moller_trumbore, slab};
+use super::shadow_fans::{moller_trumbore, slab};
 use super::{Bvh, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::simd::{Isa, Kernel};

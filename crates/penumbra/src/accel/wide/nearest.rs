@@ -8,7 +8,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::traverse::{Accel, STACK_SIZE};
+use super::tree::{WideBvh, STACK_SIZE};
 use crate::accel::BvhNode;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
@@ -78,7 +78,7 @@ pub(crate) struct Nearest {
     pub slot: u32,
 }
 
-impl Accel {
+impl WideBvh {
     /// The closest point of any triangle to `p`, nearer boxes first; `None` for an empty
     /// scene. Ties keep the first triangle found.
     pub fn nearest(&self, p: Vec3) -> Option<Nearest> {

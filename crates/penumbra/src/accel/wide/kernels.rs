@@ -1,18 +1,19 @@
 //! The single-ray queries of a chunk of rays as [`Kernel`]s, so that the traversal (its
-//! eight-lane box test above all, `wide`) is compiled for each instruction set by
+//! eight-lane box test above all, `node`) is compiled for each instruction set by
 //! `crate::simd` and runs with the best one the CPU has: AVX2's eight lanes test a wide node's
 //! children in one pass, where the baseline's SSE needs two.
 //!
 //! Every path computes the same answers: the lanes do the same operations whatever their
 //! width, and Rust never fuses a multiply and an add on its own.
+//!
+//! A kernel asks the query that runs it ([`Control`]) whether to stop, and for room for
+//! results that grow as they are found; the ray-casting API's options answer.
 
 use glam::Vec3;
 
-use super::boundary::Boundary;
-use super::run::{grow, QueryOptions};
-use super::traverse::{Accel, SlotHit, Stack};
-use super::watertight::PreparedRay;
-use super::RaycastError;
+use super::tree::{SlotHit, Stack, WideBvh};
+use crate::accel::prim::boundary::Boundary;
+use crate::accel::prim::watertight::PreparedRay;
 use crate::simd::{Isa, Kernel};
 
 /// Rays between two looks at the cancel flag: a ray through a dense region can take
@@ -20,25 +21,43 @@ use crate::simd::{Isa, Kernel};
 /// counting query's speed.
 const CHECK: usize = 8;
 
+/// What a batch kernel asks of the query that runs it.
+pub(crate) trait Control {
+    /// The query's error.
+    type Error;
+    /// True when the caller asked the query to stop.
+    fn cancelled(&self) -> bool;
+    /// The error of a query stopped because it was cancelled.
+    fn cancel_error(&self) -> Self::Error;
+    /// Makes room in `v` for `additional` more values of `what`, fallibly: results that grow
+    /// as they are found must not abort the process when memory runs out.
+    fn grow<T>(
+        &self,
+        v: &mut Vec<T>,
+        additional: usize,
+        what: &'static str,
+    ) -> Result<(), Self::Error>;
+}
+
 /// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
-pub(super) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
+pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
     PreparedRay::new(
         Vec3::new(ray[0], ray[1], ray[2]),
         Vec3::new(ray[3], ray[4], ray[5]),
     )
 }
 
-/// [`Accel::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
-pub(crate) struct Occlusions<'a> {
-    pub accel: &'a Accel,
+/// [`WideBvh::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
+pub(crate) struct Occlusions<'a, C> {
+    pub accel: &'a WideBvh,
     /// Checked every [`CHECK`] rays: a cancelled query stops there.
-    pub options: &'a QueryOptions<'a>,
+    pub options: &'a C,
     pub rays: &'a [[f32; 6]],
     pub range: (f32, f32),
     pub out: &'a mut [bool],
 }
 
-impl Kernel for Occlusions<'_> {
+impl<C: Control> Kernel for Occlusions<'_, C> {
     type Output = ();
 
     #[inline(always)]
@@ -57,19 +76,19 @@ impl Kernel for Occlusions<'_> {
     }
 }
 
-/// The number of hits of [`Accel::each_hit`] from `t = 0` on for each ray of `rays`, written
+/// The number of hits of [`WideBvh::each_hit`] from `t = 0` on for each ray of `rays`, written
 /// to `out` (left alone for a ray that hits nothing).
-pub(crate) struct Counts<'a> {
-    pub accel: &'a Accel,
-    /// [`Accel::border`].
+pub(crate) struct Counts<'a, C> {
+    pub accel: &'a WideBvh,
+    /// [`WideBvh::border`].
     pub border: &'a [Boundary],
     /// Checked every [`CHECK`] rays.
-    pub options: &'a QueryOptions<'a>,
+    pub options: &'a C,
     pub rays: &'a [[f32; 6]],
     pub out: &'a mut [i32],
 }
 
-impl Kernel for Counts<'_> {
+impl<C: Control> Kernel for Counts<'_, C> {
     type Output = ();
 
     #[inline(always)]
@@ -95,29 +114,30 @@ impl Kernel for Counts<'_> {
 /// The hits of each ray of `rays` from `t = 0` on, one per crossing, sorted by `t` then ids:
 /// the number of each ray's hits, and all the hits one ray after the other; `Err` when the
 /// query is cancelled (checked before each ray) or the hits do not fit in memory.
-pub(crate) struct Listing<'a> {
-    pub accel: &'a Accel,
-    /// [`Accel::border`].
+pub(crate) struct Listing<'a, C> {
+    pub accel: &'a WideBvh,
+    /// [`WideBvh::border`].
     pub border: &'a [Boundary],
     pub rays: &'a [[f32; 6]],
-    pub options: &'a QueryOptions<'a>,
+    pub options: &'a C,
 }
 
 /// What [`Listing`] finds.
-pub(crate) type Listed = Result<(Vec<u32>, Vec<SlotHit>), RaycastError>;
+pub(crate) type Listed<E> = Result<(Vec<u32>, Vec<SlotHit>), E>;
 
-impl Kernel for Listing<'_> {
-    type Output = Listed;
+impl<C: Control> Kernel for Listing<'_, C> {
+    type Output = Listed<C::Error>;
 
     #[inline(always)]
-    fn run<const N: usize, I: Isa>(self) -> Listed {
+    fn run<const N: usize, I: Isa>(self) -> Listed<C::Error> {
         let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
         let mut stack = Stack::default();
         let what = "the intersections";
-        grow(&mut counts, self.rays.len(), what)?;
+        let options = self.options;
+        options.grow(&mut counts, self.rays.len(), what)?;
         for (j, ray) in self.rays.iter().enumerate() {
             if j % CHECK == 0 && self.options.cancelled() {
-                return Err(RaycastError::Cancelled);
+                return Err(options.cancel_error());
             }
             one.clear();
             let mut full = Ok(());
@@ -126,7 +146,7 @@ impl Kernel for Listing<'_> {
                     .each_hit::<I>(&r, 0.0, self.border, &mut stack, &mut |h| {
                         // A ray may cross millions of triangles: grown fallibly.
                         if full.is_ok() {
-                            full = grow(&mut one, 1, what);
+                            full = options.grow(&mut one, 1, what);
                         }
                         if full.is_ok() {
                             one.push(h);
@@ -141,7 +161,7 @@ impl Kernel for Listing<'_> {
                     .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
             });
             counts.push(one.len() as u32);
-            grow(&mut all, one.len(), what)?;
+            options.grow(&mut all, one.len(), what)?;
             all.extend_from_slice(&one);
         }
         Ok((counts, all))

@@ -1,7 +1,7 @@
 //! Leaf triangles in groups of eight, by coordinate, so that the watertight test of
-//! `watertight` runs on eight triangles at once: one AVX2 vector per value, two SSE ones on
+//! `prim::watertight` runs on eight triangles at once: one AVX2 vector per value, two SSE ones on
 //! the baseline (the lanes are plain loops over `[f32; 8]`, compiled per instruction set by
-//! the kernels of `batch` and `packet` that inline them). A wide leaf holds at most eight
+//! the kernels of `kernels` and `packets` that inline them). A wide leaf holds at most eight
 //! triangles, so it is one group and one pass; with groups of four (SSE) the bunny's
 //! incoherent rays tested 1.9 groups per leaf.
 //!
@@ -14,8 +14,8 @@
 
 use glam::Vec3A;
 
-use super::boundary::Boundary;
-use super::watertight::{
+use crate::accel::prim::boundary::Boundary;
+use crate::accel::prim::watertight::{
     overflows, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
 };
 use crate::simd::Isa;
@@ -237,7 +237,7 @@ mod tests {
             .map(|_| SoaTriangle::new(&[0; 3].map(|_| Vec3A::from(point(&mut rng)))))
             .collect();
         let corners: Vec<Corners> = tris.iter().map(SoaTriangle::corners).collect();
-        let boundary = super::super::boundary::boundaries(&corners, None);
+        let boundary = crate::accel::prim::boundary::boundaries(&corners, None);
         let (mut hits, mut exact) = (0, 0);
         for _ in 0..4000 {
             let (o, target) = (point(&mut rng), point(&mut rng));

@@ -1,13 +1,13 @@
-//! The ray-casting engine's own traversal of a [`Bvh`]: closest hit, any hit and every hit,
-//! with the watertight triangle test and a conservative box test, on the eight-wide view of
-//! the tree (`wide`); the closest-point query (`closest`) walks the binary tree. The ray
-//! queries are generic over the instruction set (`crate::simd::Isa`) and inlined into the
-//! kernels of `batch` and `packet`, which are compiled once per instruction set.
+//! The ray-casting engine's tree, [`WideBvh`], and its single-ray walks: closest hit, any hit
+//! and every hit, with the watertight triangle test and a conservative box test, on the
+//! eight-wide view of the binary [`Bvh`] (`node`); the closest-point query (`nearest`) walks
+//! the binary tree. The ray queries are generic over the instruction set
+//! (`crate::simd::Isa`) and inlined into the kernels of `kernels` and `packets`, which are
+//! compiled once per instruction set.
 //!
-//! The renderer's kernels (`accel::traverse`, `accel::packet`) are left as they are; this
-//! file reads the same nodes through crate-private accessors and keeps its own copy of the
-//! triangles in leaf order with their exact corners (the renderer stores `v0` and two edges,
-//! and `v0 + e1` is not always `v1` in `f32`, which would break watertightness).
+//! The tree keeps its own copy of the triangles in leaf order with their exact corners (the
+//! renderer's leaves store `v0` and two edges, and `v0 + e1` is not always `v1` in `f32`,
+//! which would break watertightness).
 //!
 //! The box test is Ize's ("Robust BVH Ray Traversal", JCGT 2013): the exit distance is
 //! scaled by `1 + 2γ₃`, which covers the rounding of the slab distances, so a box is never
@@ -18,10 +18,10 @@ use glam::Vec3A;
 
 use std::sync::OnceLock;
 
-use super::boundary::{boundaries, Boundary};
 use super::group::{TriangleGroup, GROUP};
-use super::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
-use super::wide::{collapse, WideNode, WIDTH};
+use super::node::{collapse, WideNode, WIDTH};
+use crate::accel::prim::boundary::{boundaries, Boundary};
+use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::Bvh;
 use crate::geometry::Geometry;
 use crate::simd::{prefetch, Isa};
@@ -36,12 +36,12 @@ const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 /// above that: a triangle hit at exactly the closest `t` is then tested whatever the order of
 /// the visit, and the rule for ties does not depend on that order.
 #[inline(always)]
-pub(super) fn tie_bound(t_max: f32) -> f32 {
+pub(crate) fn tie_bound(t_max: f32) -> f32 {
     t_max * TIE_SCALE
 }
 
 /// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
-pub(super) const STACK_SIZE: usize = 64;
+pub(crate) const STACK_SIZE: usize = 64;
 
 /// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
 /// [`WIDTH`] children, once per level of the binary build's depth limit at most.
@@ -56,13 +56,13 @@ const LEAF_MAX: u32 = GROUP as u32;
 
 /// `1 + 2γ₃` with `γₙ = nε / (1 − nε)` and `ε = 2⁻²⁴`: the exit-distance scale that keeps
 /// the `f32` slab test conservative (Ize 2013).
-pub(super) const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
+pub(crate) const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * EPS / (1.0 - 3.0 * EPS));
 const EPS: f32 = f32::EPSILON * 0.5;
 
 /// The BVH over every triangle of a scene with the triangles' exact corners and ids in the
 /// BVH's leaf order.
 #[derive(Debug, Default)]
-pub(crate) struct Accel {
+pub(crate) struct WideBvh {
     bvh: Bvh,
     /// The eight-wide view of `bvh` that the ray queries traverse; a leaf child's index is
     /// its first group in `groups` and its count its number of triangles.
@@ -78,7 +78,7 @@ pub(crate) struct Accel {
     /// each: 4 % of coherent rays' time).
     normals: Vec<[f32; 3]>,
     /// Each leaf slot's part of the surface's border, for the counting rule: made by the
-    /// first counting query ([`Accel::border`]), which the others do not need.
+    /// first counting query ([`WideBvh::border`]), which the others do not need.
     border: OnceLock<Vec<Boundary>>,
 }
 
@@ -90,18 +90,18 @@ pub(crate) struct SlotHit {
     pub geometry: u32,
     /// Primitive id within the geometry.
     pub primitive: u32,
-    /// Leaf slot, for [`Accel::normal`].
+    /// Leaf slot, for [`WideBvh::normal`].
     pub slot: u32,
 }
 
-impl Accel {
+impl WideBvh {
     /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
     /// is its `object`, its primitive id `local_ids[triangle]`.
     pub fn build(
         geometry: &Geometry,
         local_ids: &[u32],
         pool: Option<&rayon::ThreadPool>,
-    ) -> Accel {
+    ) -> WideBvh {
         let bvh = match pool {
             Some(pool) => Bvh::build_parallel(geometry, pool),
             None => Bvh::build(geometry),
@@ -130,7 +130,7 @@ impl Accel {
             }
             index
         });
-        Accel {
+        WideBvh {
             bvh,
             wide,
             groups,
@@ -142,7 +142,7 @@ impl Accel {
     }
 
     /// The hit record of `crossing` on leaf slot `slot`.
-    pub(super) fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
+    pub(crate) fn slot_hit(&self, slot: usize, crossing: Crossing) -> SlotHit {
         let [geometry, primitive] = self.ids[slot];
         SlotHit {
             crossing,
@@ -173,29 +173,29 @@ impl Accel {
         })
     }
 
-    /// [`Accel::border`] when it is made.
+    /// [`WideBvh::border`] when it is made.
     pub fn made_border(&self) -> Option<&[Boundary]> {
         self.border.get().map(Vec::as_slice)
     }
 
     /// The binary tree.
-    pub(super) fn bvh(&self) -> &Bvh {
+    pub(crate) fn bvh(&self) -> &Bvh {
         &self.bvh
     }
 
     /// Geometry id and primitive id of the triangle in leaf slot `slot`.
-    pub(super) fn ids(&self, slot: usize) -> [u32; 2] {
+    pub(crate) fn ids(&self, slot: usize) -> [u32; 2] {
         self.ids[slot]
     }
 
     /// The corners of every triangle by leaf slot.
     #[inline(always)]
-    pub(super) fn tris(&self) -> &[SoaTriangle] {
+    pub(crate) fn tris(&self) -> &[SoaTriangle] {
         &self.tris
     }
 
     /// The corners of scene triangle slot `slot` (leaf order).
-    pub(super) fn slot(&self, slot: usize) -> &SoaTriangle {
+    pub(crate) fn slot(&self, slot: usize) -> &SoaTriangle {
         &self.tris[slot]
     }
 
@@ -295,7 +295,7 @@ impl Accel {
     /// Starts loading the child `(index, count)` of a wide node (a wide node when `count` is
     /// 0, else a leaf's first group) into the caches: its visit comes a little later.
     #[inline(always)]
-    pub(super) fn prefetch_child(&self, index: u32, count: u32) {
+    pub(crate) fn prefetch_child(&self, index: u32, count: u32) {
         if count == 0 {
             prefetch(&self.wide[index as usize]);
         } else {
@@ -304,14 +304,14 @@ impl Accel {
     }
 
     /// The wide tree.
-    pub(super) fn wide(&self) -> &[WideNode] {
+    pub(crate) fn wide(&self) -> &[WideNode] {
         &self.wide
     }
 
     /// The groups of the leaf whose first group is `first` and which holds `count`
     /// triangles, each with its mask of valid lanes.
     #[inline(always)]
-    pub(super) fn leaf(
+    pub(crate) fn leaf(
         &self,
         first: u32,
         count: u32,
@@ -330,13 +330,13 @@ impl Accel {
     /// The order of the closest-hit rule among hits at the same `t`: geometry id, then
     /// primitive id, of leaf slot `slot`.
     #[inline(always)]
-    pub(super) fn key(&self, slot: usize) -> u64 {
+    pub(crate) fn key(&self, slot: usize) -> u64 {
         let [geometry, primitive] = self.ids[slot];
         ((geometry as u64) << 32) | primitive as u64
     }
 
     /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
-    /// per crossing of the surface), in traversal order; `border` is [`Accel::border`].
+    /// per crossing of the surface), in traversal order; `border` is [`WideBvh::border`].
     #[inline(always)]
     pub fn each_hit<I: Isa>(
         &self,
@@ -359,7 +359,7 @@ impl Accel {
     }
 
     /// Visits the hits with `t` in `[t_min, t_max]` under `rule` (with the border of
-    /// [`Accel::border`] for [`EdgeRule::Owned`]) until `f` returns false.
+    /// [`WideBvh::border`] for [`EdgeRule::Owned`]) until `f` returns false.
     #[inline(always)]
     fn visit<I: Isa>(
         &self,
@@ -432,7 +432,7 @@ impl Stack {
     #[inline(always)]
     fn push_children(
         &mut self,
-        tree: &Accel,
+        tree: &WideBvh,
         node: &WideNode,
         mask: u32,
         near: &[f32; WIDTH],

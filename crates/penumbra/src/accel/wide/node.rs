@@ -1,7 +1,7 @@
 //! An eight-wide view of the binary [`Bvh`](crate::accel::Bvh) for the ray-casting traversal:
 //! each wide node holds up to eight children's boxes by coordinate, so that one slab test
 //! over eight lanes (one AVX2 vector; compiled per instruction set through `crate::simd`, see
-//! `batch`) replaces up to three levels of binary nodes. Embree's BVH8 on AVX2 is the model;
+//! `kernels`) replaces up to three levels of binary nodes. Embree's BVH8 on AVX2 is the model;
 //! against four wide, eight took the bunny's incoherent queries from 2,115 / 3,146 / 1,638
 //! instructions per ray (`cast_rays` / `count_intersections` / `test_occlusions`) to
 //! 1,834 / 2,655 / 1,350, and 17–23 % more rays per second (docs/benchmarks.md).
@@ -13,7 +13,7 @@
 //! node load for little culling (3 % less time on incoherent rays on the bunny at four wide).
 //! The children's boxes are the binary nodes' padded boxes, bit for bit, and each leaf is the
 //! leaf-slot range of a binary subtree, so the wide box test is exactly as conservative as
-//! the binary one (see `traverse`) and every query visits a superset of the triangles it must
+//! the binary one (see `tree`) and every query visits a superset of the triangles it must
 //! see.
 
 use crate::accel::BvhNode;
@@ -92,7 +92,7 @@ impl WideNode {
         // `1/d` is `−∞`). Where `(lo − o)·(1/d)` and `(hi − o)·(1/d)` are numbers, rounding is
         // monotonic, so this is the slab test's `min`/`max` of the two, bit for bit, without
         // the six `min`/`max` per node; it differs only where one is NaN (`0·∞`, a ray in the
-        // plane of a padded face, which never touches the true box: see `traverse`).
+        // plane of a padded face, which never touches the true box: see `tree`).
         let faces = |a: usize| {
             if inv_dir[a].is_sign_negative() {
                 (&self.max[a], &self.min[a])
@@ -243,7 +243,7 @@ mod tests {
         // opens such subtrees (of at most 2 · leaf_max triangles) first. On this sphere of
         // 20,480 triangles that leaves 55 of 660 eight-wide nodes (8 %); at four wide it left
         // 224 of 1,419 (16 %), and opening the largest child alone 298 of 1,479 (20 %).
-        let (positions, triangles) = crate::raycast::tests_meshes::icosphere(5);
+        let (positions, triangles) = crate::accel::test_meshes::icosphere(5);
         let sphere = Geometry {
             positions: positions.into_iter().map(Vec3::from).collect(),
             triangles: triangles

@@ -9,10 +9,10 @@ use glam::{Mat3, Vec3};
 use crate::sampling::Rng;
 
 /// Vertex positions and index triples.
-pub(super) type MeshData = (Vec<[f32; 3]>, Vec<[u32; 3]>);
+pub(crate) type MeshData = (Vec<[f32; 3]>, Vec<[u32; 3]>);
 
 /// An icosahedron subdivided `levels` times, projected on the unit sphere, outward-wound.
-pub(super) fn icosphere(levels: u32) -> MeshData {
+pub(crate) fn icosphere(levels: u32) -> MeshData {
     let g = (1.0 + 5f32.sqrt()) / 2.0;
     let mut v: Vec<Vec3> = [
         [-1.0, g, 0.0],
@@ -77,7 +77,7 @@ pub(super) fn icosphere(levels: u32) -> MeshData {
 
 /// A cube `[-1, 1]³` with each face split into `n × n` squares (two triangles each),
 /// rotated by `rotation`; faces wound outward.
-pub(super) fn subdivided_cube(n: u32, rotation: Mat3) -> MeshData {
+pub(crate) fn subdivided_cube(n: u32, rotation: Mat3) -> MeshData {
     let mut index: HashMap<[i32; 3], u32> = HashMap::new();
     let mut v = Vec::new();
     let mut t = Vec::new();
@@ -115,7 +115,7 @@ pub(super) fn subdivided_cube(n: u32, rotation: Mat3) -> MeshData {
 }
 
 /// Positions and triangles of an OBJ file (`v` and `f` lines; polygons as fans).
-pub(super) fn read_obj(path: &Path) -> MeshData {
+pub(crate) fn read_obj(path: &Path) -> MeshData {
     let text = std::fs::read_to_string(path).unwrap();
     let (mut v, mut t) = (Vec::new(), Vec::new());
     for line in text.lines() {
@@ -145,7 +145,7 @@ fn key(p: [f32; 3]) -> [u32; 3] {
 }
 
 /// Edges (by corner positions) with the triangles using each.
-pub(super) fn edges(mesh: &MeshData) -> HashMap<([u32; 3], [u32; 3]), Vec<usize>> {
+pub(crate) fn edges(mesh: &MeshData) -> HashMap<([u32; 3], [u32; 3]), Vec<usize>> {
     let mut e: HashMap<_, Vec<usize>> = HashMap::new();
     for (i, tri) in mesh.1.iter().enumerate() {
         for k in 0..3 {
@@ -160,14 +160,14 @@ pub(super) fn edges(mesh: &MeshData) -> HashMap<([u32; 3], [u32; 3]), Vec<usize>
 }
 
 /// A point to aim at and the triangles that hold it.
-pub(super) struct Target {
+pub(crate) struct Target {
     pub point: Vec3,
     pub triangles: Vec<usize>,
 }
 
 /// Points on every edge shared by exactly two triangles (midpoint, a third, a tenth of the
 /// way) and every vertex used by a triangle and not on a hole's rim, with the triangles around them.
-pub(super) fn targets(mesh: &MeshData) -> Vec<Target> {
+pub(crate) fn targets(mesh: &MeshData) -> Vec<Target> {
     let from = |k: [u32; 3]| Vec3::from(k.map(f32::from_bits));
     let all = edges(mesh);
     // Vertices on a hole's rim or a non-manifold edge: a ray may pass by them legitimately.
@@ -218,7 +218,7 @@ fn normal(mesh: &MeshData, i: usize) -> Vec3 {
 /// from grazing): such a ray passes from one side of the surface to the other there, so it
 /// must hit. Rays that would only touch a fold or a ridge are not aimed; targets without
 /// such a direction in 64 tries (saddles of a rough scan) are skipped.
-pub(super) fn aimed_rays(mesh: &MeshData, targets: &[Target], seed: u64) -> Vec<[f32; 6]> {
+pub(crate) fn aimed_rays(mesh: &MeshData, targets: &[Target], seed: u64) -> Vec<[f32; 6]> {
     let center = mesh.0.iter().map(|&p| Vec3::from(p)).sum::<Vec3>() / mesh.0.len() as f32;
     let radius = mesh
         .0

@@ -121,19 +121,19 @@ impl PreparedRay {
 
     /// The axis permutation `[kx, ky, kz]` of the sheared frame.
     #[inline(always)]
-    pub(super) fn axes(&self) -> [usize; 3] {
+    pub(crate) fn axes(&self) -> [usize; 3] {
         self.k
     }
 
     /// The shear `(−d_x/d_z, −d_y/d_z)` in the permuted axes.
     #[inline(always)]
-    pub(super) fn shear(&self) -> [f32; 2] {
+    pub(crate) fn shear(&self) -> [f32; 2] {
         self.shear
     }
 
     /// `1/d_z` in the permuted axes.
     #[inline(always)]
-    pub(super) fn inv_dz(&self) -> f32 {
+    pub(crate) fn inv_dz(&self) -> f32 {
         self.inv_dz
     }
 

@@ -1,0 +1,19 @@
+//! The ray-casting engine: the binary [`Bvh`](super::Bvh) seen eight children at a time, with
+//! its triangles' exact corners, and the queries that walk it with the watertight test.
+//!
+//! - `node`: the wide node and its collapse from the binary tree;
+//! - `group`: a leaf's triangles, eight by coordinate, and the watertight test on all eight;
+//! - `tree`: [`WideBvh`] (the binary tree, the wide view, triangles and ids in leaf order) and
+//!   the single-ray walks: closest hit, any hit, every hit;
+//! - `packets`: closest-hit packets of neighbouring rays (`cast_rays` on pinhole images);
+//! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
+//! - `nearest`: the closest point of the surface, walking the binary tree.
+
+mod group;
+pub(crate) mod kernels;
+pub(crate) mod nearest;
+pub(crate) mod node;
+pub(crate) mod packets;
+mod tree;
+
+pub(crate) use tree::WideBvh;
