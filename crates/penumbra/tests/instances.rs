@@ -202,7 +202,9 @@ proptest! {
             let mut b = vec![None; dirs.len()];
             inst.accel().intersect_from_on(path, origin, &dirs, 0.0, f32::INFINITY, &mut a);
             flat.accel().intersect_from_on(path, origin, &dirs, 0.0, f32::INFINITY, &mut b);
-            for (x, y) in a.into_iter().zip(b) {
+            for ((x, y), &dir) in a.into_iter().zip(b).zip(&dirs) {
+                // The packet's answer is the one-ray query's, bit for bit.
+                prop_assert_eq!(x, inst.intersect(&Ray::new(origin, dir), 0.0, f32::INFINITY));
                 same_hit((&inst, x), (&flat, y))?;
             }
             let mut blocked = vec![false; ends.len()];
