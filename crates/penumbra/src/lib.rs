@@ -78,6 +78,7 @@ pub mod shapes {
     pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 }
 
+pub use accel::prim::moller_trumbore::intersect_triangle;
 pub use accel::{
     intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
 };
@@ -85,7 +86,7 @@ pub use camera::{Camera, CameraError, PinholeCamera};
 pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
-pub use geometry::{intersect_triangle, Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
+pub use geometry::{Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
 pub use image_error::ImageError;
 pub use image_format::OutputFormat;
 pub use image_io::{check_finite, encode_image, stage_image, write_image, write_image_unless};

@@ -8,12 +8,14 @@
 //! order in which the packet visits nodes, because both follow one rule for what "closest"
 //! means: the smallest `t`, and among triangles at exactly that `t` the one with the smallest
 //! index in the scene (as the brute-force reference finds it). Every lane runs the scalar
-//! Möller–Trumbore test operation for operation (see `shadow_fans::moller_trumbore`), and the box
+//! Möller–Trumbore test operation for operation (see `prim::moller_trumbore`), and the box
 //! tests only prune, conservatively.
 
 use glam::Vec3;
 
-use super::shadow_fans::{moller_trumbore, slab};
+use super::lanes::lane;
+use super::prim::moller_trumbore::{origin_terms, solve};
+use super::shadow_fans::slab;
 use super::{Bvh, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::simd::{Isa, Kernel};
@@ -186,12 +188,11 @@ fn triangle<const N: usize>(
     t_min: f32,
     best: &mut Best<N>,
 ) {
-    let tvec = origin - tri.v0;
-    let qvec = tvec.cross(tri.e1);
-    let t_num = tri.e2.dot(qvec);
+    let (e1, e2) = (tri.e1.to_array(), tri.e2.to_array());
+    let terms = origin_terms(origin.to_array(), tri.v0.to_array(), e1, e2);
     let key = id + 1;
     for i in 0..N {
-        let (inside, t, b1, b2) = moller_trumbore(tri, tvec, qvec, t_num, dir, i);
+        let (inside, t, b1, b2) = solve(terms, lane(dir, i), e1, e2);
         let closer = (t < best.t[i]) | ((t == best.t[i]) & (key < best.id[i]));
         let take = inside & (t > t_min) & closer;
         best.t[i] = if take { t } else { best.t[i] };

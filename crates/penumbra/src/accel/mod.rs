@@ -37,8 +37,9 @@
 //!   walks (generic over what a leaf holds), and the closest-hit, any-hit and batch queries;
 //! - `closest_fans`: closest-hit SIMD packets of rays sharing an origin (camera rays);
 //! - `shadow_fans`: any-hit SIMD packets of segments sharing an origin (a point and its light
-//!   samples), the any-hit packet walk every packet kind uses, and the per-lane
-//!   Möller–Trumbore;
+//!   samples), and the any-hit packet walk every packet kind uses;
+//! - `lanes`: rays by SIMD lane and the one slab test of a box against `N` of them (fans,
+//!   bundles, and ray casting's packets);
 //! - `segments`: any-hit packets of segments with origins of their own (bundles of shadow rays
 //!   from neighbouring points to one light sample);
 //! - `shaft`: shaft culling for those bundles when every point has the same light samples:
@@ -47,8 +48,10 @@
 //!   under a top-level tree) and the pair of levels a world queries; `instance_batches`: the
 //!   batched shadow queries inside each instance a batch meets;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with;
-//! - `prim`: ray casting's triangle test: `watertight` (Woop, Benthin and Wald 2013) and
-//!   `boundary` (which triangle owns a point of the surface's border, for counting);
+//! - `prim`: the triangle tests, each written once for scalar and lane callers:
+//!   `moller_trumbore` (the renderer's), `watertight` (ray casting's: Woop, Benthin and Wald
+//!   2013; `hit_lane` is its SIMD lane) and `boundary` (which triangle owns a point of the
+//!   surface's border, for counting);
 //! - `wide`: the ray-casting engine: `node` (the wide node and the collapse), `group` (a
 //!   leaf's triangles by eight and the watertight test on them), `tree` ([`wide::WideBvh`]
 //!   and its single-ray walks), `packets` (closest-hit packets of neighbouring rays),
@@ -57,14 +60,16 @@
 
 use glam::Vec3;
 
-use crate::geometry::{intersect_triangle, Geometry, Hit, TriangleHit};
+use crate::geometry::{Geometry, Hit, TriangleHit};
 use crate::math::{Aabb, Ray};
 use crate::simd::{dispatch, simd_path, SimdPath};
+use prim::moller_trumbore::intersect_triangle;
 
 mod build;
 mod closest_fans;
 mod instance_batches;
 mod instances;
+mod lanes;
 mod levels;
 pub(crate) mod prim;
 mod segments;

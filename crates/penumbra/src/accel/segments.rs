@@ -8,20 +8,22 @@
 //! image, the closer they run. On deep trees (fine meshes) the bundles visit far fewer nodes
 //! than the fans, whose rays spread over the light's whole extent.
 //!
-//! Exactness: every lane runs the scalar Möller–Trumbore test of
-//! `geometry::intersect_triangle` operation for operation, its own `tvec`, `qvec` and `t`
-//! numerator included, so a lane is occluded exactly when [`Bvh::occluded`] says so; the box
+//! Exactness: every lane runs the Möller–Trumbore test of `prim::moller_trumbore`, the scalar
+//! test's own functions, operation for operation, its own `tvec`, `qvec` and `t` numerator
+//! included, so a lane is occluded exactly when [`Bvh::occluded`] says so; the box
 //! tests are conservative on the padded boxes and only prune.
 
 use std::marker::PhantomData;
 
 use glam::Vec3;
 
-use super::shadow_fans::{inside, walk, ShadowLanes};
+use super::lanes::{self, lane};
+use super::prim::moller_trumbore::{origin_terms, solve};
+use super::shadow_fans::{walk, ShadowLanes};
 use super::shaft::{self, Shaft};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
-use crate::simd::{max, min, Isa, Kernel};
+use crate::simd::{Isa, Kernel};
 
 /// Segments by coordinate: segment `i` runs from `(origin[0][i], origin[1][i], origin[2][i])`
 /// to `(end[0][i], end[1][i], end[2][i])`. All six slices have the same length.
@@ -308,42 +310,20 @@ impl<const N: usize, I: Isa> ShadowLanes<N> for Bundle<N, I> {
 }
 
 /// The lanes (bit i for lane i) that enter the node's box within `(0, t_max[i])`, and each
-/// lane's entry distance. A box entered exactly at `t_max[i]` counts.
-// Lane loops index several arrays by lane; that is what vectorizes.
-#[allow(clippy::needless_range_loop)]
+/// lane's entry distance ([`lanes::slab`], each lane from its own origin).
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
     rays: &Lanes<N>,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
-    let (o, inv) = (&rays.origin, &rays.inv);
-    let mut inside = [0i32; N];
-    let mut entry = [0.0; N];
-    for i in 0..N {
-        let (x0, x1) = (
-            (node.min[0] - o[0][i]) * inv[0][i],
-            (node.max[0] - o[0][i]) * inv[0][i],
-        );
-        let (y0, y1) = (
-            (node.min[1] - o[1][i]) * inv[1][i],
-            (node.max[1] - o[1][i]) * inv[1][i],
-        );
-        let (z0, z1) = (
-            (node.min[2] - o[2][i]) * inv[2][i],
-            (node.max[2] - o[2][i]) * inv[2][i],
-        );
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), 0.0);
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max[i]);
-        inside[i] = -((near <= far) as i32);
-        entry[i] = near;
-    }
-    (I::mask(&inside), entry)
+    let o = &rays.origin;
+    let rel = |a: usize, i: usize| (node.min[a] - o[a][i], node.max[a] - o[a][i]);
+    lanes::slab::<N, I>(rel, &rays.inv, 0.0, t_max, 1.0)
 }
 
 /// The lanes of `lanes` (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`:
-/// per lane, `geometry::intersect_triangle`'s products and sums in its order (glam's `cross`
-/// and `dot` written out), no fused multiply-add.
+/// per lane, the whole Möller–Trumbore test from the lane's origin and direction.
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
@@ -353,27 +333,12 @@ fn triangle<const N: usize, I: Isa>(
     t_max: f32,
     lanes: u32,
 ) -> u32 {
-    let (v0, e1, e2) = (tri.v0, tri.e1, tri.e2);
+    let (v0, e1, e2) = (tri.v0.to_array(), tri.e1.to_array(), tri.e2.to_array());
     let mut hit = [0i32; N];
     for i in 0..N {
-        let (dx, dy, dz) = (rays.dir[0][i], rays.dir[1][i], rays.dir[2][i]);
-        // pvec = dir × e2, det = e1 · pvec.
-        let px = dy * e2.z - e2.y * dz;
-        let py = dz * e2.x - e2.z * dx;
-        let pz = dx * e2.y - e2.x * dy;
-        let det = e1.x * px + e1.y * py + e1.z * pz;
-        let inv_det = 1.0 / det;
-        // tvec = origin − v0, qvec = tvec × e1.
-        let tx = rays.origin[0][i] - v0.x;
-        let ty = rays.origin[1][i] - v0.y;
-        let tz = rays.origin[2][i] - v0.z;
-        let b1 = (tx * px + ty * py + tz * pz) * inv_det;
-        let qx = ty * e1.z - e1.y * tz;
-        let qy = tz * e1.x - e1.z * tx;
-        let qz = tx * e1.y - e1.x * ty;
-        let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
-        let t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv_det;
-        hit[i] = -((inside(det, b1, b2) & (t > 0.0) & (t < t_max)) as i32);
+        let terms = origin_terms(lane(&rays.origin, i), v0, e1, e2);
+        let (inside, t, _, _) = solve(terms, lane(&rays.dir, i), e1, e2);
+        hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
     }
     I::mask(&hit) & lanes
 }

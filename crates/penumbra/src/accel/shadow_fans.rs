@@ -7,8 +7,8 @@
 //! the packet stops when no lane is left. That walk ([`walk`]) also serves the bundles of
 //! `segments`, whose lanes have origins of their own.
 //!
-//! Exactness: every lane runs the scalar Möller–Trumbore test of `geometry::intersect_triangle`
-//! operation for operation (the same products, sums and comparisons in the same order, no
+//! Exactness: every lane runs the Möller–Trumbore test of `prim::moller_trumbore`, the scalar
+//! test's own functions, operation for operation (the same products, sums and comparisons in the same order, no
 //! fused multiply-add), so a lane is occluded exactly when [`Bvh::occluded`] says so. The box
 //! tests only prune: like the scalar slab test they are conservative on the padded boxes, so
 //! which boxes are visited does not change any answer.
@@ -17,9 +17,11 @@ use std::marker::PhantomData;
 
 use glam::Vec3;
 
+use super::lanes::{self, lane};
+use super::prim::moller_trumbore::{determinant, origin_terms, solve};
 use super::{traverse, Bvh, BvhNode, TriAccel, STACK_SIZE};
 use crate::math::Ray;
-use crate::simd::{max, min, Isa, Kernel};
+use crate::simd::{Isa, Kernel};
 
 /// Trees of at least this many nodes (2 MiB of them: more than a core's L2 cache) have the
 /// packets prefetch what lies below the children they test. On smaller trees the nodes stay
@@ -237,9 +239,7 @@ fn prefetch_below(bvh: &Bvh, node: &BvhNode) {
 }
 
 /// The lanes (bit i for lane i) that enter the node's box within `(t_min, t_max[i])`, and each
-/// lane's entry distance. A box entered exactly at `t_max[i]` counts.
-// Lane loops index several arrays by lane; that is what vectorizes.
-#[allow(clippy::needless_range_loop)]
+/// lane's entry distance: the box relative to the shared origin once, then [`lanes::slab`].
 #[inline(always)]
 pub(super) fn slab<const N: usize, I: Isa>(
     node: &BvhNode,
@@ -248,21 +248,9 @@ pub(super) fn slab<const N: usize, I: Isa>(
     t_min: f32,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
-    // The box relative to the shared origin, once for all lanes.
     let lo = [node.min[0] - o[0], node.min[1] - o[1], node.min[2] - o[2]];
     let hi = [node.max[0] - o[0], node.max[1] - o[1], node.max[2] - o[2]];
-    let mut inside = [0i32; N];
-    let mut entry = [0.0; N];
-    for i in 0..N {
-        let (x0, x1) = (lo[0] * inv[0][i], hi[0] * inv[0][i]);
-        let (y0, y1) = (lo[1] * inv[1][i], hi[1] * inv[1][i]);
-        let (z0, z1) = (lo[2] * inv[2][i], hi[2] * inv[2][i]);
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), t_max[i]);
-        inside[i] = -((near <= far) as i32);
-        entry[i] = near;
-    }
-    (I::mask(&inside), entry)
+    lanes::slab::<N, I>(|a, _| (lo[a], hi[a]), inv, t_min, t_max, 1.0)
 }
 
 /// The lanes of `lanes` (bit i for lane i) that hit the triangle with `t` in `(0, t_max)`.
@@ -282,9 +270,9 @@ fn triangle<const N: usize, I: Isa>(
     t_max: f32,
     lanes: u32,
 ) -> u32 {
-    let tvec = origin - tri.v0;
-    let qvec = tvec.cross(tri.e1);
-    let t_num = tri.e2.dot(qvec);
+    let (e1, e2) = (tri.e1.to_array(), tri.e2.to_array());
+    let terms = origin_terms(origin.to_array(), tri.v0.to_array(), e1, e2);
+    let t_num = terms.2;
     // Zero or NaN: every lane's `t` is ±0 or NaN.
     if !(t_num != 0.0) {
         return 0;
@@ -293,7 +281,7 @@ fn triangle<const N: usize, I: Isa>(
         let positive = t_num > 0.0;
         let mut ahead = [0i32; N];
         for i in 0..N {
-            let det = determinant(tri, dir, i).1;
+            let det = determinant(lane(dir, i), e1, e2).1;
             ahead[i] = -((((det > 0.0) == positive) & (det != 0.0)) as i32);
         }
         if I::mask(&ahead) & lanes == 0 {
@@ -302,57 +290,8 @@ fn triangle<const N: usize, I: Isa>(
     }
     let mut hit = [0i32; N];
     for i in 0..N {
-        let (inside, t, _, _) = moller_trumbore(tri, tvec, qvec, t_num, dir, i);
+        let (inside, t, _, _) = solve(terms, lane(dir, i), e1, e2);
         hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
     }
     I::mask(&hit) & lanes
-}
-
-/// Lane `i`'s `pvec = dir × e2` (as glam's cross product) and `det = e1 · pvec`, as
-/// Möller–Trumbore computes them.
-#[inline(always)]
-pub(super) fn determinant<const N: usize>(
-    tri: &TriAccel,
-    dir: &[[f32; N]; 3],
-    i: usize,
-) -> ([f32; 3], f32) {
-    let (e1, e2) = (tri.e1, tri.e2);
-    let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
-    let px = dy * e2.z - e2.y * dz;
-    let py = dz * e2.x - e2.z * dx;
-    let pz = dx * e2.y - e2.x * dy;
-    ([px, py, pz], e1.x * px + e1.y * py + e1.z * pz)
-}
-
-/// Lane `i` of Möller–Trumbore exactly as `geometry::intersect_triangle` computes it, with the
-/// origin's terms (`tvec = origin − v0`, `qvec = tvec × e1`, `t_num = e2·qvec`) shared by all
-/// lanes: whether the ray meets the triangle's inside (edges included), and `t`, `b1`, `b2`.
-/// The caller bounds `t`.
-#[inline(always)]
-pub(super) fn moller_trumbore<const N: usize>(
-    tri: &TriAccel,
-    tvec: Vec3,
-    qvec: Vec3,
-    t_num: f32,
-    dir: &[[f32; N]; 3],
-    i: usize,
-) -> (bool, f32, f32, f32) {
-    let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
-    let ([px, py, pz], det) = determinant(tri, dir, i);
-    let inv_det = 1.0 / det;
-    let b1 = (tvec.x * px + tvec.y * py + tvec.z * pz) * inv_det;
-    let b2 = (dx * qvec.x + dy * qvec.y + dz * qvec.z) * inv_det;
-    let t = t_num * inv_det;
-    (inside(det, b1, b2), t, b1, b2)
-}
-
-/// Möller–Trumbore's verdict from its determinant and barycentrics, as
-/// `geometry::intersect_triangle` gives it: the ray meets the triangle's inside, edges
-/// included. Every lane test ends here, so that all of them answer alike.
-// The comparisons are written out, negations included, to keep the scalar test's answers for
-// NaN values (a NaN `b2` passes its two tests there, and must here).
-#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
-#[inline(always)]
-pub(super) fn inside(det: f32, b1: f32, b2: f32) -> bool {
-    (det != 0.0) & det.is_finite() & (0.0 <= b1) & (b1 <= 1.0) & !(b2 < 0.0) & !(b1 + b2 > 1.0)
 }

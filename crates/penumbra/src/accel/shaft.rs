@@ -18,7 +18,8 @@
 
 use glam::Vec3;
 
-use super::shadow_fans::{determinant, inside};
+use super::lanes::lane;
+use super::prim::moller_trumbore::{origin_terms, solve};
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
 
@@ -270,28 +271,24 @@ struct Fixed<const N: usize> {
 impl<const N: usize> Fixed<N> {
     #[inline(always)]
     fn new(tri: &TriAccel, o: &[[f32; N]; 3]) -> Self {
-        let (v0, e1, e2) = (tri.v0, tri.e1, tri.e2);
+        let (v0, e1, e2) = (tri.v0.to_array(), tri.e1.to_array(), tri.e2.to_array());
         let mut f = Fixed {
             tvec: [[0.0; N]; 3],
             qvec: [[0.0; N]; 3],
             t_num: [0.0; N],
         };
         for i in 0..N {
-            let tx = o[0][i] - v0.x;
-            let ty = o[1][i] - v0.y;
-            let tz = o[2][i] - v0.z;
-            let qx = ty * e1.z - e1.y * tz;
-            let qy = tz * e1.x - e1.z * tx;
-            let qz = tx * e1.y - e1.x * ty;
-            (f.tvec[0][i], f.tvec[1][i], f.tvec[2][i]) = (tx, ty, tz);
-            (f.qvec[0][i], f.qvec[1][i], f.qvec[2][i]) = (qx, qy, qz);
-            f.t_num[i] = e2.x * qx + e2.y * qy + e2.z * qz;
+            let (tvec, qvec, t_num) = origin_terms(lane(o, i), v0, e1, e2);
+            for a in 0..3 {
+                (f.tvec[a][i], f.qvec[a][i]) = (tvec[a], qvec[a]);
+            }
+            f.t_num[i] = t_num;
         }
         f
     }
 
     /// The lanes of `lanes` whose segment from `o` to `end` the triangle meets with `t` in
-    /// `(0, t_max)`: the rest of the lane test, written as `segments`' `triangle` writes it.
+    /// `(0, t_max)`: the rest of the lane test, `prim::moller_trumbore::solve`.
     #[inline(always)]
     fn hits<I: Isa>(
         &self,
@@ -307,17 +304,12 @@ impl<const N: usize> Fixed<N> {
                 dir[a][i] = end[a] - o[a][i];
             }
         }
+        let (e1, e2) = (tri.e1.to_array(), tri.e2.to_array());
         let mut hit = [0i32; N];
         for i in 0..N {
-            let (dx, dy, dz) = (dir[0][i], dir[1][i], dir[2][i]);
-            let ([px, py, pz], det) = determinant(tri, &dir, i);
-            let inv_det = 1.0 / det;
-            let (tx, ty, tz) = (self.tvec[0][i], self.tvec[1][i], self.tvec[2][i]);
-            let b1 = (tx * px + ty * py + tz * pz) * inv_det;
-            let (qx, qy, qz) = (self.qvec[0][i], self.qvec[1][i], self.qvec[2][i]);
-            let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
-            let t = self.t_num[i] * inv_det;
-            hit[i] = -((inside(det, b1, b2) & (t > 0.0) & (t < t_max)) as i32);
+            let terms = (lane(&self.tvec, i), lane(&self.qvec, i), self.t_num[i]);
+            let (inside, t, _, _) = solve(terms, lane(&dir, i), e1, e2);
+            hit[i] = -((inside & (t > 0.0) & (t < t_max)) as i32);
         }
         I::mask(&hit) & lanes
     }

@@ -1,6 +1,6 @@
 //! Triangles and the meshes they live in. Every object of a scene becomes triangles here:
-//! the ray–triangle test and its [`Hit`] record, indexed mesh storage, the built-in shapes
-//! (quad, cube, sphere), and the [`Surface`] at a hit.
+//! the [`Hit`] record of a ray–triangle test (the tests are in `accel::prim`), indexed mesh
+//! storage, the built-in shapes (quad, cube, sphere), and the [`Surface`] at a hit.
 
 mod mesh;
 mod shapes;
@@ -10,4 +10,4 @@ mod triangle;
 pub use mesh::{Geometry, Mesh, Triangle};
 pub use shapes::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 pub use surface::Surface;
-pub use triangle::{intersect_triangle, Hit, TriangleHit};
+pub use triangle::{Hit, TriangleHit};

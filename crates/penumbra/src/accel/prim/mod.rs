@@ -1,6 +1,9 @@
-//! The ray–triangle tests: `watertight`, the test of Woop, Benthin and Wald that ray casting
-//! uses (no ray slips between two triangles that share an edge), with `boundary`, the part of
-//! the surface's border each triangle owns for its counting rule.
+//! The ray–triangle tests, each written once for every caller (the scalar test and the SIMD
+//! lanes of rays or of triangles): `moller_trumbore`, the renderer's; `watertight`, the test
+//! of Woop, Benthin and Wald that ray casting uses (no ray slips between two triangles that
+//! share an edge), with `boundary`, the part of the surface's border each triangle owns for
+//! its counting rule.
 
 pub(crate) mod boundary;
+pub(crate) mod moller_trumbore;
 pub(crate) mod watertight;

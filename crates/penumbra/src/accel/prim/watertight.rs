@@ -206,6 +206,47 @@ impl PreparedRay {
     }
 }
 
+/// One SIMD lane of [`PreparedRay::hit`], operation for operation (the same differences,
+/// products and sums in the same order, no fused multiply-add), without its exact re-tests:
+/// the triangle with corners `c` (each by permuted axis, `[c[kx], c[ky], c[kz]]`) against the
+/// ray whose origin by permuted axis is `o`, with shear `(sx, sy)` and `1/d_z` `inv_dz`.
+/// Callers run it with a lane per triangle (a leaf's group) or a lane per ray (a packet).
+///
+/// Returns `(exact, inside, t, b1, b2)`: `exact` when an edge function rounds to zero, or
+/// when the lane is inside but its `t` overflowed (then [`PreparedRay::hit`] itself must
+/// answer, with its `f64` re-test or its other order for `t`); `inside` when the ray meets
+/// the triangle (not edge-on, not degenerate), `t` still to be bounded by the caller.
+#[inline(always)]
+pub(crate) fn hit_lane(
+    c: [[f32; 3]; 3],
+    o: [f32; 3],
+    (sx, sy): (f32, f32),
+    inv_dz: f32,
+) -> (bool, bool, f32, f32, f32) {
+    // Each corner in the sheared frame: as in `hit`, each depends on its vertex alone.
+    let f = c.map(|c| {
+        let fz = c[2] - o[2];
+        ((c[0] - o[0]) + sx * fz, (c[1] - o[1]) + sy * fz, fz)
+    });
+    // The edge functions `x2·y1 − y2·x1` of `hit`.
+    let u = f[2].0 * f[1].1 - f[2].1 * f[1].0;
+    let v = f[0].0 * f[2].1 - f[0].1 * f[2].0;
+    let w = f[1].0 * f[0].1 - f[1].1 * f[0].0;
+    let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
+    let negative = (u < 0.0) | (v < 0.0) | (w < 0.0);
+    let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
+    // `element_sum` of glam's `Vec3A`: `(x + y) + (z + 0)`.
+    let det = (u + v) + (w + 0.0);
+    let scaled_t = (u * (f[0].2 * inv_dz) + v * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
+    let inv_det = 1.0 / det;
+    let t = scaled_t * inv_det;
+    // `det` is not 0 and not NaN.
+    #[allow(clippy::eq_op)]
+    let inside = !(negative & positive) & (det != 0.0) & (det == det);
+    let exact = zero | (inside & overflows(t));
+    (exact, inside, t, v * inv_det, w * inv_det)
+}
+
 /// True when a hit's `t` came out infinite or NaN: for a short direction far from the
 /// triangle, the products `uvw·(fz/d_z)` overflow (the group and packet tests hand such
 /// lanes to [`PreparedRay::hit`], which recomputes `t` with [`far_t`]).

@@ -16,7 +16,7 @@ use glam::Vec3A;
 
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{
-    overflows, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
+    hit_lane, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
 };
 use crate::simd::Isa;
 
@@ -120,9 +120,8 @@ impl PreparedRay {
         let [sx, sy] = self.shear();
         let inv_dz = self.inv_dz();
         let o = self.origin.to_array();
-        let (ox, oy, oz) = (o[kx], o[ky], o[kz]);
-        // Each corner's coordinates by permuted axis: as in `hit`, each depends on its vertex
-        // alone.
+        let o = [o[kx], o[ky], o[kz]];
+        // Each corner's coordinates by permuted axis.
         let rows = [0, 1, 2].map(|c| (&group.v[c][kx], &group.v[c][ky], &group.v[c][kz]));
         let (mut zero, mut inside) = ([0i32; GROUP], [0i32; GROUP]);
         let mut hits = GroupHits {
@@ -132,32 +131,11 @@ impl PreparedRay {
             b2: [0.0; GROUP],
         };
         for i in 0..GROUP {
-            let f = rows.map(|(x, y, z)| {
-                let fz = z[i] - oz;
-                ((x[i] - ox) + sx * fz, (y[i] - oy) + sy * fz, fz)
-            });
-            // The edge functions `x2·y1 − y2·x1` of `hit`.
-            let u = f[2].0 * f[1].1 - f[2].1 * f[1].0;
-            let v = f[0].0 * f[2].1 - f[0].1 * f[2].0;
-            let w = f[1].0 * f[0].1 - f[1].1 * f[0].0;
-            zero[i] = -i32::from((u == 0.0) | (v == 0.0) | (w == 0.0));
-            let negative = (u < 0.0) | (v < 0.0) | (w < 0.0);
-            let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
-            // `element_sum` of glam's `Vec3A`: `(x + y) + (z + 0)`.
-            let det = (u + v) + (w + 0.0);
-            let scaled_t =
-                (u * (f[0].2 * inv_dz) + v * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
-            let inv_det = 1.0 / det;
-            let t = scaled_t * inv_det;
-            // `det` is not 0 and not NaN; `t` in `[t_min, t_max]` (false for a NaN `t`).
-            #[allow(clippy::eq_op)]
-            let ok = !(negative & positive) & (det != 0.0) & (det == det);
+            let c = rows.map(|(x, y, z)| [x[i], y[i], z[i]]);
+            let (exact, ok, t, b1, b2) = hit_lane(c, o, (sx, sy), inv_dz);
             inside[i] = -i32::from(ok & (t >= t_min) & (t <= t_max));
-            // A hit whose `t` overflowed goes to the one-triangle test too.
-            zero[i] |= -i32::from(ok & overflows(t));
-            hits.t[i] = t;
-            hits.b1[i] = v * inv_det;
-            hits.b2[i] = w * inv_det;
+            zero[i] = -i32::from(exact);
+            (hits.t[i], hits.b1[i], hits.b2[i]) = (t, b1, b2);
         }
         let exact = I::mask(&zero) & valid;
         hits.mask = I::mask(&inside) & valid & !exact;

@@ -17,11 +17,10 @@
 use super::kernels::Control;
 use super::node::WIDTH;
 use super::tree::{tie_bound, SlotHit, Stack, WideBvh, EXIT_SCALE};
+use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
-use crate::accel::prim::watertight::{
-    overflows, Corners, Crossing, EdgeRule, PreparedRay, T_LIMIT,
-};
-use crate::simd::{max, min, Isa, Kernel};
+use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, PreparedRay, T_LIMIT};
+use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray.
 pub(crate) type ClosestHit = Option<SlotHit>;
@@ -204,28 +203,17 @@ fn trace<const N: usize, I: Isa>(
 }
 
 /// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
-/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance: the single-ray test of `node`, per lane.
-#[allow(clippy::needless_range_loop)]
+/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance:
+/// the conservative test of `node`, per lane ([`crate::accel::lanes::slab`]).
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     (lo, hi): ([f32; 3], [f32; 3]),
     lanes: &Lanes<'_, N>,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
-    let mut inside = [0i32; N];
-    let mut entry = [0.0; N];
-    let (o, inv) = (&lanes.origin, &lanes.inv_dir);
-    for i in 0..N {
-        let t0 = [0, 1, 2].map(|a| (lo[a] - o[a][i]) * inv[a][i]);
-        let t1 = [0, 1, 2].map(|a| (hi[a] - o[a][i]) * inv[a][i]);
-        let near = [0, 1, 2].map(|a| min(t0[a], t1[a]));
-        let far = [0, 1, 2].map(|a| max(t0[a], t1[a]));
-        let near = max(max(max(near[0], near[1]), near[2]), 0.0);
-        let far = min(min(min(far[0], far[1]), far[2]) * EXIT_SCALE, t_max[i]);
-        inside[i] = -i32::from(near <= far);
-        entry[i] = near;
-    }
-    (I::mask(&inside), entry)
+    let o = &lanes.origin;
+    let rel = |a: usize, i: usize| (lo[a] - o[a][i], hi[a] - o[a][i]);
+    crate::accel::lanes::slab::<N, I>(rel, &lanes.inv_dir, 0.0, t_max, EXIT_SCALE)
 }
 
 /// Tests the triangle `corners` (leaf slot `slot`) on the lanes of
@@ -245,35 +233,12 @@ fn triangle<const N: usize, I: Isa>(
     let (mut hit, mut zero) = ([0i32; N], [0i32; N]);
     let (mut t, mut b1, mut b2) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for i in 0..N {
-        // As `PreparedRay::hit`, lane by lane: each corner in the sheared frame.
-        let o = [
-            lanes.permuted[0][i],
-            lanes.permuted[1][i],
-            lanes.permuted[2][i],
-        ];
-        let (sx, sy, inv_dz) = (lanes.shear[0][i], lanes.shear[1][i], lanes.inv_dz[i]);
-        let f = v.map(|c| {
-            let fz = c[2] - o[2];
-            ((c[0] - o[0]) + sx * fz, (c[1] - o[1]) + sy * fz, fz)
-        });
-        let u = f[2].0 * f[1].1 - f[2].1 * f[1].0;
-        let v_ = f[0].0 * f[2].1 - f[0].1 * f[2].0;
-        let w = f[1].0 * f[0].1 - f[1].1 * f[0].0;
-        zero[i] = -i32::from((u == 0.0) | (v_ == 0.0) | (w == 0.0));
-        let negative = (u < 0.0) | (v_ < 0.0) | (w < 0.0);
-        let positive = (u > 0.0) | (v_ > 0.0) | (w > 0.0);
-        let det = (u + v_) + (w + 0.0);
-        let scaled_t =
-            (u * (f[0].2 * inv_dz) + v_ * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
-        let inv_det = 1.0 / det;
-        t[i] = scaled_t * inv_det;
-        b1[i] = v_ * inv_det;
-        b2[i] = w * inv_det;
-        #[allow(clippy::eq_op)]
-        let inside = !(negative & positive) & (det != 0.0) & (det == det);
-        hit[i] = -i32::from(inside & (t[i] >= 0.0) & (t[i] <= best.t[i]));
-        // A hit whose `t` overflowed: the one-triangle test, as for an edge.
-        zero[i] |= -i32::from(inside & overflows(t[i]));
+        let shear = (lanes.shear[0][i], lanes.shear[1][i]);
+        let (exact, inside, ti, b1i, b2i) =
+            hit_lane(v, lane(&lanes.permuted, i), shear, lanes.inv_dz[i]);
+        hit[i] = -i32::from(inside & (ti >= 0.0) & (ti <= best.t[i]));
+        zero[i] = -i32::from(exact);
+        (t[i], b1[i], b2[i]) = (ti, b1i, b2i);
     }
     let exact = I::mask(&zero) & mask;
     let mut hits = I::mask(&hit) & mask & !exact;
