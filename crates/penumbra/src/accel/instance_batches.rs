@@ -127,21 +127,15 @@ pub(super) fn occlude_segments(
     t_max: f32,
     blocked: &mut [bool],
 ) {
-    let hull = bounds(segments.origin).union(bounds(segments.end));
-    let (mut origins, mut ends) = (Mapped::default(), Mapped::default());
-    let point = |c: [&[f32]; 3], i: usize| Vec3::new(c[0][i], c[1][i], c[2][i]);
-    let segment = |i: usize| (point(segments.origin, i), point(segments.end, i));
-    each_instance(
+    let (o, e) = (segments.origin, segments.end);
+    let segment = |i: usize| (point(o, i), point(e, i));
+    each_instance_mapped(
         instances,
-        hull,
-        blocked,
+        [o, e],
         (segment, t_max),
-        |map, mesh, blocked| {
-            let local = Segments {
-                origin: origins.map(map, points(segments.origin)),
-                end: ends.map(map, points(segments.end)),
-            };
-            mesh.occlude_segments_on(path, local, t_max, blocked);
+        blocked,
+        |mesh, origin, end, blocked| {
+            mesh.occlude_segments_on(path, Segments { origin, end }, t_max, blocked);
         },
     );
 }
@@ -154,22 +148,39 @@ pub(super) fn occlude_pairs(
     t_max: f32,
     blocked: &mut [bool],
 ) {
-    let hull = bounds(pairs.origins).union(bounds(pairs.ends));
-    let (mut origins, mut ends) = (Mapped::default(), Mapped::default());
-    let m = pairs.origins[0].len().max(1);
-    let point = |c: [&[f32]; 3], i: usize| Vec3::new(c[0][i], c[1][i], c[2][i]);
-    let segment = |k: usize| (point(pairs.origins, k % m), point(pairs.ends, k / m));
-    each_instance(
+    let (o, e) = (pairs.origins, pairs.ends);
+    let m = o[0].len().max(1);
+    let segment = |k: usize| (point(o, k % m), point(e, k / m));
+    each_instance_mapped(
         instances,
-        hull,
-        blocked,
+        [o, e],
         (segment, t_max),
-        |map, mesh, blocked| {
-            let local = Pairs {
-                origins: origins.map(map, points(pairs.origins)),
-                ends: ends.map(map, points(pairs.ends)),
-            };
-            mesh.occlude_pairs_on(path, local, t_max, blocked);
+        blocked,
+        |mesh, origins, ends, blocked| {
+            mesh.occlude_pairs_on(path, Pairs { origins, ends }, t_max, blocked);
         },
     );
+}
+
+/// Point `i` of coordinate slices `c`.
+fn point(c: [&[f32]; 3], i: usize) -> Vec3 {
+    Vec3::new(c[0][i], c[1][i], c[2][i])
+}
+
+/// [`each_instance`] for a batch given as two sets of points by coordinate (origins and
+/// ends), over the hull of both: `trace` gets each instance's mesh tree and both sets mapped
+/// into its space.
+fn each_instance_mapped(
+    instances: &Instances,
+    [a, b]: [[&[f32]; 3]; 2],
+    fallback: (impl Fn(usize) -> (Vec3, Vec3), f32),
+    blocked: &mut [bool],
+    mut trace: impl FnMut(&Bvh, [&[f32]; 3], [&[f32]; 3], &mut [bool]),
+) {
+    let hull = bounds(a).union(bounds(b));
+    let (mut mapped_a, mut mapped_b) = (Mapped::default(), Mapped::default());
+    each_instance(instances, hull, blocked, fallback, |map, mesh, blocked| {
+        let (a, b) = (mapped_a.map(map, points(a)), mapped_b.map(map, points(b)));
+        trace(mesh, a, b, blocked);
+    });
 }
