@@ -156,14 +156,7 @@ fn large_films_under_one_gib_render_or_are_refused_in_one_line() {
 /// A `.npy` file whose header declares `rows` float32 4×4 matrices, made as large as they need
 /// but sparse (no data is written).
 fn sparse_npy(path: &Path, rows: u64) {
-    let mut text = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, 4, 4), }}");
-    while (10 + text.len() + 1) % 64 != 0 {
-        text.push(' ');
-    }
-    text.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((text.len() as u16).to_le_bytes());
-    bytes.extend(text.as_bytes());
+    let bytes = support::npy("<f4", &format!("({rows}, 4, 4)"), &[]);
     let header = bytes.len() as u64;
     std::fs::write(path, bytes).unwrap();
     let file = std::fs::OpenOptions::new().write(true).open(path).unwrap();

@@ -6,7 +6,7 @@ mod support;
 
 use glam::Vec3;
 use penumbra::{AssetKind, ErrorKind, Ray, Scene, SceneError, SceneFile, SceneFormat};
-use support::TempDir;
+use support::{npy, TempDir};
 
 const HEAD: &str = r#"[film]
 width = 32
@@ -98,20 +98,6 @@ fn a_small_mesh_placed_a_few_times_is_copied_and_a_large_one_is_built_once() {
     let s = build(&dir, &copies(n)).unwrap().world.stats();
     assert_eq!(s.triangles, 12 * (n + 1));
     assert_eq!((s.unique_triangles, s.meshes, s.instances), (12, 1, n + 1));
-}
-
-/// A `.npy` file of the given dtype and shape holding `values` (little-endian).
-fn npy(descr: &str, shape: &str, values: &[u8]) -> Vec<u8> {
-    let mut text = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-    while (10 + text.len() + 1) % 64 != 0 {
-        text.push(' ');
-    }
-    text.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((text.len() as u16).to_le_bytes());
-    bytes.extend(text.as_bytes());
-    bytes.extend(values);
-    bytes
 }
 
 /// Row-major float32 translations by (x, 0, 0).

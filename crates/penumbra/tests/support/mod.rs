@@ -189,3 +189,18 @@ pub fn with_texture(file: &str) -> String {
 pub fn with_mesh(file: &str) -> String {
     format!("{BASE_TOML}\n[[objects]]\ntype = \"mesh\"\nfile = \"{file}\"\n")
 }
+
+/// A NumPy `.npy` file (version 1, as `numpy.save` writes it) whose header gives `descr` (say
+/// `<f4`) and `shape` (say `(2, 4, 4)`), followed by `data`.
+pub fn npy(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
+    let mut text = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + text.len() + 1) % 64 != 0 {
+        text.push(' ');
+    }
+    text.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((text.len() as u16).to_le_bytes());
+    bytes.extend(text.as_bytes());
+    bytes.extend(data);
+    bytes
+}
