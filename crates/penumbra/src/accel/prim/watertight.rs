@@ -23,7 +23,7 @@
 //!   may leave it, the triangle owns its boundary edges, and one triangle owns each vertex of
 //!   the border (see `boundary`): a ray there hits the surface once.
 
-use glam::{Vec3, Vec3A, Vec3Swizzles};
+use glam::{Vec3, Vec3A};
 
 use super::boundary::Boundary;
 use crate::math::unit_cross;
@@ -140,8 +140,8 @@ impl PreparedRay {
     /// Intersects the triangle `tri`, whose part of the surface's border is `boundary` (used
     /// by [`EdgeRule::Owned`] only), for `t` in `[t_min, t_max]` (and at most [`T_LIMIT`])
     /// under `rule`. Two-sided; degenerate triangles and triangles seen exactly edge-on are
-    /// missed. Exact for corners and origins within ±[`MAX_COORDINATE`](crate::scale::MAX_COORDINATE): no product
-    /// overflows there.
+    /// missed. Exact for corners and origins within
+    /// ±[`MAX_COORDINATE`](crate::scale::MAX_COORDINATE): no product overflows there.
     #[inline(always)]
     pub fn hit(
         &self,
@@ -151,59 +151,90 @@ impl PreparedRay {
         t_max: f32,
         rule: EdgeRule,
     ) -> Option<Crossing> {
-        // The corners in the ray's sheared frame, one lane per corner. Each lane depends on
-        // its vertex alone, so a vertex shared by two triangles lands on the same point.
-        let d = [
-            tri.x - Vec3A::splat(self.origin.x),
-            tri.y - Vec3A::splat(self.origin.y),
-            tri.z - Vec3A::splat(self.origin.z),
-        ];
-        let [kx, ky, kz] = self.k;
-        let fz = d[kz];
-        let (fx, fy) = (d[kx] + self.shear[0] * fz, d[ky] + self.shear[1] * fz);
-        // Edge functions, one lane each: `u` of edge B→C (the weight of A), `v` of C→A,
-        // `w` of A→B; `x1, y1` are the edges' start corners and `x2, y2` their ends.
-        let (x1, x2, y1, y2) = (fx.yzx(), fx.zxy(), fy.yzx(), fy.zxy());
-        let mut uvw = x2 * y1 - y2 * x1;
-        if uvw.cmpeq(Vec3A::ZERO).any() {
-            uvw = Vec3A::new(
-                edge_f64(x2.x, y1.x, y2.x, x1.x),
-                edge_f64(x2.y, y1.y, y2.y, x1.y),
-                edge_f64(x2.z, y1.z, y2.z, x1.z),
-            );
+        let f = self.sheared(tri);
+        let mut uvw = edge_functions(&f, |a, b, c, d| a * b - c * d);
+        if uvw.contains(&0.0) {
+            uvw = edge_functions(&f, edge_f64);
         }
-        if uvw.cmplt(Vec3A::ZERO).any() && uvw.cmpgt(Vec3A::ZERO).any() {
+        if uvw.iter().any(|&e| e < 0.0) && uvw.iter().any(|&e| e > 0.0) {
             return None;
         }
-        let det = uvw.element_sum();
+        let det = sum(uvw);
         if det == 0.0 || det.is_nan() {
             return None;
         }
-        if rule == EdgeRule::Owned {
-            let zero = uvw.cmpeq(Vec3A::ZERO);
-            if zero.any() {
-                let (ex, ey, flip) = (x2 - x1, y2 - y1, det < 0.0);
-                let zeros = [0, 1, 2].map(|k| zero.test(k));
-                if !owns(zeros, boundary, |k| owned(ex[k], ey[k], flip)) {
-                    return None;
-                }
+        if rule == EdgeRule::Owned && uvw.contains(&0.0) {
+            // Edge `k` in the frame, from corner `k + 1` to corner `k + 2`.
+            let edge = |k: usize| {
+                let (start, end) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+                (end.0 - start.0, end.1 - start.1)
+            };
+            let zeros = uvw.map(|e| e == 0.0);
+            let top_left = |k: usize| {
+                let (ex, ey) = edge(k);
+                owned(ex, ey, det < 0.0)
+            };
+            if !owns(zeros, boundary, top_left) {
+                return None;
             }
         }
-        let scaled_t = (uvw * (fz * self.inv_dz)).element_sum();
+        let inv_dz = self.inv_dz;
+        let scaled_t = sum([0, 1, 2].map(|k| uvw[k] * (f[k].2 * inv_dz)));
         let inv_det = 1.0 / det;
         let mut t = scaled_t * inv_det;
         if overflows(t) {
-            t = far_t(uvw, fz, inv_det, self.inv_dz);
+            t = far_t(uvw, &f, inv_det, inv_dz);
         }
         if !(t >= t_min && t <= t_max.min(T_LIMIT)) {
             return None;
         }
         Some(Crossing {
             t,
-            b1: uvw.y * inv_det,
-            b2: uvw.z * inv_det,
+            b1: uvw[1] * inv_det,
+            b2: uvw[2] * inv_det,
         })
     }
+
+    /// The corners of `tri` in the ray's sheared frame ([`sheared`]).
+    #[inline(always)]
+    fn sheared(&self, tri: &SoaTriangle) -> Sheared {
+        let [kx, ky, kz] = self.k;
+        let axes = [tri.x, tri.y, tri.z];
+        let c = [0, 1, 2].map(|corner| [axes[kx][corner], axes[ky][corner], axes[kz][corner]]);
+        let o = self.origin;
+        sheared(c, [o[kx], o[ky], o[kz]], (self.shear[0], self.shear[1]))
+    }
+}
+
+/// A triangle's corners in a ray's sheared frame: `(x, y, z)` each.
+type Sheared = [(f32, f32, f32); 3];
+
+/// The corners `c` (each by permuted axis) in the sheared frame of the ray whose origin by
+/// permuted axis is `o` and whose shear is `(sx, sy)`. Each corner depends on its vertex
+/// alone, so a vertex shared by two triangles lands on the same point.
+#[inline(always)]
+fn sheared(c: [[f32; 3]; 3], o: [f32; 3], (sx, sy): (f32, f32)) -> Sheared {
+    c.map(|c| {
+        let fz = c[2] - o[2];
+        ((c[0] - o[0]) + sx * fz, (c[1] - o[1]) + sy * fz, fz)
+    })
+}
+
+/// The edge functions `x2·y1 − y2·x1`, by `diff(x2, y1, y2, x1)`: `u` of edge B→C (the
+/// weight of A), `v` of C→A, `w` of A→B, edge `k` running from corner `k + 1` (`x1, y1`) to
+/// corner `k + 2` (`x2, y2`).
+#[inline(always)]
+fn edge_functions(f: &Sheared, diff: impl Fn(f32, f32, f32, f32) -> f32) -> [f32; 3] {
+    [0, 1, 2].map(|k| {
+        let (start, end) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+        diff(end.0, start.1, end.1, start.0)
+    })
+}
+
+/// `(x + y) + (z + 0)`: the sum of glam's `Vec3A::element_sum`, kept for its answers.
+#[inline(always)]
+fn sum(v: [f32; 3]) -> f32 {
+    (v[0] + v[1]) + (v[2] + 0.0)
 }
 
 /// One SIMD lane of [`PreparedRay::hit`], operation for operation (the same differences,
@@ -223,21 +254,17 @@ pub(crate) fn hit_lane(
     (sx, sy): (f32, f32),
     inv_dz: f32,
 ) -> (bool, bool, f32, f32, f32) {
-    // Each corner in the sheared frame: as in `hit`, each depends on its vertex alone.
-    let f = c.map(|c| {
-        let fz = c[2] - o[2];
-        ((c[0] - o[0]) + sx * fz, (c[1] - o[1]) + sy * fz, fz)
-    });
-    // The edge functions `x2·y1 − y2·x1` of `hit`.
-    let u = f[2].0 * f[1].1 - f[2].1 * f[1].0;
-    let v = f[0].0 * f[2].1 - f[0].1 * f[2].0;
-    let w = f[1].0 * f[0].1 - f[1].1 * f[0].0;
+    let f = sheared(c, o, (sx, sy));
+    let [u, v, w] = edge_functions(&f, |a, b, c, d| a * b - c * d);
     let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
     let negative = (u < 0.0) | (v < 0.0) | (w < 0.0);
     let positive = (u > 0.0) | (v > 0.0) | (w > 0.0);
-    // `element_sum` of glam's `Vec3A`: `(x + y) + (z + 0)`.
-    let det = (u + v) + (w + 0.0);
-    let scaled_t = (u * (f[0].2 * inv_dz) + v * (f[1].2 * inv_dz)) + (w * (f[2].2 * inv_dz) + 0.0);
+    let det = sum([u, v, w]);
+    let scaled_t = sum([
+        u * (f[0].2 * inv_dz),
+        v * (f[1].2 * inv_dz),
+        w * (f[2].2 * inv_dz),
+    ]);
     let inv_det = 1.0 / det;
     let t = scaled_t * inv_det;
     // `det` is not 0 and not NaN.
@@ -260,8 +287,8 @@ pub(crate) fn overflows(t: f32) -> bool {
 /// The usual order (`fz/d_z` first) is kept where it does not overflow, so that ordinary
 /// answers stay bit for bit what they were.
 #[inline(never)]
-fn far_t(uvw: Vec3A, fz: Vec3A, inv_det: f32, inv_dz: f32) -> f32 {
-    (uvw * fz).element_sum() * inv_det * inv_dz
+fn far_t(uvw: [f32; 3], f: &Sheared, inv_det: f32, inv_dz: f32) -> f32 {
+    sum([0, 1, 2].map(|k| uvw[k] * f[k].2)) * inv_det * inv_dz
 }
 
 /// `a·b − c·d` in `f64` (exact products of `f32`), rounded to `f32` keeping its sign: a
