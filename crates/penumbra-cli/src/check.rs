@@ -1,6 +1,6 @@
 //! `penumbra check`: load and build a scene, then print what it holds: totals, each object's
 //! triangles and bounds, and warnings (on stderr; see `warnings`) for scene mistakes. A
-//! `.obj` file is summarized on its own (see `check_obj`).
+//! `.obj` or `.ply` mesh is summarized on its own (see `check_obj`).
 
 use std::ops::Range;
 use std::path::Path;
@@ -17,10 +17,10 @@ use crate::warnings::{light_warnings, unused_warnings, view_warnings};
 
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
-    if check_obj::is_obj(path) {
+    if check_obj::is_mesh(path) {
         if let Some(o) = args.set.first() {
             return Err(invalid(format!(
-                "--set {o}: overrides change scene keys, and a .obj mesh has none (check a scene that places the mesh instead)"
+                "--set {o}: overrides change scene keys, and a mesh file has none (check a scene that places the mesh instead)"
             )));
         }
         return check_obj::run(path, args.json);

@@ -1,25 +1,33 @@
-//! `penumbra check model.obj`: a Wavefront OBJ on its own, to place it in a scene: triangles,
-//! bounds (in the file's own units and axes), materials and their textures, whether it has
-//! normals and uvs, and whether it is closed.
+//! `penumbra check model.obj` (or `model.ply`): a Wavefront OBJ or PLY mesh on its own, to
+//! place it in a scene: triangles, bounds (in the file's own units and axes), materials and
+//! their textures (OBJ only), whether it has normals and uvs, and whether it is closed.
 
 use std::path::Path;
 
-use penumbra::inspect_obj;
+use penumbra::{inspect_obj, inspect_ply};
 use serde_json::json;
 
 use crate::failure::{invalid, say, Failure};
 use crate::summary::{bounds_json, bounds_text};
 
-/// True for a path naming an OBJ file.
-pub fn is_obj(path: &Path) -> bool {
+/// True for a path naming a mesh file: OBJ or PLY, by its extension in any case.
+pub fn is_mesh(path: &Path) -> bool {
+    has_extension(path, "obj") || has_extension(path, "ply")
+}
+
+fn has_extension(path: &Path, extension: &str) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        .is_some_and(|e| e.eq_ignore_ascii_case(extension))
 }
 
 pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
-    let info = inspect_obj(path)
-        .map_err(|e| invalid(format!("{}: cannot load mesh: {e}", path.display())))?;
+    let inspect = match has_extension(path, "ply") {
+        true => inspect_ply,
+        false => inspect_obj,
+    };
+    let info =
+        inspect(path).map_err(|e| invalid(format!("{}: cannot load mesh: {e}", path.display())))?;
     let textures: Vec<String> = info
         .materials
         .iter()

@@ -11,6 +11,7 @@ mod obj;
 mod overrides;
 mod pack;
 mod parse;
+mod ply;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -26,6 +27,7 @@ pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 pub use overrides::{Override, OverrideError};
 pub use pack::{PackError, ScenePack};
 use parse::Source;
+pub use ply::{inspect_ply, inspect_ply_bytes};
 
 /// Largest scene file read: 256 MiB of text, far beyond any hand-written or exported scene.
 pub const MAX_SCENE_BYTES: u64 = 256 << 20;

@@ -1,6 +1,7 @@
-//! Objects: each shape becomes an object-space [`Mesh`] (OBJ files read once per scene, their
-//! MTL materials made once per file) and is added to the world with its transform: copied,
-//! or, for an OBJ file the scene places many times, built once and instanced.
+//! Objects: each shape becomes an object-space [`Mesh`] (OBJ and PLY files read once per
+//! scene, an OBJ file's MTL materials made once per file) and is added to the world with its
+//! transform: copied, or, for a mesh file the scene places many times, built once and
+//! instanced.
 
 use std::rc::Rc;
 
@@ -14,6 +15,7 @@ use crate::math::Transform;
 use crate::scene::desc::{ColorDesc, ObjectDesc, ShapeDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::obj::{load_obj, ObjMaterial};
+use crate::scene::ply::{is_ply, load_model};
 use crate::texture::{Filter, ImageTexture, Texture, TextureKind, Wrap};
 use crate::world::{flatten_instances, WorldError, DEFAULT_MATERIAL};
 
@@ -201,7 +203,7 @@ impl Builder<'_> {
         Ok(Some(id))
     }
 
-    /// The mesh of the OBJ `file` (read once per scene) and, when `with_mtl`, the world
+    /// The mesh of the OBJ or PLY `file` (read once per scene) and, when `with_mtl`, the world
     /// materials of its MTL materials followed by the default (made once per file).
     fn obj(
         &mut self,
@@ -215,14 +217,18 @@ impl Builder<'_> {
             Some(loaded) => loaded,
             None => {
                 self.check_obj_size(path, &obj_path)?;
-                let model =
-                    load_obj(self.file.files(), &obj_path, self.pool.as_ref()).map_err(|e| {
-                        self.err(
-                            ErrorKind::Asset(AssetKind::Mesh),
-                            path,
-                            format!("cannot load mesh \"{}\": {e}", obj_path.display()),
-                        )
-                    })?;
+                // A `.ply` file by its extension; any other is read as OBJ.
+                let model = match is_ply(&obj_path) {
+                    true => load_model(self.file.files(), &obj_path),
+                    false => load_obj(self.file.files(), &obj_path, self.pool.as_ref()),
+                }
+                .map_err(|e| {
+                    self.err(
+                        ErrorKind::Asset(AssetKind::Mesh),
+                        path,
+                        format!("cannot load mesh \"{}\": {e}", obj_path.display()),
+                    )
+                })?;
                 self.read.insert(obj_path.clone());
                 self.read.extend(model.mtl_files);
                 let loaded = LoadedObj {

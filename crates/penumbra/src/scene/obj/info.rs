@@ -10,7 +10,7 @@ use crate::math::Aabb;
 use super::{load_obj, mtl, parse_obj, Library, ObjModel};
 use crate::files::Files;
 
-/// A summary of an OBJ file, in its own (object) space.
+/// A summary of an OBJ (or PLY) file, in its own (object) space.
 #[derive(Clone, Debug)]
 pub struct ObjInfo {
     /// Triangles after fan triangulation of its faces.
@@ -52,7 +52,8 @@ pub fn inspect_mtl(bytes: &[u8], path: &Path) -> Result<Vec<(String, Option<Path
         .collect())
 }
 
-fn summarize(model: &ObjModel) -> ObjInfo {
+/// The summary of a mesh file's model (also a PLY file's, without materials).
+pub(in crate::scene) fn summarize(model: &ObjModel) -> ObjInfo {
     let mesh = &model.mesh;
     let bounds = mesh
         .indices

@@ -44,6 +44,7 @@ use crate::files::Files;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
+pub(super) use info::summarize;
 pub use info::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 use lines::decode;
 use mtl::Library;

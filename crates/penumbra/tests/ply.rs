@@ -1,0 +1,162 @@
+//! PLY meshes through the public API: `type = "mesh"` and `type = "instances"` scene objects
+//! naming `.ply` files written into a temporary folder, their errors at the object's `file`
+//! key, and the real files of the shared assets when they are present.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+use penumbra::{inspect_ply, AssetKind, ErrorKind, Scene, SceneError, SceneFile, SceneFormat};
+use support::TempDir;
+
+const HEAD: &str = "[film]\nwidth = 4\nheight = 4\n[camera]\nposition = [0, 0, 5]\n\
+                    look_at = [0, 0, 0]\nfov = 40\n";
+
+fn build(dir: &TempDir, objects: &str) -> Result<Scene, SceneError> {
+    let text = format!("{HEAD}{objects}");
+    SceneFile::from_str(&text, SceneFormat::Toml, "x.toml", dir.path())?.build(1)
+}
+
+/// A unit square in z = 0 as one quad, binary little-endian, with normals and `s`/`t` uvs.
+fn square_ply() -> Vec<u8> {
+    let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 4\n\
+        property float x\nproperty float y\nproperty float z\nproperty float nx\n\
+        property float ny\nproperty float nz\nproperty uchar red\nproperty float s\n\
+        property float t\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+        .to_vec();
+    for [x, y] in [[0.0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]] {
+        for v in [x, y, 0.0, 0.0, 0.0, 1.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        bytes.push(255);
+        for v in [x, y] {
+            bytes.extend(v.to_le_bytes());
+        }
+    }
+    bytes.push(4);
+    for i in 0u32..4 {
+        bytes.extend(i.to_le_bytes());
+    }
+    bytes
+}
+
+#[test]
+fn a_ply_mesh_loads_as_an_obj_does_whatever_the_case_of_its_extension() {
+    let dir = TempDir::new("ply_mesh");
+    dir.write("square.PLY", square_ply());
+    let scene = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"square.PLY\"\n",
+    )
+    .unwrap();
+    let g = scene.world.geometry();
+    assert_eq!(g.triangles.len(), 2);
+    assert_eq!(
+        g.corners(1),
+        [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
+    );
+    let uvs = g.triangles[1].vertices.map(|v| g.uvs[v as usize]);
+    assert_eq!(uvs, [Vec2::ZERO, Vec2::ONE, Vec2::Y]);
+    assert!(g.triangles[1].smooth);
+}
+
+#[test]
+fn ply_files_are_read_once_and_instanced_by_the_copy_or_instance_rule() {
+    let dir = TempDir::new("ply_instances");
+    dir.write("square.ply", square_ply());
+    let copies = |n: usize| {
+        let list: Vec<String> = (0..n)
+            .map(|i| format!("{{ translate = [{}, 0, 0] }}", i as f32 * 0.01))
+            .collect();
+        format!(
+            "[[objects]]\ntype = \"instances\"\nfile = \"square.ply\"\ntransforms = [{}]\n\
+             [[objects]]\ntype = \"mesh\"\nfile = \"./square.ply\"\n",
+            list.join(", ")
+        )
+    };
+    let s = build(&dir, &copies(3)).unwrap().world.stats();
+    assert_eq!((s.triangles, s.unique_triangles, s.instances), (8, 8, 0));
+    // 2^20 / 2 copies and more: built once, shared by both objects (one file, two spellings).
+    let n = (1 << 20) / 2 + 1;
+    let s = build(&dir, &copies(n)).unwrap().world.stats();
+    assert_eq!(s.triangles, 2 * (n + 1));
+    assert_eq!((s.unique_triangles, s.meshes, s.instances), (2, 1, n + 1));
+}
+
+#[test]
+fn a_bad_ply_file_is_a_mesh_error_at_the_file_key() {
+    let dir = TempDir::new("ply_bad");
+    let mut truncated = square_ply();
+    truncated.truncate(truncated.len() - 3);
+    let cases: [(&[u8], &str); 3] = [
+        (&truncated, "ends early"),
+        (b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "no triangles"),
+        (b"solid stl\n", "not a PLY file"),
+    ];
+    for (bytes, words) in cases {
+        dir.write("bad.ply", bytes);
+        let e = build(&dir, "[[objects]]\ntype = \"mesh\"\nfile = \"bad.ply\"\n").unwrap_err();
+        let SceneError::Invalid {
+            kind,
+            location,
+            message,
+        } = &e
+        else {
+            panic!("{e}");
+        };
+        assert_eq!(*kind, ErrorKind::Asset(AssetKind::Mesh), "{e}");
+        assert_eq!(location.key.as_deref(), Some("objects[0].file"), "{e}");
+        assert!(
+            message.contains("bad.ply") && message.contains(words),
+            "{e}"
+        );
+    }
+    let e = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"missing.ply\"\n",
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Asset(AssetKind::Mesh), "{e}");
+}
+
+/// A file of the shared assets (`../shared/assets/ply/` beside the repository), or `None`
+/// with a message when this machine lacks it.
+fn shared(name: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/assets/ply")
+        .join(name);
+    if !path.is_file() {
+        eprintln!("skipped: {} is absent", path.display());
+        return None;
+    }
+    Some(path)
+}
+
+#[test]
+fn the_shared_ply_files_have_their_triangles_and_bounds() {
+    if let Some(path) = shared("bunny_zipper.ply") {
+        let info = inspect_ply(&path).unwrap();
+        assert_eq!((info.triangles, info.vertices), (16_301, 8_171));
+        assert!(!info.normals && !info.uvs);
+        let (min, max) = (info.bounds.min, info.bounds.max);
+        assert!(
+            min.abs_diff_eq(Vec3::new(-0.0945716, 0.0333891, -0.0618736), 1e-7),
+            "{min}"
+        );
+        assert!(
+            max.abs_diff_eq(Vec3::new(0.0609346, 0.186643, 0.0586895), 1e-7),
+            "{max}"
+        );
+    }
+    if let Some(path) = shared("cube_blender_uv.ply") {
+        let info = inspect_ply(&path).unwrap();
+        assert_eq!((info.triangles, info.vertices), (12, 24));
+        assert!(info.normals && info.uvs);
+        assert_eq!(
+            (info.bounds.min, info.bounds.max),
+            (Vec3::splat(-0.5), Vec3::splat(0.5))
+        );
+        assert!(info.closed);
+    }
+}
