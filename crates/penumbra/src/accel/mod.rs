@@ -184,7 +184,9 @@ const BINS: usize = 16;
 const MAX_LEAF: usize = 8;
 /// Subtrees with at least this many triangles are built on separate threads.
 const PARALLEL_MIN: usize = 32 * 1024;
-/// Entries of the fixed traversal stacks.
+/// Entries of the fixed stacks of every walk of the binary tree (single rays, packets, closest
+/// points), and the depth from which the wide walks' stack is sized: the one bound of both
+/// engines.
 const STACK_SIZE: usize = 64;
 /// Deepest leaf: the any-hit traversal holds at most `depth + 1` entries on its stack.
 const MAX_DEPTH: usize = STACK_SIZE - 2;

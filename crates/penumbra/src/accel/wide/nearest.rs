@@ -8,8 +8,8 @@
 
 use glam::{DVec3, Vec3};
 
-use super::tree::{WideBvh, STACK_SIZE};
-use crate::accel::BvhNode;
+use super::tree::WideBvh;
+use crate::accel::{BvhNode, STACK_SIZE};
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.

@@ -22,7 +22,7 @@ use super::group::{TriangleGroup, GROUP};
 use super::node::{collapse, WideNode, WIDTH};
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
-use crate::accel::Bvh;
+use crate::accel::{Bvh, STACK_SIZE};
 use crate::geometry::Geometry;
 use crate::simd::{prefetch, Isa};
 
@@ -40,11 +40,9 @@ pub(crate) fn tie_bound(t_max: f32) -> f32 {
     t_max * TIE_SCALE
 }
 
-/// Entries of the binary traversal's stack: the build's depth limit keeps it below this.
-pub(crate) const STACK_SIZE: usize = 64;
-
 /// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
-/// [`WIDTH`] children, once per level of the binary build's depth limit at most.
+/// [`WIDTH`] children, once per level of the binary tree at most (its depth limit keeps it
+/// within the binary walks' [`STACK_SIZE`]).
 const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
@@ -244,52 +242,90 @@ impl WideBvh {
         &self,
         ray: &PreparedRay,
         t_min: f32,
-        mut t_max: f32,
+        t_max: f32,
         stack: &mut Stack,
     ) -> Option<(&TriangleGroup, usize, Crossing)> {
         let mut best: Option<(&TriangleGroup, usize, Crossing)> = None;
+        let mut t_max = t_max;
+        // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
+        let bound = |t: f32| if ANY { t } else { tie_bound(t) };
+        let rule = (EdgeRule::Inclusive, &[][..]);
+        self.walk::<I>(
+            ray,
+            t_min,
+            &mut t_max,
+            bound,
+            !ANY,
+            rule,
+            stack,
+            |group, lane, c, t_max| {
+                if ANY {
+                    best = Some((group, lane, c));
+                    return false;
+                }
+                // Lanes of one group are tested against the same `t_max`: a later lane may be
+                // farther than an earlier one's hit. Ids are read only for a tie.
+                let closer = match best {
+                    None => true,
+                    Some((g, l, _)) => {
+                        let (i, b) = (group.first as usize + lane, g.first as usize + l);
+                        c.t < *t_max || (c.t == *t_max && self.key(i) < self.key(b))
+                    }
+                };
+                if closer {
+                    *t_max = c.t;
+                    best = Some((group, lane, c));
+                }
+                true
+            },
+        );
+        best
+    }
+
+    /// The one walk of the wide tree every single-ray query is made of: visits the leaves the
+    /// ray enters with `t` in `[t_min, bound(t_max)]` (`sorted`: nearest child first), tests
+    /// their groups under `rule` (with the border of [`WideBvh::border`] for
+    /// [`EdgeRule::Owned`]) for `t` in `[t_min, t_max]`, and calls `hit(group, lane,
+    /// crossing, t_max)` for each hit, which may lower `t_max` and returns false to stop.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn walk<'a, I: Isa>(
+        &'a self,
+        ray: &PreparedRay,
+        t_min: f32,
+        t_max: &mut f32,
+        bound: impl Fn(f32) -> f32,
+        sorted: bool,
+        (rule, border): (EdgeRule, &[Boundary]),
+        stack: &mut Stack,
+        mut hit: impl FnMut(&'a TriangleGroup, usize, Crossing, &mut f32) -> bool,
+    ) {
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
         while let Some((first, count, near)) = stack.pop() {
-            // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
-            let bound = if ANY { t_max } else { tie_bound(t_max) };
-            if near > bound {
+            let limit = bound(*t_max);
+            if near > limit {
                 continue;
             }
             if count == 0 {
                 let node = &self.wide[first as usize];
-                let (mask, near) = node.enter::<I>(&o, &inv, t_min, bound, EXIT_SCALE);
-                stack.push_children(self, node, mask, &near, !ANY);
+                let (mask, near) = node.enter::<I>(&o, &inv, t_min, limit, EXIT_SCALE);
+                stack.push_children(self, node, mask, &near, sorted);
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {
-                let rule = EdgeRule::Inclusive;
-                let hits = ray.hit_group::<I>(group, valid, &self.tris, &[], t_min, t_max, rule);
+                let tris = &self.tris;
+                let hits = ray.hit_group::<I>(group, valid, tris, border, t_min, *t_max, rule);
                 let mut mask = hits.mask;
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    let (i, c) = (group.first as usize + lane, hits.crossing(lane));
-                    if ANY {
-                        return Some((group, lane, c));
-                    }
-                    // Lanes of one group are tested against the same `t_max`: a later lane
-                    // may be farther than an earlier one's hit. Ids are read only for a tie.
-                    let closer = match best {
-                        None => true,
-                        Some((g, l, _)) => {
-                            let b = g.first as usize + l;
-                            c.t < t_max || (c.t == t_max && self.key(i) < self.key(b))
-                        }
-                    };
-                    if closer {
-                        t_max = c.t;
-                        best = Some((group, lane, c));
+                    if !hit(group, lane, hits.crossing(lane), t_max) {
+                        return;
                     }
                 }
             }
         }
-        best
     }
 
     /// Starts loading the child `(index, count)` of a wide node (a wide node when `count` is
@@ -346,52 +382,21 @@ impl WideBvh {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        self.visit::<I>(
+        let rule = (EdgeRule::Owned, border);
+        let mut t_max = f32::INFINITY;
+        self.walk::<I>(
             ray,
-            (t_min, f32::INFINITY),
-            (EdgeRule::Owned, border),
+            t_min,
+            &mut t_max,
+            |t| t,
+            false,
+            rule,
             stack,
-            &mut |h| {
-                f(h);
+            |g, lane, c, _| {
+                f(self.slot_hit(g.first as usize + lane, c));
                 true
             },
         );
-    }
-
-    /// Visits the hits with `t` in `[t_min, t_max]` under `rule` (with the border of
-    /// [`WideBvh::border`] for [`EdgeRule::Owned`]) until `f` returns false.
-    #[inline(always)]
-    fn visit<I: Isa>(
-        &self,
-        ray: &PreparedRay,
-        (t_min, t_max): (f32, f32),
-        (rule, border): (EdgeRule, &[Boundary]),
-        stack: &mut Stack,
-        f: &mut impl FnMut(SlotHit) -> bool,
-    ) {
-        let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
-        stack.start(&self.wide);
-        while let Some((first, count, _)) = stack.pop() {
-            if count == 0 {
-                let node = &self.wide[first as usize];
-                let (mask, near) = node.enter::<I>(&o, &inv, t_min, t_max, EXIT_SCALE);
-                stack.push_children(self, node, mask, &near, false);
-                continue;
-            }
-            for (group, valid) in self.leaf(first, count) {
-                let tris = &self.tris;
-                let hits = ray.hit_group::<I>(group, valid, tris, border, t_min, t_max, rule);
-                let mut mask = hits.mask;
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let hit = self.slot_hit(group.first as usize + lane, hits.crossing(lane));
-                    if !f(hit) {
-                        return;
-                    }
-                }
-            }
-        }
     }
 }
 
