@@ -19,8 +19,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use penumbra::{
-    decode_texture_image, inspect_mtl, inspect_obj_bytes, render, Aabb, Light, Override,
-    RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, ScenePack, World,
+    decode_texture_image, inspect_mtl, inspect_obj_bytes, inspect_ply_bytes, render, Aabb, Light,
+    Override, RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, ScenePack, World,
 };
 
 /// A fuzz target: its name (the folder of its corpus) and its body.
@@ -32,7 +32,7 @@ pub struct Target {
 }
 
 /// Every target.
-pub const TARGETS: [Target; 7] = [
+pub const TARGETS: [Target; 8] = [
     Target {
         name: "scene_toml",
         run: scene_toml,
@@ -52,6 +52,10 @@ pub const TARGETS: [Target; 7] = [
     Target {
         name: "mtl",
         run: mtl,
+    },
+    Target {
+        name: "ply",
+        run: ply,
     },
     Target {
         name: "texture",
@@ -259,6 +263,17 @@ pub fn obj(data: &[u8]) {
     };
     // A mesh without faces is an error, so the bounds hold at least one vertex.
     assert!(info.triangles > 0, "an OBJ without faces was accepted");
+    check_bounds(&info.bounds, false);
+}
+
+/// A PLY file, ASCII or binary.
+pub fn ply(data: &[u8]) {
+    let Ok(info) = inspect_ply_bytes(data) else {
+        return;
+    };
+    // A mesh without triangles is an error, so the bounds hold at least one vertex.
+    assert!(info.triangles > 0, "a PLY without triangles was accepted");
+    assert!(info.vertices > 0);
     check_bounds(&info.bounds, false);
 }
 
