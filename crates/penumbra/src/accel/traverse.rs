@@ -24,22 +24,38 @@ pub(super) fn walk_closest(
     inv_dir: Vec3A,
     t_min: f32,
     t: &mut f32,
-    mut leaf: impl FnMut(Range<usize>, &mut f32),
+    leaf: impl FnMut(Range<usize>, &mut f32),
+) {
+    let enter = |node: &BvhNode, t: f32| slab(node, origin, inv_dir, t_min, t);
+    walk_nearest(nodes, t, enter, leaf);
+}
+
+/// The nearest-first walk over `nodes` (root at 0, not empty) that every closest query of
+/// the binary tree is made of (a ray's closest hit, a point's closest point): `enter(node,
+/// bound)` is the node's distance when it may still hold something within `bound`, else
+/// `None`; the walk visits the leaves entered, the nearer child first, and skips each waiting
+/// subtree no longer entered under the bound, which `leaf(slots, bound)` may lower.
+#[inline(always)]
+pub(super) fn walk_nearest<K: Copy + PartialOrd>(
+    nodes: &[BvhNode],
+    bound: &mut K,
+    enter: impl Fn(&BvhNode, K) -> Option<K>,
+    mut leaf: impl FnMut(Range<usize>, &mut K),
 ) {
     let mut stack = [0u32; STACK_SIZE];
     let mut sp = 0;
     let mut node = &nodes[0];
-    if slab(node, origin, inv_dir, t_min, *t).is_none() {
+    if enter(node, *bound).is_none() {
         return;
     }
     loop {
         if node.is_leaf() {
             let first = node.first as usize;
-            leaf(first..first + node.count as usize, t);
+            leaf(first..first + node.count as usize, bound);
         } else {
             let (l, r) = (node.first as usize, node.first as usize + 1);
-            let dl = slab(&nodes[l], origin, inv_dir, t_min, *t);
-            let dr = slab(&nodes[r], origin, inv_dir, t_min, *t);
+            let dl = enter(&nodes[l], *bound);
+            let dr = enter(&nodes[r], *bound);
             match (dl, dr) {
                 (Some(a), Some(b)) => {
                     let (near, far) = if a <= b { (l, r) } else { (r, l) };
@@ -59,14 +75,14 @@ pub(super) fn walk_closest(
                 (None, None) => {}
             }
         }
-        // Pop the next subtree that can still hold a closer hit.
+        // Pop the next subtree that can still hold something nearer.
         loop {
             if sp == 0 {
                 return;
             }
             sp -= 1;
             let candidate = &nodes[stack[sp] as usize];
-            if slab(candidate, origin, inv_dir, t_min, *t).is_some() {
+            if enter(candidate, *bound).is_some() {
                 node = candidate;
                 break;
             }

@@ -1,6 +1,7 @@
 //! The closest point of a triangle to a point, by Voronoi regions (Ericson, "Real-Time
-//! Collision Detection", 2005, §5.1.5), and of the whole surface, by a walk of the binary tree
-//! that visits the nearer child first and skips boxes farther than the best point so far.
+//! Collision Detection", 2005, §5.1.5), and of the whole surface, by the binary tree's
+//! nearest-first walk (`accel::traverse::walk_nearest`): the nearer child first, boxes farther
+//! than the best point so far skipped.
 //!
 //! Both compute in `f64`: the region tests multiply four lengths (`d1·d4` is a product of
 //! dot products), which overflow `f32` from coordinates of about 1e9 on, where every point
@@ -9,7 +10,8 @@
 use glam::{DVec3, Vec3};
 
 use super::tree::WideBvh;
-use crate::accel::{BvhNode, STACK_SIZE};
+use crate::accel::traverse::walk_nearest;
+use crate::accel::BvhNode;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
@@ -19,7 +21,7 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
     (point.as_vec3(), b1 as f32, b2 as f32)
 }
 
-/// [`closest_on_triangle`] in `f64`.
+/// `closest_on_triangle` in `f64`.
 fn closest_f64(p: DVec3, tri: [DVec3; 3]) -> (DVec3, f64, f64) {
     let [a, b, c] = tri;
     let (ab, ac, ap) = (b - a, c - a, p - a);
@@ -88,51 +90,30 @@ impl WideBvh {
         }
         let mut best: Option<Nearest> = None;
         let mut best_d = f64::INFINITY;
-        let mut stack = [(0u32, 0.0f64); STACK_SIZE];
-        let mut sp = 1;
         let pa = p.as_dvec3();
-        while sp > 0 {
-            sp -= 1;
-            let (index, d_box) = stack[sp];
-            if d_box > best_d {
-                continue;
-            }
-            let node = &nodes[index as usize];
-            let first = node.first() as usize;
-            if node.count() > 0 {
-                for i in first..first + node.count() as usize {
-                    let corners = self.slot(i).corners().map(|c| Vec3::from(c).as_dvec3());
-                    let (q, b1, b2) = closest_f64(pa, corners);
-                    let d = (q - pa).length_squared();
-                    if d < best_d {
-                        best_d = d;
-                        best = Some(Nearest {
-                            point: q.as_vec3(),
-                            b1: b1 as f32,
-                            b2: b2 as f32,
-                            geometry: self.ids(i)[0],
-                            primitive: self.ids(i)[1],
-                            slot: i as u32,
-                        });
-                    }
+        // A box farther than the best point so far cannot hold a nearer one.
+        let enter = |node: &BvhNode, bound: f64| {
+            let d = box_distance_sq(node, pa);
+            (d <= bound).then_some(d)
+        };
+        walk_nearest(nodes, &mut best_d, enter, |slots, best_d| {
+            for i in slots {
+                let corners = self.slot(i).corners().map(|c| Vec3::from(c).as_dvec3());
+                let (q, b1, b2) = closest_f64(pa, corners);
+                let d = (q - pa).length_squared();
+                if d < *best_d {
+                    *best_d = d;
+                    best = Some(Nearest {
+                        point: q.as_vec3(),
+                        b1: b1 as f32,
+                        b2: b2 as f32,
+                        geometry: self.ids(i)[0],
+                        primitive: self.ids(i)[1],
+                        slot: i as u32,
+                    });
                 }
-            } else {
-                let (l, r) = (first, first + 1);
-                let (dl, dr) = (
-                    box_distance_sq(&nodes[l], pa),
-                    box_distance_sq(&nodes[r], pa),
-                );
-                // Push the farther child first so the nearer one is visited next.
-                let (near, far) = if dl <= dr {
-                    ((l, dl), (r, dr))
-                } else {
-                    ((r, dr), (l, dl))
-                };
-                stack[sp] = (far.0 as u32, far.1);
-                stack[sp + 1] = (near.0 as u32, near.1);
-                sp += 2;
             }
-        }
+        });
         best
     }
 }
