@@ -106,6 +106,14 @@ class Scene:
         return self._core.stats
 
     @property
+    def object_ids(self) -> List[range]:
+        """For each entry of the scene's ``objects``, in file order, the object ids it added
+        (the ``object_id`` AOV and the geometry ids of :meth:`raycasting_scene`): one each,
+        and one per copy for ``type = "instances"``, so ``object_ids[i][k]`` is copy ``k`` of
+        entry ``i``."""
+        return [range(start, end) for start, end in self._core.object_ids]
+
+    @property
     def files(self) -> List[str]:
         """The files the build read besides the scene file (meshes, MTL libraries, images),
         as the scene resolved their paths, sorted."""

@@ -25,6 +25,8 @@ pub struct CoreScene {
     /// The parsed file and the files its build read: what a pack of the scene holds.
     pub(crate) file: SceneFile,
     pub(crate) files: Vec<PathBuf>,
+    /// For each `objects` entry, the object ids it added.
+    objects: Vec<std::ops::Range<u32>>,
 }
 
 /// Parses and builds with the GIL released.
@@ -47,6 +49,7 @@ pub(crate) fn build(
         load_seconds: scene.load_time.as_secs_f64(),
         file,
         files: scene.files,
+        objects: scene.objects,
     })
 }
 
@@ -102,6 +105,12 @@ impl CoreScene {
     fn raycasting_scene(&self, py: Python<'_>) -> PyResult<CoreRaycastingScene> {
         py.detach(|| CoreRaycastingScene::from_world(&self.world))
             .map_err(|e| call_error("Scene.raycasting_scene", e))
+    }
+
+    /// For each `objects` entry, in file order, its first object id and how many it added.
+    #[getter]
+    fn object_ids(&self) -> Vec<(u32, u32)> {
+        self.objects.iter().map(|r| (r.start, r.end)).collect()
     }
 
     /// The files the build read besides the scene file (meshes, MTL libraries, images).
