@@ -21,7 +21,7 @@ pub enum Command {
     /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
     #[command(version)]
     Render(RenderArgs),
-    /// Validate a scene file (or a bare .obj mesh) and print a summary.
+    /// Validate a scene file (or a bare .obj or .ply mesh) and print a summary.
     #[command(version)]
     Check(CheckArgs),
     /// Print a shell completion script: source it, or save it where the shell looks.
@@ -36,7 +36,7 @@ pub enum Command {
 /// `penumbra check`.
 #[derive(clap::Args)]
 pub struct CheckArgs {
-    /// The scene file (.toml or .json; - reads standard input), or a Wavefront .obj mesh.
+    /// The scene file (.toml or .json; - reads standard input), or a Wavefront .obj or .ply mesh.
     pub scene: PathBuf,
     /// Override a scene key: KEY.PATH=VALUE (repeatable).
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]

@@ -56,7 +56,7 @@ pub enum ShapeDesc {
     Cube(CubeDesc),
     /// `type = "sphere"`: a tessellated sphere.
     Sphere(SphereDesc),
-    /// `type = "mesh"`: a Wavefront OBJ file.
+    /// `type = "mesh"`: a Wavefront OBJ or PLY file.
     Mesh(MeshDesc),
     /// `type = "instances"`: many copies of one OBJ file, built once.
     Instances(InstancesDesc),
@@ -105,7 +105,7 @@ pub struct SphereDesc {
 /// A mesh file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshDesc {
-    /// Wavefront OBJ file, relative to the scene file's folder.
+    /// Wavefront OBJ or PLY file (by extension), relative to the scene file's folder.
     pub file: String,
 }
 
@@ -113,7 +113,7 @@ pub struct MeshDesc {
 /// `scale`, `rotate` and `translate`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstancesDesc {
-    /// Wavefront OBJ file, relative to the scene file's folder.
+    /// Wavefront OBJ or PLY file (by extension), relative to the scene file's folder.
     pub file: String,
     /// Where the copies go.
     pub transforms: TransformsDesc,
@@ -182,7 +182,7 @@ pub enum ObjectType {
     Cube,
     /// A tessellated sphere.
     Sphere,
-    /// A Wavefront OBJ file.
+    /// A Wavefront OBJ or PLY file.
     Mesh,
     /// Copies of an OBJ file.
     Instances,
