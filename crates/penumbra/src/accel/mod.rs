@@ -33,8 +33,9 @@
 //! - `build`: binned-SAH construction, serial and parallel;
 //! - `split`: one node's split: binning (in parallel chunks for large nodes), the SAH sweep
 //!   and the partition;
-//! - `traverse`: single rays on the binary tree: the slab test, the closest-first and any-hit
-//!   walks (generic over what a leaf holds), and the closest-hit, any-hit and batch queries;
+//! - `traverse`: single rays on the binary tree: the slab test, the nearest-first walk (generic
+//!   over the distance: a ray's closest hit, a point's closest point) and the any-hit walk
+//!   (both generic over what a leaf holds), and the closest-hit, any-hit and batch queries;
 //! - `closest_fans`: closest-hit SIMD packets of rays sharing an origin (camera rays);
 //! - `shadow_fans`: any-hit SIMD packets of segments sharing an origin (a point and its light
 //!   samples), and the any-hit packet walk every packet kind uses;
@@ -54,7 +55,7 @@
 //!   surface's border, for counting);
 //! - `wide`: the ray-casting engine: `node` (the wide node and the collapse), `group` (a
 //!   leaf's triangles by eight and the watertight test on them), `tree` ([`wide::WideBvh`]
-//!   and its single-ray walks), `packets` (closest-hit packets of neighbouring rays),
+//!   and the one single-ray walk its closest-, any- and every-hit queries share), `packets` (closest-hit packets of neighbouring rays),
 //!   `kernels` (batches of single-ray queries per instruction set), `nearest` (the closest
 //!   point of the surface).
 

@@ -4,10 +4,10 @@
 //! - `node`: the wide node and its collapse from the binary tree;
 //! - `group`: a leaf's triangles, eight by coordinate, and the watertight test on all eight;
 //! - `tree`: [`WideBvh`] (the binary tree, the wide view, triangles and ids in leaf order) and
-//!   the single-ray walks: closest hit, any hit, every hit;
+//!   its one single-ray walk, which the closest-, any- and every-hit queries share;
 //! - `packets`: closest-hit packets of neighbouring rays (`cast_rays` on pinhole images);
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
-//! - `nearest`: the closest point of the surface, walking the binary tree.
+//! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk.
 
 mod group;
 pub(crate) mod kernels;
