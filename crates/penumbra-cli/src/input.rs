@@ -26,8 +26,8 @@ impl Reader {
     /// What it reads, as a message says it.
     fn accepts(self) -> &'static str {
         match self {
-            Reader::Render => "`penumbra render` reads a .toml or .json scene file (a .obj mesh goes into a scene as an object of type \"mesh\")",
-            Reader::Check => "`penumbra check` reads a .toml or .json scene file or a .obj mesh",
+            Reader::Render => "`penumbra render` reads a .toml or .json scene file (a .obj or .ply mesh goes into a scene as an object of type \"mesh\")",
+            Reader::Check => "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh",
         }
     }
 }

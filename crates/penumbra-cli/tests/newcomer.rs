@@ -68,14 +68,21 @@ fn a_format_that_disagrees_with_the_name_says_so_in_flag_values() {
 #[test]
 fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
     let dir = scene_dir("file-kinds");
-    dir.write("model.ply", "ply\nformat ascii 1.0\nend_header\n");
+    dir.write("model.glb", "glTF");
     dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    let check = "`penumbra check` reads a .toml or .json scene file or a .obj mesh";
+    dir.write(
+        "tri.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+         end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    );
+    let check = "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh";
     let render = "`penumbra render` reads a .toml or .json scene file";
     for (args, want) in [
-        (["check", "model.ply"], check),
-        (["render", "model.ply"], render),
+        (["check", "model.glb"], check),
+        (["render", "model.glb"], render),
         (["render", "tri.obj"], render),
+        (["render", "tri.ply"], render),
     ] {
         let line = error_line(&run_in(dir.path(), args), 2);
         assert!(line.starts_with(&format!("error: {}: ", args[1])), "{line}");
@@ -84,8 +91,9 @@ fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
     // What render says about a mesh leads to its place in a scene.
     let line = error_line(&run_in(dir.path(), ["render", "tri.obj"]), 2);
     assert!(line.contains("type \"mesh\""), "{line}");
-    // And check does read the mesh.
+    // And check does read the meshes.
     ok(run_in(dir.path(), ["check", "tri.obj"]));
+    ok(run_in(dir.path(), ["check", "tri.ply"]));
 }
 
 #[test]
