@@ -12,7 +12,7 @@ use crate::summary::{bounds_json, bounds_text};
 
 /// True for a path naming a mesh file: OBJ or PLY, by its extension in any case.
 pub fn is_mesh(path: &Path) -> bool {
-    has_extension(path, "obj") || has_extension(path, "ply")
+    penumbra::ModelFormat::from_path(path).is_some()
 }
 
 fn has_extension(path: &Path, extension: &str) -> bool {

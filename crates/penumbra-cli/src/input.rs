@@ -3,7 +3,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use penumbra::{Override, SceneFile, SceneFormat, MAX_SCENE_BYTES};
+use penumbra::{ModelFormat, Override, SceneFile, SceneFormat, MAX_SCENE_BYTES};
 
 use crate::failure::{invalid, Failure};
 
@@ -26,17 +26,17 @@ impl Reader {
     /// What it reads, as a message says it.
     fn accepts(self) -> &'static str {
         match self {
-            Reader::Render => "`penumbra render` reads a .toml or .json scene file (a .obj or .ply mesh goes into a scene as an object of type \"mesh\")",
+            Reader::Render => "`penumbra render` reads a .toml or .json scene file or a .obj or .ply mesh (rendered with a default camera and lights)",
             Reader::Check => "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh",
         }
     }
 }
 
 /// Reads and parses the scene at `path` (`-`: standard input) with `set` applied, for
-/// `reader`.
+/// `reader`. A bare `.obj` or `.ply` mesh is the scene [`SceneFile::for_model`] makes of it.
 pub fn load(path: &Path, set: &[Override], reader: Reader) -> Result<SceneFile, Failure> {
     if !is_stdin(path) {
-        if SceneFormat::from_path(path).is_none() {
+        if SceneFormat::from_path(path).is_none() && ModelFormat::from_path(path).is_none() {
             return Err(invalid(format!(
                 "{}: unknown file type: {}",
                 path.display(),

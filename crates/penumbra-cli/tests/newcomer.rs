@@ -77,23 +77,32 @@ fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
          end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
     );
     let check = "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh";
-    let render = "`penumbra render` reads a .toml or .json scene file";
+    let render = "`penumbra render` reads a .toml or .json scene file or a .obj or .ply mesh";
     for (args, want) in [
         (["check", "model.glb"], check),
         (["render", "model.glb"], render),
-        (["render", "tri.obj"], render),
-        (["render", "tri.ply"], render),
     ] {
         let line = error_line(&run_in(dir.path(), args), 2);
         assert!(line.starts_with(&format!("error: {}: ", args[1])), "{line}");
         assert!(line.contains(want), "{args:?}: {line}");
     }
-    // What render says about a mesh leads to its place in a scene.
-    let line = error_line(&run_in(dir.path(), ["render", "tri.obj"]), 2);
-    assert!(line.contains("type \"mesh\""), "{line}");
-    // And check does read the meshes.
-    ok(run_in(dir.path(), ["check", "tri.obj"]));
-    ok(run_in(dir.path(), ["check", "tri.ply"]));
+    // Both subcommands read the meshes: render as a scene of their own.
+    for mesh in ["tri.obj", "tri.ply"] {
+        ok(run_in(
+            dir.path(),
+            [
+                "render",
+                mesh,
+                "--set",
+                "film.width=8",
+                "--set",
+                "film.height=6",
+                "-q",
+            ],
+        ));
+        ok(run_in(dir.path(), ["check", mesh]));
+    }
+    assert_eq!(image(&dir.join("tri.png")).dimensions(), (8, 6));
 }
 
 #[test]

@@ -144,9 +144,9 @@ pub enum SceneError {
         /// The cause.
         source: std::io::Error,
     },
-    /// The file name does not say TOML or JSON.
+    /// The file name does not say TOML or JSON (or a mesh format).
     #[error(
-        "{}: unknown scene format (the file name must end in .toml or .json)",
+        "{}: unknown scene format (the file name must end in .toml or .json, or .obj or .ply for a bare mesh)",
         escape_controls(&path.display().to_string())
     )]
     UnknownFormat {

@@ -6,6 +6,7 @@ mod build;
 pub mod desc;
 mod error;
 mod locate;
+mod model;
 mod npy;
 mod obj;
 mod overrides;
@@ -23,6 +24,7 @@ use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use model::ModelFormat;
 pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 pub use overrides::{Override, OverrideError};
 pub use pack::{PackError, ScenePack};
@@ -93,7 +95,8 @@ pub struct Scene {
 }
 
 impl SceneFile {
-    /// Reads and parses a `.toml` or `.json` scene file.
+    /// Reads and parses a `.toml` or `.json` scene file, or makes the scene of a bare `.obj`
+    /// or `.ply` mesh file (see [`SceneFile::for_model`]).
     pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
         SceneFile::load_with(path, &[])
     }
@@ -106,6 +109,9 @@ impl SceneFile {
         overrides: &[Override],
     ) -> Result<SceneFile, SceneError> {
         let path = path.as_ref();
+        if ModelFormat::from_path(path).is_some() {
+            return SceneFile::for_model_with(path, overrides);
+        }
         let format = SceneFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
             path: path.to_owned(),
         })?;

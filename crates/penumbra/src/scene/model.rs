@@ -1,0 +1,258 @@
+//! A model is a scene: a bare mesh file (`.obj` or `.ply`) becomes the scene description a
+//! TOML file would give, with one `type = "mesh"` object naming it, a camera that frames its
+//! bounds and a default light rig. Overrides, packs and building then work on it unchanged.
+//!
+//! The defaults, from the mesh's bounds (centre c, bounding-sphere radius r = half the
+//! diagonal):
+//! - camera: fov 40°, up +y, looking at c from c + d·normalize(1, 0.8, 1.4) (front-right-above)
+//!   with d = r / sin(20°) ≈ 2.92·r, the distance at which the bounding sphere fits the
+//!   vertical field of view;
+//! - light: one area light, a horizontal square of side 2r/3 (a third of the diagonal) facing
+//!   down, centred at c + 3r·normalize(−1, 2, 1) (above front-left), 4×4 samples, intensity 1
+//!   (under the default Phong model a white diffuse surface facing it is lit to about 1), plus
+//!   `render.ambient` 0.1;
+//! - film 800×600, sampler `rgss` with 4 samples per pixel.
+//!
+//! ```
+//! use penumbra::SceneFile;
+//!
+//! let dir = std::env::temp_dir().join(format!("penumbra-model-doc-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//! let obj = dir.join("tri.obj");
+//! std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")?;
+//! let file = SceneFile::load(&obj)?;
+//! assert_eq!(file.desc.objects.len(), 1);
+//! assert_eq!(file.build(1)?.settings.width, 800);
+//! # std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use super::error::{AssetKind, ErrorKind, Location};
+use super::{inspect_obj, inspect_ply, Override, SceneError, SceneFile, SceneFormat};
+use crate::math::Aabb;
+
+/// Vertical field of view of the default camera, in degrees.
+const MODEL_FOV_DEG: f64 = 40.0;
+/// Direction from the bounds' centre to the default camera (normalized before use).
+const MODEL_CAMERA_DIR: [f64; 3] = [1.0, 0.8, 1.4];
+/// Direction from the bounds' centre to the default area light (normalized before use).
+const MODEL_LIGHT_DIR: [f64; 3] = [-1.0, 2.0, 1.0];
+
+/// The kinds of mesh file a model can be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelFormat {
+    /// Wavefront OBJ (with its MTL materials).
+    Obj,
+    /// PLY (no materials: the default one).
+    Ply,
+}
+
+impl ModelFormat {
+    /// The format a file name's extension (in any case) names, if it is a mesh file.
+    pub fn from_path(path: &Path) -> Option<ModelFormat> {
+        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "obj" => Some(ModelFormat::Obj),
+            "ply" => Some(ModelFormat::Ply),
+            _ => None,
+        }
+    }
+}
+
+impl SceneFile {
+    /// The scene of a bare mesh file (`.obj` or `.ply`): the mesh, a camera framing its
+    /// bounds and the default light rig (see the module `model`'s docs). The mesh is read
+    /// once here for its bounds, and again when the scene is built.
+    pub fn for_model(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
+        SceneFile::for_model_with(path, &[])
+    }
+
+    /// [`SceneFile::for_model`] with `overrides` applied in order (see [`Override`]), as
+    /// to the keys of a scene file.
+    pub fn for_model_with(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+    ) -> Result<SceneFile, SceneError> {
+        let path = path.as_ref();
+        let format = ModelFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
+            path: path.to_owned(),
+        })?;
+        std::fs::metadata(path).map_err(|source| SceneError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        let inspect = match format {
+            ModelFormat::Obj => inspect_obj,
+            ModelFormat::Ply => inspect_ply,
+        };
+        let info = inspect(path).map_err(|message| mesh_error(path, message))?;
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .ok_or_else(|| mesh_error(path, "the file name is not UTF-8 text".into()))?;
+        let text = model_scene_text(name, info.bounds);
+        let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
+        SceneFile::from_str_with(&text, SceneFormat::Toml, path, base_dir, overrides)
+    }
+}
+
+/// An error about the mesh file itself, naming it.
+fn mesh_error(path: &Path, message: String) -> SceneError {
+    SceneError::Invalid {
+        kind: ErrorKind::Asset(AssetKind::Mesh),
+        location: Box::new(Location {
+            file: PathBuf::from(path),
+            line: None,
+            column: None,
+            key: None,
+            set_by: None,
+        }),
+        message,
+    }
+}
+
+/// The default camera for `bounds`: (position, look_at), with fov [`MODEL_FOV_DEG`] and up +y.
+/// A box of no extent (one point) is framed as if its radius were 1.
+pub(crate) fn model_camera(bounds: Aabb) -> (DVec3, DVec3) {
+    let (centre, radius) = sphere(bounds);
+    let distance = radius / (MODEL_FOV_DEG.to_radians() / 2.0).sin();
+    let dir = DVec3::from(MODEL_CAMERA_DIR).normalize();
+    (centre + distance * dir, centre)
+}
+
+/// The default area light for `bounds`: (center, side). The square is horizontal (u along
+/// +x, v along +z, so it faces −y), of side 2r/3, at 3r from the centre toward
+/// [`MODEL_LIGHT_DIR`].
+pub(crate) fn model_light(bounds: Aabb) -> (DVec3, f64) {
+    let (centre, radius) = sphere(bounds);
+    let dir = DVec3::from(MODEL_LIGHT_DIR).normalize();
+    (centre + 3.0 * radius * dir, 2.0 * radius / 3.0)
+}
+
+/// Centre and radius of the bounding sphere of `bounds` (radius 1 when it has no extent).
+fn sphere(bounds: Aabb) -> (DVec3, f64) {
+    let (min, max) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
+    let radius = (max - min).length() / 2.0;
+    let radius = if radius > 0.0 && radius.is_finite() {
+        radius
+    } else {
+        1.0
+    };
+    ((min + max) / 2.0, radius)
+}
+
+/// The TOML text of the scene of the mesh file `file_name` (relative to the scene's folder)
+/// whose bounds are `bounds`.
+pub(crate) fn model_scene_text(file_name: &str, bounds: Aabb) -> String {
+    let (position, look_at) = model_camera(bounds);
+    let (light, side) = model_light(bounds);
+    let file = toml::Value::String(file_name.to_owned());
+    format!(
+        "# The scene of a bare mesh file: a camera framing its bounds and the default light rig.\n\
+         [film]\nwidth = 800\nheight = 600\n\n\
+         [camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov = {MODEL_FOV_DEG:?}\n\n\
+         [render]\nsampler = \"rgss\"\nsamples = 4\nambient = 0.1\n\n\
+         [[lights]]\ntype = \"area\"\ncenter = {}\nu = [{side:?}, 0.0, 0.0]\n\
+         v = [0.0, 0.0, {side:?}]\nsamples = 4\nintensity = 1.0\n\n\
+         [[objects]]\ntype = \"mesh\"\nfile = {file}\n",
+        vector(position),
+        vector(look_at),
+        vector(light),
+    )
+}
+
+/// A TOML array of three floats (`{:?}` writes a float TOML reads back exactly: `1.0`,
+/// `1e20`).
+fn vector(v: DVec3) -> String {
+    format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn unit_box() -> Aabb {
+        Aabb::EMPTY
+            .grow(Vec3::new(-1.0, -1.0, -1.0))
+            .grow(Vec3::new(1.0, 1.0, 1.0))
+    }
+
+    #[test]
+    fn the_camera_sees_the_bounding_sphere_exactly_fill_the_vertical_fov() {
+        let (position, look_at) = model_camera(unit_box());
+        assert_eq!(look_at, DVec3::ZERO);
+        let r = 3f64.sqrt();
+        // The sphere's silhouette half-angle asin(r/d) is half the fov.
+        let half = (r / position.length()).asin().to_degrees();
+        assert!((half - 20.0).abs() < 1e-9, "{half}");
+        let dir = position.normalize();
+        assert!(
+            dir.x > 0.0 && dir.y > 0.0 && dir.z > 0.0,
+            "front-right-above: {dir}"
+        );
+    }
+
+    #[test]
+    fn the_light_is_above_front_left_and_a_third_of_the_diagonal() {
+        let (center, side) = model_light(unit_box());
+        assert!(
+            center.x < 0.0 && center.y > 0.0 && center.z > 0.0,
+            "{center}"
+        );
+        assert!((side - 2.0 * 3f64.sqrt() / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_point_is_framed_as_a_unit_sphere() {
+        let point = Aabb::EMPTY.grow(Vec3::new(2.0, 0.0, 0.0));
+        let (position, look_at) = model_camera(point);
+        assert_eq!(look_at, DVec3::new(2.0, 0.0, 0.0));
+        let d = (position - look_at).length();
+        assert!((d - 1.0 / 20f64.to_radians().sin()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_text_parses_with_the_file_name_quoted() {
+        let text = model_scene_text("a \"b\".obj", unit_box());
+        let file = SceneFile::from_str(&text, SceneFormat::Toml, "x.obj", ".").unwrap();
+        assert_eq!(file.desc.objects.len(), 1);
+        assert_eq!(file.desc.lights.len(), 1);
+        let value: toml::Value = toml::from_str(&text).unwrap();
+        assert_eq!(value["objects"][0]["file"].as_str(), Some("a \"b\".obj"));
+    }
+
+    #[test]
+    fn huge_bounds_give_floats_toml_reads() {
+        let huge = Aabb::EMPTY.grow(Vec3::splat(-1e30)).grow(Vec3::splat(1e30));
+        let text = model_scene_text("m.ply", huge);
+        SceneFile::from_str(&text, SceneFormat::Toml, "m.ply", ".").unwrap();
+    }
+
+    #[test]
+    fn other_extensions_are_not_models() {
+        assert_eq!(
+            ModelFormat::from_path(Path::new("a.OBJ")),
+            Some(ModelFormat::Obj)
+        );
+        assert_eq!(
+            ModelFormat::from_path(Path::new("a.ply")),
+            Some(ModelFormat::Ply)
+        );
+        assert_eq!(ModelFormat::from_path(Path::new("a.glb")), None);
+        assert!(matches!(
+            SceneFile::for_model("a.toml"),
+            Err(SceneError::UnknownFormat { .. })
+        ));
+    }
+
+    #[test]
+    fn a_missing_file_is_a_read_error_naming_it() {
+        let err = SceneFile::for_model("no/such/model.obj").unwrap_err();
+        assert!(matches!(err, SceneError::Read { .. }));
+        assert!(err.to_string().starts_with("no/such/model.obj: "), "{err}");
+    }
+}
