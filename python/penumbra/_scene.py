@@ -249,6 +249,11 @@ def load(path: PathLike, threads: int = 0) -> Scene:
     included), with ``threads`` workers for reading meshes and building the BVH (0: all
     cores). The GIL is released meanwhile.
 
+    A bare ``.obj`` or ``.ply`` mesh is a scene too, as ``penumbra render model.obj`` takes
+    it: the mesh (with its MTL materials, or the default one), a camera framing its bounds
+    and the default light rig, film 800×600 (see "A model as a scene" in the scene format
+    reference).
+
     Raises :class:`SceneError` (a ``ValueError``) for a mistake in the scene, located by its
     ``file``, ``line``, ``column`` and ``key``; ``OSError`` (``FileNotFoundError``, ...) when
     the file cannot be read.

@@ -53,7 +53,8 @@ pub(crate) fn build(
     })
 }
 
-/// Loads and builds the `.toml` or `.json` scene file at `path`.
+/// Loads and builds the `.toml` or `.json` scene file at `path`, or the scene of a bare
+/// `.obj` or `.ply` mesh (see `SceneFile::for_model`).
 #[pyfunction]
 #[pyo3(signature = (path, threads = 0))]
 pub fn load(py: Python<'_>, path: PathBuf, threads: usize) -> PyResult<CoreScene> {
