@@ -50,7 +50,8 @@ pub struct CheckArgs {
 #[derive(clap::Args)]
 pub struct RenderArgs {
     /// The scene file (.toml or .json). - reads it from standard input (TOML, or JSON when it
-    /// starts with `{`), with relative paths in it relative to the current folder.
+    /// starts with `{`), with relative paths in it relative to the current folder. A .obj or
+    /// .ply mesh is rendered as a scene of its own: a camera framing it and a default light rig.
     pub scene: PathBuf,
     /// Output image; the extension picks the format; - writes to standard output (needs
     /// --format). {camera}, {scene}, {spp} and {seed} are replaced; missing folders are made.
