@@ -145,7 +145,16 @@ impl SceneFile {
         base_dir: impl Into<PathBuf>,
         overrides: &[Override],
     ) -> Result<SceneFile, SceneError> {
-        let mut source = Source::new(name.into(), text.to_owned(), format);
+        let source = Source::new(name.into(), text.to_owned(), format);
+        SceneFile::from_source(source, base_dir, overrides)
+    }
+
+    /// The scene file of `source` with `overrides` applied in order.
+    fn from_source(
+        mut source: Source,
+        base_dir: impl Into<PathBuf>,
+        overrides: &[Override],
+    ) -> Result<SceneFile, SceneError> {
         Ok(SceneFile {
             desc: source.parse(overrides)?,
             base_dir: base_dir.into(),

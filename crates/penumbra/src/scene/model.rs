@@ -32,6 +32,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::error::{AssetKind, ErrorKind, Location};
+use super::parse::Source;
 use super::{inspect_obj, inspect_ply, Override, SceneError, SceneFile, SceneFormat};
 use crate::math::Aabb;
 
@@ -65,7 +66,9 @@ impl ModelFormat {
 impl SceneFile {
     /// The scene of a bare mesh file (`.obj` or `.ply`): the mesh, a camera framing its
     /// bounds and the default light rig (see the module `model`'s docs). The mesh is read
-    /// once here for its bounds, and again when the scene is built.
+    /// once here for its bounds, and again when the scene is built. Its
+    /// [`text`](SceneFile::text) is the TOML scene written for it; errors about that scene
+    /// name the key (and any override), never a line, since the user never saw the text.
     pub fn for_model(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
         SceneFile::for_model_with(path, &[])
     }
@@ -95,7 +98,8 @@ impl SceneFile {
             .ok_or_else(|| mesh_error(path, "the file name is not UTF-8 text".into()))?;
         let text = model_scene_text(name, info.bounds);
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
-        SceneFile::from_str_with(&text, SceneFormat::Toml, path, base_dir, overrides)
+        let source = Source::new(path.to_owned(), text, SceneFormat::Toml).generated();
+        SceneFile::from_source(source, base_dir, overrides)
     }
 }
 
@@ -247,6 +251,22 @@ mod tests {
             SceneFile::for_model("a.toml"),
             Err(SceneError::UnknownFormat { .. })
         ));
+    }
+
+    #[test]
+    fn errors_in_the_written_scene_name_the_key_not_a_line() {
+        let dir = std::env::temp_dir().join(format!("penumbra-model-key-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obj = dir.join("tri.obj");
+        std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let file = SceneFile::for_model(&obj).unwrap();
+        let path = super::super::KeyPath::root("camera").key("position");
+        let err = file.error(ErrorKind::BadValue, &path, "too far");
+        std::fs::remove_dir_all(&dir).unwrap();
+        let location = err.location().unwrap();
+        assert_eq!((location.line, location.column), (None, None));
+        assert_eq!(location.key.as_deref(), Some("camera.position"));
+        assert_eq!(location.file, obj);
     }
 
     #[test]

@@ -22,6 +22,9 @@ pub(super) struct Source {
     /// The overrides applied, each with the path it set: values at or under one of these
     /// paths are not in the text, and their errors name the override instead.
     set: Vec<(KeyPath, String)>,
+    /// True when penumbra wrote the text (the scene of a bare mesh file): errors then name
+    /// the key, never a line of text the user has not seen.
+    generated: bool,
 }
 
 impl Source {
@@ -31,6 +34,15 @@ impl Source {
             text,
             format,
             set: Vec::new(),
+            generated: false,
+        }
+    }
+
+    /// The same source, marked as text penumbra wrote (see `generated`).
+    pub(super) fn generated(self) -> Self {
+        Self {
+            generated: true,
+            ..self
         }
     }
 
@@ -190,7 +202,7 @@ impl Source {
                 return self.override_error(classify_kind(kind, message), path, set, message);
             }
         }
-        let (line, column) = match offset {
+        let (line, column) = match offset.filter(|_| !self.generated) {
             Some(o) => {
                 let (l, c) = error::line_col(&self.text, o);
                 (Some(l), Some(c))
