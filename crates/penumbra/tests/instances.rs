@@ -367,3 +367,26 @@ fn an_instanced_room_has_the_same_bits_for_any_thread_count_and_region() {
         }
     }
 }
+
+#[test]
+fn instances_of_an_empty_mesh_are_objects_that_nothing_hits() {
+    let mut b = WorldBuilder::new();
+    let empty = b.add_shared_mesh(Mesh::default()).unwrap();
+    let cube = b
+        .add_shared_mesh(penumbra::shapes::cube(Vec3::ONE))
+        .unwrap();
+    for k in 0..3 {
+        let t = Transform::from_srt(Vec3::ONE, Vec3::ZERO, Vec3::new(2.0 * k as f32, 0.0, 0.0));
+        b.add_instance(empty, &t, &[0]).unwrap();
+        b.add_instance(cube, &t, &[0]).unwrap();
+    }
+    let world = b.build(1);
+    assert_eq!(world.stats().objects, 6);
+    let hit = world.intersect(
+        &Ray::new(Vec3::new(2.0, 0.0, 5.0), -Vec3::Z),
+        0.0,
+        f32::INFINITY,
+    );
+    assert_eq!(hit.map(|h| world.surface(&h).object), Some(3));
+    assert!(world.bounds().max.x < 4.6, "{:?}", world.bounds());
+}
