@@ -185,6 +185,14 @@ impl Default for Transform {
     }
 }
 
+/// The matrix of the scene format's transform `T·Rz·Ry·Rx·S` (see [`Transform::from_srt`]).
+pub(crate) fn srt_matrix(scale: Vec3, rotate_deg: Vec3, translate: Vec3) -> Mat4 {
+    let r = Mat4::from_rotation_z(rotate_deg.z.to_radians())
+        * Mat4::from_rotation_y(rotate_deg.y.to_radians())
+        * Mat4::from_rotation_x(rotate_deg.x.to_radians());
+    Mat4::from_translation(translate) * r * Mat4::from_scale(scale)
+}
+
 impl Transform {
     /// The identity.
     pub const IDENTITY: Transform = Transform {
@@ -204,10 +212,7 @@ impl Transform {
     /// The scene format's transform `T·Rz·Ry·Rx·S`: scale, then rotate about x, y and z
     /// (degrees, right-hand rule), then translate.
     pub fn from_srt(scale: Vec3, rotate_deg: Vec3, translate: Vec3) -> Self {
-        let r = Mat4::from_rotation_z(rotate_deg.z.to_radians())
-            * Mat4::from_rotation_y(rotate_deg.y.to_radians())
-            * Mat4::from_rotation_x(rotate_deg.x.to_radians());
-        Self::from_matrix(Mat4::from_translation(translate) * r * Mat4::from_scale(scale))
+        Self::from_matrix(srt_matrix(scale, rotate_deg, translate))
     }
 
     /// `self` applied after `inner`.

@@ -315,6 +315,7 @@ impl WorldBuilder {
         World {
             geometry: self.geometry,
             meshes: self.meshes,
+            mesh_boxes: self.mesh_boxes,
             placed: self.placed,
             instance_materials: self.instance_materials,
             accel: Levels::new(flat, instances),

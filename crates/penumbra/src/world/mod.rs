@@ -137,6 +137,8 @@ pub struct WorldStats {
 pub struct World {
     geometry: Geometry,
     meshes: Vec<Mesh>,
+    /// Bounds of each shared mesh's vertices, in object space.
+    mesh_boxes: Vec<Aabb>,
     placed: Vec<Placed>,
     instance_materials: Vec<u32>,
     accel: Levels,
@@ -188,22 +190,20 @@ impl World {
     /// mesh box placed by the instance (which holds the placed mesh, loosely when rotated);
     /// empty for an empty world.
     pub fn bounds(&self) -> Aabb {
-        let mesh_bounds: Vec<Aabb> = self.meshes.iter().map(mesh_bounds).collect();
         self.placed
             .iter()
-            .map(|p| mesh_bounds[p.mesh as usize].transformed(&p.transform))
+            .map(|p| self.mesh_boxes[p.mesh as usize].transformed(&p.transform))
             .fold(self.geometry.bounds(), Aabb::union)
     }
 
     /// Each instance's object id, triangles (its mesh's) and bounds (its mesh's box placed,
     /// as [`World::bounds`] takes it), in the order they were added.
     pub fn instance_summary(&self) -> Vec<(u32, usize, Aabb)> {
-        let mesh_bounds: Vec<Aabb> = self.meshes.iter().map(mesh_bounds).collect();
         self.placed
             .iter()
             .map(|p| {
                 let mesh = p.mesh as usize;
-                let bounds = mesh_bounds[mesh].transformed(&p.transform);
+                let bounds = self.mesh_boxes[mesh].transformed(&p.transform);
                 (p.object, self.meshes[mesh].len(), bounds)
             })
             .collect()

@@ -90,7 +90,7 @@ impl Builder<'_> {
         let instances = matches!(o.shape, ShapeDesc::Instances(_));
         if !instances {
             placements.push(Placement {
-                transform: Transform::IDENTITY,
+                matrix: glam::Mat4::IDENTITY,
                 material: None,
             });
         }
@@ -105,7 +105,7 @@ impl Builder<'_> {
         // Each copy: its placement, then the object's transform; its material, or the
         // object's materials.
         for (i, p) in placements.iter().enumerate() {
-            let transform = world.then_after(p.transform);
+            let transform = Transform::from_matrix(world.world_from_object * p.matrix);
             self.check_invertible(&at(i), &transform, None)?;
             let own;
             let materials = match &p.material {

@@ -11,7 +11,7 @@ use glam::{Mat4, Vec3};
 
 use super::budget::BYTES_PER_INSTANCE;
 use super::{Builder, Result};
-use crate::math::Transform;
+use crate::math::srt_matrix;
 use crate::scene::desc::{ObjectDesc, PlacementDesc, ShapeDesc, TransformsDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::npy;
@@ -19,10 +19,10 @@ use crate::scene::npy;
 /// Bytes a `.npy` file may have: 2^24 instances of float64 matrices and a header.
 const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
 
-/// One copy: its transform within the object (before the object's own) and, when it names
-/// one, its material.
+/// One copy: its object-to-parent matrix (applied before the object's own transform) and,
+/// when it names one, its material.
 pub(super) struct Placement {
-    pub transform: Transform,
+    pub matrix: Mat4,
     pub material: Option<String>,
 }
 
@@ -70,7 +70,7 @@ impl Builder<'_> {
                 Ok(matrices
                     .iter()
                     .map(|&m| Placement {
-                        transform: Transform::from_matrix(m),
+                        matrix: m,
                         material: None,
                     })
                     .collect())
@@ -80,8 +80,8 @@ impl Builder<'_> {
 
     /// One inline placement, checked.
     fn placement(&self, at: &KeyPath, p: &PlacementDesc) -> Result<Placement> {
-        let transform = match p.matrix {
-            None => Transform::from_srt(
+        let matrix = match p.matrix {
+            None => srt_matrix(
                 p.scale.map_or(Vec3::ONE, |s| s.rgb()),
                 p.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
                 p.translate.map_or(Vec3::ZERO, |t| t.vec3()),
@@ -100,11 +100,11 @@ impl Builder<'_> {
                     ));
                 }
                 let by_rows: Vec<f32> = rows.iter().flatten().map(|v| v.f32()).collect();
-                Transform::from_matrix(Mat4::from_cols_slice(&by_rows).transpose())
+                Mat4::from_cols_slice(&by_rows).transpose()
             }
         };
         Ok(Placement {
-            transform,
+            matrix,
             material: p.material.clone(),
         })
     }
