@@ -1,8 +1,8 @@
 //! Two-level instancing against copies: random meshes placed by random instances (nested
 //! transforms composed, mirrored, scaled non-uniformly) must answer every query as the same
 //! scene with every instance copied into the world does: the same hit, `t` within 1e-5
-//! relative, the same ids, uvs and normals; the same occlusion for single rays, shared-origin
-//! packets, bundles of segments and shafts, on every SIMD path.
+//! relative, the same ids, uvs, vertex colours and normals; the same occlusion for single
+//! rays, shared-origin packets, bundles of segments and shafts, on every SIMD path.
 
 use glam::{Vec2, Vec3};
 use penumbra::{
@@ -10,13 +10,14 @@ use penumbra::{
 };
 use proptest::prelude::*;
 
-/// A small random mesh near the origin, with uvs and (sometimes) vertex normals.
+/// A small random mesh near the origin, with uvs and (sometimes) vertex normals and colours.
 fn arb_mesh() -> impl Strategy<Value = Mesh> {
     (
         prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 3..30),
         any::<bool>(),
+        any::<bool>(),
     )
-        .prop_map(|(points, smooth)| {
+        .prop_map(|(points, smooth, colored)| {
             let positions: Vec<Vec3> = points.into_iter().map(Vec3::from).collect();
             let n = positions.len() as u32;
             let indices = (0..n / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
@@ -29,11 +30,16 @@ fn arb_mesh() -> impl Strategy<Value = Mesh> {
             } else {
                 Vec::new()
             };
+            let colors = match colored {
+                true => positions.iter().map(|p| p.abs().min(Vec3::ONE)).collect(),
+                false => Vec::new(),
+            };
             Mesh {
                 material_slots: (0..n / 3).map(|t| t % 2).collect(),
                 positions,
                 normals,
                 uvs,
+                colors,
                 indices,
             }
         })
@@ -153,6 +159,12 @@ fn same_hit(a: (&World, Option<Hit>), b: (&World, Option<Hit>)) -> Result<(), Te
             let (sa, sb) = (wa.surface(&x), wb.surface(&y));
             prop_assert_eq!(sa.material, sb.material);
             prop_assert!((sa.uv - sb.uv).length() < 1e-4, "uv {} vs {}", sa.uv, sb.uv);
+            prop_assert!(
+                (sa.color - sb.color).length() < 1e-4,
+                "colour {} vs {}",
+                sa.color,
+                sb.color
+            );
             let close = |p: Vec3, q: Vec3| (p - q).length() < 1e-3;
             prop_assert!(close(sa.geometric_normal, sb.geometric_normal));
             prop_assert!(close(sa.shading_normal, sb.shading_normal));

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::math::{Aabb, Transform};
+use crate::math::{Aabb, Rgb, Transform};
 
 /// An indexed triangle mesh in its own (object) space, as a shape or an OBJ file makes it.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -14,6 +14,9 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Per-vertex texture coordinates; empty means (0, 0) everywhere.
     pub uvs: Vec<Vec2>,
+    /// Per-vertex colours, linear RGB (finite; 1 is white), which multiply the material's
+    /// diffuse and ambient colours; empty (or not one per vertex) means none, white.
+    pub colors: Vec<Rgb>,
     /// Vertex index triples, one per triangle.
     pub indices: Vec<[u32; 3]>,
     /// Per-triangle material slot, local to the mesh (an index into the object's material
@@ -40,6 +43,11 @@ impl Mesh {
     /// True when every vertex has texture coordinates (else they are (0, 0) everywhere).
     pub fn has_uvs(&self) -> bool {
         self.uvs.len() == self.positions.len()
+    }
+
+    /// True when every vertex has a colour (else the mesh is uncoloured: white).
+    pub fn has_colors(&self) -> bool {
+        !self.colors.is_empty() && self.colors.len() == self.positions.len()
     }
 
     /// The material slot of triangle `i`.
@@ -77,6 +85,9 @@ pub struct Geometry {
     pub normals: Vec<Vec3>,
     /// Texture coordinates, one per vertex.
     pub uvs: Vec<Vec2>,
+    /// Linear RGB colours, one per vertex (white where a mesh has none), or empty when no
+    /// mesh appended so far has colours: scenes without them pay no memory for them.
+    pub colors: Vec<Rgb>,
     /// The triangles.
     pub triangles: Vec<Triangle>,
 }
@@ -102,6 +113,7 @@ impl Geometry {
             self.uvs
                 .extend(std::iter::repeat_n(Vec2::ZERO, mesh.positions.len()));
         }
+        self.append_colors(mesh, base as usize);
         for (i, idx) in mesh.indices.iter().enumerate() {
             self.triangles.push(Triangle {
                 vertices: idx.map(|v| base + v),
@@ -112,11 +124,25 @@ impl Geometry {
         }
     }
 
+    /// Appends `mesh`'s vertex colours, whose first vertex is `base`: white for an uncoloured
+    /// mesh once some mesh has colours, and white for every earlier vertex when the first
+    /// coloured mesh arrives.
+    fn append_colors(&mut self, mesh: &Mesh, base: usize) {
+        if mesh.has_colors() {
+            self.colors.resize(base, Rgb::ONE);
+            self.colors.extend_from_slice(&mesh.colors);
+        } else if !self.colors.is_empty() {
+            self.colors
+                .extend(std::iter::repeat_n(Rgb::ONE, mesh.positions.len()));
+        }
+    }
+
     /// Drops every vertex from `vertices` on and every triangle from `triangles` on.
     pub(crate) fn truncate(&mut self, vertices: usize, triangles: usize) {
         self.positions.truncate(vertices);
         self.normals.truncate(vertices);
         self.uvs.truncate(vertices);
+        self.colors.truncate(vertices);
         self.triangles.truncate(triangles);
     }
 
@@ -142,5 +168,35 @@ impl Geometry {
         (0..self.len())
             .flat_map(|i| self.corners(i))
             .fold(Aabb::EMPTY, Aabb::grow)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle(colors: Vec<Rgb>) -> Mesh {
+        Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            colors,
+            indices: vec![[0, 1, 2]],
+            ..Mesh::default()
+        }
+    }
+
+    #[test]
+    fn colours_take_memory_only_once_a_mesh_has_them() {
+        let mut g = Geometry::default();
+        g.append(&triangle(Vec::new()), &Transform::IDENTITY, &[0], 0);
+        // Colours not one per vertex are no colours.
+        g.append(&triangle(vec![Rgb::X]), &Transform::IDENTITY, &[0], 1);
+        assert!(g.colors.is_empty());
+        let red = vec![Rgb::X; 3];
+        g.append(&triangle(red.clone()), &Transform::IDENTITY, &[0], 2);
+        g.append(&triangle(Vec::new()), &Transform::IDENTITY, &[0], 3);
+        let white = vec![Rgb::ONE; 6];
+        assert_eq!(g.colors, [white.clone(), red, white[..3].to_vec()].concat());
+        g.truncate(6, 2);
+        assert_eq!(g.colors, white);
     }
 }

@@ -19,7 +19,7 @@ pub fn triangle(vertices: [Vec3; 3], uvs: [Vec2; 3], normals: Option<[Vec3; 3]>)
         normals: normals.map(|n| n.to_vec()).unwrap_or_default(),
         uvs: uvs.to_vec(),
         indices: vec![[0, 1, 2]],
-        material_slots: Vec::new(),
+        ..Mesh::default()
     }
 }
 

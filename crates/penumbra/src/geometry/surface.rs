@@ -1,11 +1,12 @@
 //! What a ray hit, as shading and ray-casting queries need it: [`Surface::from_hit`] turns a
-//! geometric [`Hit`] into the point, normals, texture coordinates and ids of the triangle.
+//! geometric [`Hit`] into the point, normals, texture coordinates, vertex colour and ids of the
+//! triangle.
 
 use glam::{Vec2, Vec3};
 
 use super::mesh::material_of;
 use super::{Geometry, Hit, Mesh};
-use crate::math::{unit_cross, Transform};
+use crate::math::{unit_cross, Rgb, Transform};
 
 /// The surface at a ray hit, in world space. Normals are as the triangle defines them, not
 /// turned toward the ray: callers that shade face-forward them, callers that cast rays (like
@@ -26,6 +27,9 @@ pub struct Surface {
     pub shading_normal: Vec3,
     /// Interpolated texture coordinates.
     pub uv: Vec2,
+    /// The interpolated vertex colour (linear RGB), exactly 1 for a triangle without vertex
+    /// colours and exactly the corners' colour where all three agree.
+    pub color: Rgb,
     /// Index of the triangle in [`Geometry::triangles`].
     pub triangle: u32,
     /// The object the triangle belongs to.
@@ -68,8 +72,10 @@ impl Surface {
             .smooth
             .then(|| [i0, i1, i2].map(|i| geometry.normals[i]));
         let uv = [i0, i1, i2].map(|i| geometry.uvs[i]);
+        let colors =
+            (!geometry.colors.is_empty()).then(|| [i0, i1, i2].map(|i| geometry.colors[i]));
         let ids = (hit.triangle, tri.object, tri.material);
-        Surface::interpolate(p, n, uv, hit, ids)
+        Surface::interpolate(p, n, uv, colors, hit, ids)
     }
 
     /// The surface at `hit` of `mesh` placed in the world by `world` as object `object`, its
@@ -92,18 +98,21 @@ impl Surface {
             true => corners.map(|v| mesh.uvs[v]),
             false => [Vec2::ZERO; 3],
         };
+        let colors = mesh.has_colors().then(|| corners.map(|v| mesh.colors[v]));
         let material = material_of(mesh.slot(index), materials);
-        Surface::interpolate(p, n, uv, hit, (hit.triangle, object, material))
+        let ids = (hit.triangle, object, material);
+        Surface::interpolate(p, n, uv, colors, hit, ids)
     }
 
     /// The surface at `hit`'s barycentrics of the triangle with world-space corners `p`,
-    /// vertex normals `n` (a smooth triangle's) and texture coordinates `uv`; `ids` are its
-    /// triangle, object and material.
+    /// vertex normals `n` (a smooth triangle's), texture coordinates `uv` and vertex colours
+    /// `colors` (a coloured triangle's); `ids` are its triangle, object and material.
     #[inline(always)]
     fn interpolate(
         p: [Vec3; 3],
         n: Option<[Vec3; 3]>,
         uv: [Vec2; 3],
+        colors: Option<[Rgb; 3]>,
         hit: &Hit,
         ids: (u32, u32, u32),
     ) -> Surface {
@@ -125,6 +134,13 @@ impl Surface {
             geometric_normal,
             shading_normal,
             uv: b0 * uv[0] + hit.b1 * uv[1] + hit.b2 * uv[2],
+            color: match colors {
+                // One colour at all three corners is that colour, exactly (the barycentrics'
+                // sum may round off 1): uncoloured meshes in a coloured scene stay white.
+                Some([c0, c1, c2]) if c0 == c1 && c1 == c2 => c0,
+                Some([c0, c1, c2]) => b0 * c0 + hit.b1 * c1 + hit.b2 * c2,
+                None => Rgb::ONE,
+            },
             triangle,
             object,
             material,
@@ -143,7 +159,7 @@ mod tests {
             normals: vec![Vec3::Z, Vec3::Z, Vec3::X],
             uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
             indices: vec![[0, 1, 2]],
-            material_slots: Vec::new(),
+            ..Mesh::default()
         };
         let mut g = Geometry::default();
         g.append(&mesh, &Transform::IDENTITY, &[3], 7);
@@ -161,5 +177,60 @@ mod tests {
         // 0.5·z + 0.5·x, normalized: not flipped toward any ray.
         assert!((s.shading_normal - Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-6);
         assert_eq!((s.triangle, s.object, s.material), (0, 7, 3));
+        assert_eq!(s.color, Rgb::ONE);
+    }
+
+    fn hit(b1: f32, b2: f32) -> Hit {
+        Hit {
+            t: 1.0,
+            b1,
+            b2,
+            triangle: 0,
+            instance: None,
+        }
+    }
+
+    fn colored(colors: Vec<Rgb>) -> Mesh {
+        Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            colors,
+            indices: vec![[0, 1, 2]],
+            ..Mesh::default()
+        }
+    }
+
+    #[test]
+    fn interpolates_vertex_colours_and_keeps_a_uniform_one_exact() {
+        let mesh = colored(vec![Rgb::X, Rgb::Y, Rgb::Z]);
+        let mut g = Geometry::default();
+        g.append(&mesh, &Transform::IDENTITY, &[0], 0);
+        let s = Surface::from_hit(&g, &hit(0.25, 0.5));
+        assert!((s.color - Rgb::new(0.25, 0.25, 0.5)).length() < 1e-6);
+        // Barycentrics whose sum rounds off 1 still give a uniform colour exactly.
+        let grey = Rgb::splat(0.3);
+        let mut g = Geometry::default();
+        g.append(&colored(vec![grey; 3]), &Transform::IDENTITY, &[0], 0);
+        let (b1, b2) = (0.134_041_7_f32, 0.349_079_04_f32);
+        assert_ne!((1.0 - b1 - b2) * 0.3 + b1 * 0.3 + b2 * 0.3, 0.3f32);
+        assert_eq!(Surface::from_hit(&g, &hit(b1, b2)).color, grey);
+    }
+
+    #[test]
+    fn an_instance_is_its_copy_bit_for_bit() {
+        let mut mesh = colored(vec![Rgb::X, Rgb::new(0.2, 0.7, 0.1), Rgb::Z]);
+        mesh.normals = vec![Vec3::Z, Vec3::X, Vec3::Y];
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        let world = Transform::from_srt(
+            Vec3::new(2.0, -1.0, 0.5),
+            Vec3::new(10.0, 20.0, 30.0),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
+        let mut g = Geometry::default();
+        g.append(&mesh, &world, &[4, 5], 9);
+        for (b1, b2) in [(0.1, 0.7), (0.3, 0.3), (0.0, 1.0)] {
+            let copy = Surface::from_hit(&g, &hit(b1, b2));
+            let instance = Surface::from_instance(&mesh, &world, &hit(b1, b2), 9, &[4, 5]);
+            assert_eq!(copy, instance);
+        }
     }
 }

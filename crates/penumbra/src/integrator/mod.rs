@@ -181,6 +181,9 @@ impl<'w> Integrator<'w> {
             Some(t) => world.textures()[t as usize].eval(surface.uv),
             None => Vec3::ONE,
         };
+        // The texture times the vertex colour scales k_d and k_a. Without vertex colours the
+        // colour is exactly 1 and x·1 = x, so such scenes shade exactly as before.
+        let tex = tex * surface.color;
         let p = material.shininess;
         let lobe = Lobe {
             n,

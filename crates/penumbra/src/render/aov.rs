@@ -53,7 +53,8 @@ pub struct AovPixel {
     /// World-space unit shading normal of the center ray's hit, turned to the camera's side
     /// as shading turns it; zero on a miss.
     pub normal: Vec3,
-    /// The diffuse reflectance k_d times the texture, averaged over the pixel's samples.
+    /// The diffuse reflectance k_d times the texture and the vertex colour, averaged over the
+    /// pixel's samples.
     pub albedo: Rgb,
     /// Index of the object hit (the scene file's `objects` entry, in order), or [`NO_ID`].
     pub object_id: u32,
@@ -249,15 +250,15 @@ pub(crate) fn facing_normal(ray: &Ray, surface: &Surface) -> Vec3 {
     surface.facing(ray.direction).1
 }
 
-/// The diffuse reflectance at `surface`: the material's k_d times its texture, as shading
-/// uses it.
+/// The diffuse reflectance at `surface`: the material's k_d times its texture and the vertex
+/// colour, as shading uses it.
 pub(crate) fn albedo(world: &World, surface: &Surface) -> Rgb {
     let material = &world.materials()[surface.material as usize];
     let tex = match material.texture {
         Some(t) => world.textures()[t as usize].eval(surface.uv),
         None => Vec3::ONE,
     };
-    tex * material.diffuse
+    tex * surface.color * material.diffuse
 }
 
 #[cfg(test)]
@@ -368,6 +369,7 @@ mod tests {
             geometric_normal: Vec3::Z,
             shading_normal: -Vec3::Z,
             uv: glam::Vec2::ZERO,
+            color: Rgb::ONE,
             triangle: 0,
             object: 0,
             material: 0,
