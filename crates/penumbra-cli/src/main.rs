@@ -13,6 +13,7 @@ mod aov;
 mod args;
 mod cameras;
 mod check;
+mod check_gltf;
 mod check_obj;
 mod completions;
 mod failure;

@@ -146,7 +146,7 @@ pub enum SceneError {
     },
     /// The file name does not say TOML or JSON (or a mesh format).
     #[error(
-        "{}: unknown scene format (the file name must end in .toml or .json, or .obj or .ply for a bare mesh)",
+        "{}: unknown scene format (the file name must end in .toml or .json, or .obj, .ply, .gltf or .glb for a bare model)",
         escape_controls(&path.display().to_string())
     )]
     UnknownFormat {

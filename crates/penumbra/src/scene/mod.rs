@@ -5,6 +5,7 @@
 mod build;
 pub mod desc;
 mod error;
+mod gltf;
 mod locate;
 mod model;
 mod npy;
@@ -24,6 +25,7 @@ use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
+pub use gltf::{inspect_gltf, inspect_gltf_bytes, GltfInfo};
 pub use model::ModelFormat;
 pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
 pub use overrides::{Override, OverrideError};
@@ -90,13 +92,16 @@ pub struct Scene {
     /// build it again (see [`SceneFile::pack`]).
     pub files: Vec<PathBuf>,
     /// For each `[[objects]]` entry, in file order, the object ids it added: one, or one per
-    /// copy for `type = "instances"`.
+    /// copy for `type = "instances"` (and one per placed mesh of a glTF file).
     pub objects: Vec<std::ops::Range<u32>>,
+    /// What the build ignored in the files it read (glTF features penumbra does not render:
+    /// animations, normal maps, …), one sentence each, naming the file.
+    pub warnings: Vec<String>,
 }
 
 impl SceneFile {
-    /// Reads and parses a `.toml` or `.json` scene file, or makes the scene of a bare `.obj`
-    /// or `.ply` mesh file (see [`SceneFile::for_model`]).
+    /// Reads and parses a `.toml` or `.json` scene file, or makes the scene of a bare `.obj`,
+    /// `.ply`, `.gltf` or `.glb` model file (see [`SceneFile::for_model`]).
     pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
         SceneFile::load_with(path, &[])
     }

@@ -1,6 +1,9 @@
-//! A model is a scene: a bare mesh file (`.obj` or `.ply`) becomes the scene description a
-//! TOML file would give, with one `type = "mesh"` object naming it, a camera that frames its
-//! bounds and a default light rig. Overrides, packs and building then work on it unchanged.
+//! A model is a scene: a bare mesh file (`.obj`, `.ply`, `.gltf` or `.glb`) becomes the scene
+//! description a TOML file would give, with one `type = "mesh"` object naming it, a camera
+//! that frames its bounds and a default light rig. Overrides, packs and building then work on
+//! it unchanged. A glTF file with cameras uses them instead (`cameras = true`: the first is
+//! the view), and one with point lights uses them instead of the rig (`lights = true`, under
+//! the physical light model, whose 1/d² falloff is glTF's).
 //!
 //! The defaults, from the mesh's bounds (centre c, bounding-sphere radius r = half the
 //! diagonal):
@@ -33,7 +36,7 @@ use glam::DVec3;
 
 use super::error::{AssetKind, ErrorKind, Location};
 use super::parse::Source;
-use super::{inspect_obj, inspect_ply, Override, SceneError, SceneFile, SceneFormat};
+use super::{inspect_gltf, inspect_obj, inspect_ply, Override, SceneError, SceneFile, SceneFormat};
 use crate::math::Aabb;
 
 /// Vertical field of view of the default camera, in degrees.
@@ -50,6 +53,8 @@ pub enum ModelFormat {
     Obj,
     /// PLY (no materials: the default one).
     Ply,
+    /// glTF 2.0, as JSON (`.gltf`) or binary (`.glb`).
+    Gltf,
 }
 
 impl ModelFormat {
@@ -58,6 +63,7 @@ impl ModelFormat {
         match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "obj" => Some(ModelFormat::Obj),
             "ply" => Some(ModelFormat::Ply),
+            "gltf" | "glb" => Some(ModelFormat::Gltf),
             _ => None,
         }
     }
@@ -87,20 +93,39 @@ impl SceneFile {
             path: path.to_owned(),
             source,
         })?;
-        let inspect = match format {
-            ModelFormat::Obj => inspect_obj,
-            ModelFormat::Ply => inspect_ply,
+        let (bounds, imports) = match format {
+            ModelFormat::Obj => (inspect_obj(path).map(|i| i.bounds), Imports::default()),
+            ModelFormat::Ply => (inspect_ply(path).map(|i| i.bounds), Imports::default()),
+            ModelFormat::Gltf => match inspect_gltf(path) {
+                Ok(i) => {
+                    let imports = Imports {
+                        cameras: !i.cameras.is_empty(),
+                        lights: i.lights > 0,
+                    };
+                    (Ok(i.bounds), imports)
+                }
+                Err(e) => (Err(e), Imports::default()),
+            },
         };
-        let info = inspect(path).map_err(|message| mesh_error(path, message))?;
+        let bounds = bounds.map_err(|message| mesh_error(path, message))?;
         let name = path
             .file_name()
             .and_then(|n| n.to_str())
             .ok_or_else(|| mesh_error(path, "the file name is not UTF-8 text".into()))?;
-        let text = model_scene_text(name, info.bounds);
+        let text = model_scene_text(name, bounds, imports);
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
         let source = Source::new(path.to_owned(), text, SceneFormat::Toml).generated();
         SceneFile::from_source(source, base_dir, overrides)
     }
+}
+
+/// What a model file brings of its own instead of the defaults.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Imports {
+    /// Its cameras: no default camera.
+    pub cameras: bool,
+    /// Its lights: no default rig, the physical light model.
+    pub lights: bool,
 }
 
 /// An error about the mesh file itself, naming it.
@@ -149,22 +174,46 @@ fn sphere(bounds: Aabb) -> (DVec3, f64) {
 }
 
 /// The TOML text of the scene of the mesh file `file_name` (relative to the scene's folder)
-/// whose bounds are `bounds`.
-pub(crate) fn model_scene_text(file_name: &str, bounds: Aabb) -> String {
+/// whose bounds are `bounds`, with the file's own cameras and lights when `imports` says so.
+pub(crate) fn model_scene_text(file_name: &str, bounds: Aabb, imports: Imports) -> String {
     let (position, look_at) = model_camera(bounds);
     let (light, side) = model_light(bounds);
     let file = toml::Value::String(file_name.to_owned());
+    let camera = match imports.cameras {
+        true => String::new(),
+        false => format!(
+            "[camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov = {MODEL_FOV_DEG:?}\n\n",
+            vector(position),
+            vector(look_at),
+        ),
+    };
+    let lights = match imports.lights {
+        true => String::new(),
+        false => format!(
+            "[[lights]]\ntype = \"area\"\ncenter = {}\nu = [{side:?}, 0.0, 0.0]\n\
+             v = [0.0, 0.0, {side:?}]\nsamples = 4\nintensity = 1.0\n\n",
+            vector(light),
+        ),
+    };
+    let model = match imports.lights {
+        true => "light_model = \"physical\"\n",
+        false => "",
+    };
+    let mut object = format!("[[objects]]\ntype = \"mesh\"\nfile = {file}\n");
+    if imports.cameras {
+        object.push_str("cameras = true\n");
+    }
+    if imports.lights {
+        object.push_str("lights = true\n");
+    }
     format!(
-        "# The scene of a bare mesh file: a camera framing its bounds and the default light rig.\n\
+        "# The scene of a bare model file: a camera framing its bounds (or the file's cameras)\n\
+         # and the default light rig (or the file's lights).\n\
          [film]\nwidth = 800\nheight = 600\n\n\
-         [camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov = {MODEL_FOV_DEG:?}\n\n\
-         [render]\nsampler = \"rgss\"\nsamples = 4\nambient = 0.1\n\n\
-         [[lights]]\ntype = \"area\"\ncenter = {}\nu = [{side:?}, 0.0, 0.0]\n\
-         v = [0.0, 0.0, {side:?}]\nsamples = 4\nintensity = 1.0\n\n\
-         [[objects]]\ntype = \"mesh\"\nfile = {file}\n",
-        vector(position),
-        vector(look_at),
-        vector(light),
+         {camera}\
+         [render]\nsampler = \"rgss\"\nsamples = 4\nambient = 0.1\n{model}\n\
+         {lights}\
+         {object}"
     )
 }
 
@@ -221,7 +270,7 @@ mod tests {
 
     #[test]
     fn the_text_parses_with_the_file_name_quoted() {
-        let text = model_scene_text("a \"b\".obj", unit_box());
+        let text = model_scene_text("a \"b\".obj", unit_box(), Imports::default());
         let file = SceneFile::from_str(&text, SceneFormat::Toml, "x.obj", ".").unwrap();
         assert_eq!(file.desc.objects.len(), 1);
         assert_eq!(file.desc.lights.len(), 1);
@@ -232,7 +281,7 @@ mod tests {
     #[test]
     fn huge_bounds_give_floats_toml_reads() {
         let huge = Aabb::EMPTY.grow(Vec3::splat(-1e30)).grow(Vec3::splat(1e30));
-        let text = model_scene_text("m.ply", huge);
+        let text = model_scene_text("m.ply", huge, Imports::default());
         SceneFile::from_str(&text, SceneFormat::Toml, "m.ply", ".").unwrap();
     }
 
@@ -246,7 +295,11 @@ mod tests {
             ModelFormat::from_path(Path::new("a.ply")),
             Some(ModelFormat::Ply)
         );
-        assert_eq!(ModelFormat::from_path(Path::new("a.glb")), None);
+        assert_eq!(
+            ModelFormat::from_path(Path::new("a.GLB")),
+            Some(ModelFormat::Gltf)
+        );
+        assert_eq!(ModelFormat::from_path(Path::new("a.fbx")), None);
         assert!(matches!(
             SceneFile::for_model("a.toml"),
             Err(SceneError::UnknownFormat { .. })

@@ -6,6 +6,7 @@
 
 mod bounds;
 mod budget;
+mod gltf;
 mod materials;
 mod objects;
 mod placements;
@@ -36,6 +37,11 @@ struct Builder<'a> {
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     /// OBJ files read once per scene.
     meshes: HashMap<PathBuf, objects::LoadedObj>,
+    /// glTF files read once per scene.
+    gltfs: HashMap<PathBuf, gltf::LoadedGltf>,
+    /// What the files read ignored (glTF features penumbra does not render), each naming
+    /// its file.
+    warnings: Vec<String>,
     /// How many copies of each OBJ file the scene places.
     uses: HashMap<PathBuf, usize>,
     /// `.npy` files of instance transforms read once per scene.
@@ -66,6 +72,8 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         pool: thread_pool(threads).ok().map(|(pool, _)| pool),
         images: HashMap::new(),
         meshes: HashMap::new(),
+        gltfs: HashMap::new(),
+        warnings: Vec::new(),
         uses: HashMap::new(),
         transforms: HashMap::new(),
         read: BTreeSet::new(),
@@ -78,7 +86,25 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         budget: budget::Budget::new(crate::memory::available()),
     };
     let film = b.film()?;
-    b.cameras()?;
+    let file_cameras = b.cameras()?;
+    let gltf_cameras = b.gltf_cameras()?;
+    if file_cameras + gltf_cameras == 0 {
+        let path = desc.objects.iter().position(|o| {
+            matches!(&o.shape, crate::scene::desc::ShapeDesc::Mesh(m) if m.cameras == Some(true))
+        });
+        return Err(match path {
+            Some(i) => b.err(
+                ErrorKind::MissingKey,
+                &KeyPath::root("objects").index(i).key("cameras"),
+                "the glTF file has no perspective camera, and the scene has no [camera] table",
+            ),
+            None => b.err(
+                ErrorKind::MissingKey,
+                &KeyPath::default(),
+                "missing key `camera` (a [camera] table or [cameras.NAME] tables)",
+            ),
+        });
+    }
     let (settings, default_light_samples) = b.settings(film.width, film.height)?;
 
     let render = KeyPath::root("render");
@@ -109,6 +135,15 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         let emitted = bounds::emission(l, settings.light_model);
         emission += emitted;
         b.check_emission(&path, bounds::light_key(l), emitted, emission)?;
+        b.world.add_light(light);
+    }
+    for (path, light) in b.gltf_lights()? {
+        let crate::light::Light::Point(p) = &light else {
+            continue;
+        };
+        let emitted = bounds::peak(p.intensity);
+        emission += emitted;
+        b.check_emission(&path, "lights", emitted, emission)?;
         b.world.add_light(light);
     }
     b.lighting = Lighting {
@@ -150,6 +185,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         gamma: film.gamma,
         files: b.read.into_iter().collect(),
         objects,
+        warnings: b.warnings,
     })
 }
 

@@ -38,6 +38,16 @@ impl Builder<'_> {
             o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
         );
         self.check_invertible(&path.key("scale"), &world, o.scale)?;
+        if let Some(file) = super::gltf::gltf_file(o) {
+            let placements = match &o.shape {
+                ShapeDesc::Instances(d) => self.placements(path, &d.transforms)?,
+                _ => vec![Placement {
+                    matrix: glam::Mat4::IDENTITY,
+                    material: None,
+                }],
+            };
+            return self.gltf_object(path, o, file, world, &placements);
+        }
         let material = match &o.material {
             Some(name) => Some(self.material_index(&path.key("material"), name)?),
             None => None,

@@ -74,8 +74,9 @@ impl Builder<'_> {
     }
 
     /// Every camera of the file, checked, into the world under its name (a single `[camera]`
-    /// is called "camera").
-    pub(super) fn cameras(&mut self) -> Result<()> {
+    /// is called "camera"); returns how many. A file without one is refused unless an object
+    /// imports a glTF file's cameras (checked once they are added).
+    pub(super) fn cameras(&mut self) -> Result<usize> {
         let desc = &self.file.desc;
         let named: Vec<(String, &CameraDesc, KeyPath)> =
             match (&desc.camera, desc.cameras.0.is_empty()) {
@@ -85,6 +86,7 @@ impl Builder<'_> {
                         "a scene has either [camera] or [cameras.NAME] tables, not both",
                     ))
                 }
+                (None, true) if self.imports_cameras() => return Ok(0),
                 (None, true) => {
                     return Err(self.err(
                         ErrorKind::MissingKey,
@@ -100,6 +102,7 @@ impl Builder<'_> {
                     .map(|(n, c)| (n.clone(), c, KeyPath::root("cameras").key(n)))
                     .collect(),
             };
+        let count = named.len();
         for (name, c, path) in named {
             let up = c.up.map_or(glam::Vec3::Y, |u| u.vec3());
             let camera = Camera::new(c.position.vec3(), c.look_at.vec3(), up, c.fov.f32())
@@ -125,7 +128,14 @@ impl Builder<'_> {
                 .add_camera(name, camera)
                 .map_err(|e| self.bad(&path, e.to_string()))?;
         }
-        Ok(())
+        Ok(count)
+    }
+
+    /// True when an object asks for a glTF file's cameras.
+    fn imports_cameras(&self) -> bool {
+        self.file.desc.objects.iter().any(|o| {
+            matches!(&o.shape, crate::scene::desc::ShapeDesc::Mesh(m) if m.cameras == Some(true))
+        })
     }
 
     /// The file's render settings on a `width × height` film through the first camera, and

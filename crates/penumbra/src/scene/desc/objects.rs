@@ -56,9 +56,9 @@ pub enum ShapeDesc {
     Cube(CubeDesc),
     /// `type = "sphere"`: a tessellated sphere.
     Sphere(SphereDesc),
-    /// `type = "mesh"`: a Wavefront OBJ or PLY file.
+    /// `type = "mesh"`: a Wavefront OBJ, PLY, glTF or GLB file.
     Mesh(MeshDesc),
-    /// `type = "instances"`: many copies of one OBJ file, built once.
+    /// `type = "instances"`: many copies of one mesh file, built once.
     Instances(InstancesDesc),
 }
 
@@ -105,15 +105,21 @@ pub struct SphereDesc {
 /// A mesh file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshDesc {
-    /// Wavefront OBJ or PLY file (by extension), relative to the scene file's folder.
+    /// Wavefront OBJ, PLY, glTF or GLB file (by extension), relative to the scene file's
+    /// folder.
     pub file: String,
+    /// For a glTF file: add its perspective cameras to the scene's (default false).
+    pub cameras: Option<bool>,
+    /// For a glTF file: add its point lights to the scene's (default false).
+    pub lights: Option<bool>,
 }
 
 /// Copies of one mesh file, each placed by one of `transforms` and then by the object's own
 /// `scale`, `rotate` and `translate`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstancesDesc {
-    /// Wavefront OBJ or PLY file (by extension), relative to the scene file's folder.
+    /// Wavefront OBJ, PLY, glTF or GLB file (by extension), relative to the scene file's
+    /// folder.
     pub file: String,
     /// Where the copies go.
     pub transforms: TransformsDesc,
@@ -205,6 +211,8 @@ pub(super) struct ObjectFields {
     radius: Option<Num>,
     file: Option<String>,
     transforms: Option<TransformsDesc>,
+    cameras: Option<bool>,
+    lights: Option<bool>,
 }
 
 impl Tagged for ObjectDesc {
@@ -223,6 +231,8 @@ impl Tagged for ObjectDesc {
         "radius",
         "file",
         "transforms",
+        "cameras",
+        "lights",
     ];
 
     const KINDS: &'static [ObjectType] = &[
@@ -240,7 +250,7 @@ impl Tagged for ObjectDesc {
             ObjectType::Quad => &["corner", "u", "v"],
             ObjectType::Cube => &["center", "size"],
             ObjectType::Sphere => &["center", "radius"],
-            ObjectType::Mesh => &["file"],
+            ObjectType::Mesh => &["file", "cameras", "lights"],
             ObjectType::Instances => &["file", "transforms"],
         }
     }
@@ -276,6 +286,8 @@ impl Tagged for ObjectDesc {
             "size" => f.size = Some(map.next_value()?),
             "radius" => f.radius = Some(map.next_value()?),
             "transforms" => f.transforms = Some(map.next_value()?),
+            "cameras" => f.cameras = Some(map.next_value()?),
+            "lights" => f.lights = Some(map.next_value()?),
             _ => f.file = Some(map.next_value()?),
         }
         Ok(())
@@ -303,6 +315,8 @@ impl Tagged for ObjectDesc {
             }),
             ObjectType::Mesh => ShapeDesc::Mesh(MeshDesc {
                 file: f.file.ok_or("file")?,
+                cameras: f.cameras,
+                lights: f.lights,
             }),
             ObjectType::Instances => ShapeDesc::Instances(InstancesDesc {
                 file: f.file.ok_or("file")?,

@@ -1,0 +1,165 @@
+//! The scene graph: the chosen scene's nodes walked from its roots (iteratively, so a deep
+//! chain cannot overflow the stack; a node reached twice is an error, so a cycle cannot
+//! hang), each node's world matrix the product of its ancestors' and its own.
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec3};
+use gltf::khr_lights_punctual::Kind;
+
+use super::{GltfCamera, GltfError, GltfLight, GltfModel, MeshUse, Reader, Result};
+
+impl Reader<'_> {
+    /// Walks the chosen scene into `model`: mesh uses (each mesh read once), cameras and
+    /// lights, and the materials and images the used meshes need.
+    pub(super) fn scene(&mut self, model: &mut GltfModel) -> Result<()> {
+        let doc = self.doc;
+        let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+            None => {
+                self.ignored
+                    .note("the file has no scene: every root node is rendered");
+                root_nodes(doc)
+            }
+        };
+        let extra_scenes = doc.scenes().len().saturating_sub(1);
+        self.ignored.add(
+            "{n} scene(s) besides the default one are ignored",
+            extra_scenes,
+        );
+        self.ignored.add(
+            "{n} animation(s) are ignored: the nodes' rest pose is rendered",
+            doc.animations().len(),
+        );
+        self.ignored.add(
+            "{n} skin(s) are ignored: skinned meshes are rendered in their bind pose",
+            doc.skins().len(),
+        );
+        let mut seen = vec![false; doc.nodes().len()];
+        let mut mesh_of: HashMap<usize, usize> = HashMap::new();
+        let mut stack: Vec<(usize, Mat4)> =
+            roots.iter().rev().map(|&i| (i, Mat4::IDENTITY)).collect();
+        while let Some((i, parent)) = stack.pop() {
+            let at = format!("nodes[{i}]");
+            let node = doc
+                .nodes()
+                .nth(i)
+                .ok_or_else(|| GltfError::new(&at, "no such node"))?;
+            if std::mem::replace(&mut seen[i], true) {
+                return Err(GltfError::new(
+                    at,
+                    "the node is reached twice from the scene's roots (the node hierarchy must \
+                     be a tree)",
+                ));
+            }
+            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+            let matrix = parent * local;
+            if !matrix.is_finite() {
+                return Err(GltfError::new(at, "the node's transform is not finite"));
+            }
+            if let Some(mesh) = node.mesh() {
+                if matrix.determinant() == 0.0 {
+                    self.ignored
+                        .note("{n} node(s) with a zero scale are not placed (invisible)");
+                } else {
+                    let k = match mesh_of.get(&mesh.index()) {
+                        Some(&k) => k,
+                        None => {
+                            model.meshes.push(self.mesh(mesh.index())?);
+                            mesh_of.insert(mesh.index(), model.meshes.len() - 1);
+                            model.meshes.len() - 1
+                        }
+                    };
+                    model.uses.push(MeshUse { mesh: k, matrix });
+                }
+            }
+            if let Some(camera) = node.camera() {
+                self.camera(model, &node, camera, matrix);
+            }
+            if let Some(light) = node.light() {
+                self.light(model, light, matrix);
+            }
+            let first = stack.len();
+            stack.extend(node.children().map(|c| (c.index(), matrix)));
+            stack[first..].reverse();
+        }
+        self.materials(model)
+    }
+
+    fn camera(
+        &mut self,
+        model: &mut GltfModel,
+        node: &gltf::Node,
+        camera: gltf::Camera,
+        matrix: Mat4,
+    ) {
+        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+            self.ignored.note(
+                "{n} orthographic camera(s) are ignored (penumbra's cameras are perspective)",
+            );
+            return;
+        };
+        let fov = p.yfov().to_degrees();
+        if !(fov > 0.0 && fov < 180.0) {
+            self.ignored
+                .note("{n} camera(s) with a yfov outside (0, 180) degrees are ignored");
+            return;
+        }
+        let base = camera
+            .name()
+            .or(node.name())
+            .filter(|n| !n.is_empty())
+            .unwrap_or("camera");
+        let name = unique(base, |n| model.cameras.iter().any(|c| c.name == n));
+        model.cameras.push(GltfCamera {
+            name,
+            matrix,
+            fov_y_deg: fov,
+        });
+    }
+
+    fn light(
+        &mut self,
+        model: &mut GltfModel,
+        light: gltf::khr_lights_punctual::Light,
+        matrix: Mat4,
+    ) {
+        match light.kind() {
+            Kind::Point => {
+                if light.range().is_some() {
+                    self.ignored
+                        .note("{n} point light range(s) are ignored (light falls off as 1/d²)");
+                }
+                model.lights.push(GltfLight {
+                    position: matrix.transform_point3(Vec3::ZERO),
+                    color: Vec3::from(light.color()),
+                    intensity: light.intensity(),
+                });
+            }
+            Kind::Spot { .. } => self.ignored.note("{n} spot light(s) are ignored"),
+            Kind::Directional => self.ignored.note("{n} directional light(s) are ignored"),
+        }
+    }
+}
+
+/// `base`, or `base-2`, `base-3`, … the first that `taken` does not refuse.
+pub(crate) fn unique(base: &str, taken: impl Fn(&str) -> bool) -> String {
+    if !taken(base) {
+        return base.to_owned();
+    }
+    (2..)
+        .map(|k| format!("{base}-{k}"))
+        .find(|n| !taken(n))
+        .unwrap_or_default()
+}
+
+/// Nodes no other node names as a child, in index order.
+fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
+    let mut child = vec![false; doc.nodes().len()];
+    for node in doc.nodes() {
+        for c in node.children() {
+            child[c.index()] = true;
+        }
+    }
+    (0..child.len()).filter(|&i| !child[i]).collect()
+}
