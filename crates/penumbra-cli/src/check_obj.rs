@@ -1,13 +1,14 @@
 //! `penumbra check model.obj` (or `model.ply`): a Wavefront OBJ or PLY mesh on its own, to
 //! place it in a scene: triangles, bounds (in the file's own units and axes), materials and
-//! their textures (OBJ only), whether it has normals and uvs, and whether it is closed.
+//! their textures, whether it has normals, uvs and vertex colours, whether it is closed, and
+//! warnings (on stderr) for what the file holds that penumbra ignores.
 
 use std::path::Path;
 
 use penumbra::{inspect_obj, inspect_ply};
 use serde_json::json;
 
-use crate::failure::{invalid, say, Failure};
+use crate::failure::{invalid, note, say, Failure};
 use crate::summary::{bounds_json, bounds_text};
 
 /// True for a path naming a mesh file: OBJ or PLY, by its extension in any case.
@@ -22,9 +23,6 @@ fn has_extension(path: &Path, extension: &str) -> bool {
 }
 
 pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
-    if penumbra::ModelFormat::from_path(path) == Some(penumbra::ModelFormat::Gltf) {
-        return crate::check_gltf::run(path, json);
-    }
     let inspect = match has_extension(path, "ply") {
         true => inspect_ply,
         false => inspect_obj,
@@ -37,6 +35,9 @@ pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
         .filter_map(|(_, t)| t.as_ref().map(|t| t.display().to_string()))
         .collect();
     let names: Vec<&str> = info.materials.iter().map(|(n, _)| n.as_str()).collect();
+    for w in &info.warnings {
+        note(&format!("warning: {}: {w}", path.display()));
+    }
     if json {
         let summary = json!({
             "mesh": path.display().to_string(),
@@ -45,9 +46,11 @@ pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
             "bounds": bounds_json(info.bounds),
             "normals": info.normals,
             "uvs": info.uvs,
+            "colors": info.colors,
             "materials": names,
             "textures": textures,
             "closed": info.closed,
+            "warnings": info.warnings,
         });
         return say(&summary.to_string());
     }
@@ -58,9 +61,10 @@ pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
         format!("  vertices   {}", info.vertices),
         format!("  bounds     {}", bounds_text(info.bounds)),
         format!(
-            "  normals    {}, uvs {}",
+            "  normals    {}, uvs {}, colours {}",
             yes_no(info.normals),
-            yes_no(info.uvs)
+            yes_no(info.uvs),
+            yes_no(info.colors)
         ),
         format!(
             "  materials  {}{}",

@@ -23,11 +23,15 @@ pub struct ObjInfo {
     pub normals: bool,
     /// See `normals`.
     pub uvs: bool,
+    /// Whether every vertex has a colour (OBJ `v x y z r g b`; PLY `red`, `green`, `blue`).
+    pub colors: bool,
     /// The materials of its MTL libraries, in order, each with its `map_Kd` texture.
     pub materials: Vec<(String, Option<PathBuf>)>,
     /// True when every edge is shared by exactly two triangles (vertices matched by position):
     /// a closed surface, such as a watertight model.
     pub closed: bool,
+    /// What the file holds that penumbra reads but ignores, each named once (PLY files).
+    pub warnings: Vec<String>,
 }
 
 /// Reads the OBJ file at `path` (and its MTL libraries, not its textures) and summarizes it.
@@ -66,30 +70,42 @@ pub(in crate::scene) fn summarize(model: &ObjModel) -> ObjInfo {
         bounds,
         normals: !mesh.normals.is_empty(),
         uvs: !mesh.uvs.is_empty(),
+        colors: mesh.has_colors(),
         materials: model
             .materials
             .iter()
             .map(|m| (m.name.clone(), m.diffuse_texture.clone()))
             .collect(),
         closed: is_closed(mesh),
+        warnings: Vec::new(),
     }
 }
 
 /// Every edge shared by exactly two triangles, vertices compared by position (an OBJ splits a
-/// position into several vertices where normals or uvs differ).
+/// position into several vertices where normals or uvs differ). Each distinct position gets
+/// an id, each edge a sorted pair of ids packed in a `u64`; sorted, every run has length 2.
 fn is_closed(mesh: &Mesh) -> bool {
     if mesh.indices.is_empty() {
         return false;
     }
-    let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
-    let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
+    let id: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let next = ids.len() as u32;
+            *ids.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+        })
+        .collect();
+    let mut edges: Vec<u64> = Vec::with_capacity(3 * mesh.indices.len());
     for tri in &mesh.indices {
         for k in 0..3 {
-            let (a, b) = (key(tri[k]), key(tri[(k + 1) % 3]));
-            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            let (a, b) = (id[tri[k] as usize], id[tri[(k + 1) % 3] as usize]);
+            edges.push(u64::from(a.min(b)) << 32 | u64::from(a.max(b)));
         }
     }
-    edges.values().all(|&n| n == 2)
+    edges.sort_unstable();
+    edges.chunk_by(|a, b| a == b).all(|run| run.len() == 2)
 }
 
 #[cfg(test)]

@@ -50,7 +50,7 @@ use lines::decode;
 use mtl::Library;
 
 /// A material from an MTL file.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct ObjMaterial {
     pub name: String,
     pub diffuse: Option<[f32; 3]>,

@@ -48,6 +48,17 @@ impl<'a> Body<'a> {
         self.format
     }
 
+    /// The bytes not yet read (for the bulk reads of `fast`).
+    pub(super) fn rest(&self) -> &'a [u8] {
+        &self.bytes[self.pos..]
+    }
+
+    /// Passes over `n` bytes that a bulk read took from [`Body::rest`] (at most its length).
+    pub(super) fn advance(&mut self, n: usize) {
+        self.pos += n.min(self.left());
+        self.start = At::Byte(self.pos);
+    }
+
     /// The next value, of type `ty`. Integers come back exactly (every PLY integer fits an
     /// `f64`); an ASCII integer must be written as one and be in its type's range.
     pub(super) fn scalar(&mut self, ty: Scalar) -> Result<f64, PlyError> {
@@ -102,21 +113,7 @@ impl<'a> Body<'a> {
             return Err(self.ended(format!("a value of {size} bytes")));
         };
         self.pos += size;
-        let mut a = [0u8; 8];
-        a[..size].copy_from_slice(b);
-        if big {
-            a[..size].reverse();
-        }
-        Ok(match ty {
-            Scalar::I8 => a[0] as i8 as f64,
-            Scalar::U8 => a[0] as f64,
-            Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
-            Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
-            Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::F64 => f64::from_le_bytes(a),
-        })
+        Ok(load(b, ty, big))
     }
 
     fn ascii(&mut self, ty: Scalar) -> Result<f64, PlyError> {
@@ -168,5 +165,26 @@ impl<'a> Body<'a> {
             return Err(self.ended("another value".into()));
         }
         Ok(&bytes[begin..self.pos])
+    }
+}
+
+/// The value of type `ty` in `bytes` (exactly its size), in the byte order `big`. Integers
+/// come back exactly.
+#[inline(always)]
+pub(super) fn load(bytes: &[u8], ty: Scalar, big: bool) -> f64 {
+    let mut a = [0u8; 8];
+    a[..bytes.len()].copy_from_slice(bytes);
+    if big {
+        a[..bytes.len()].reverse();
+    }
+    match ty {
+        Scalar::I8 => a[0] as i8 as f64,
+        Scalar::U8 => a[0] as f64,
+        Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+        Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+        Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+        Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+        Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+        Scalar::F64 => f64::from_le_bytes(a),
     }
 }

@@ -87,12 +87,26 @@ pub(super) struct Header {
     pub body: usize,
     /// The line the body starts on (for an ASCII body).
     pub body_line: usize,
+    /// The texture files the `comment TextureFile NAME` lines name (MeshLab, VCGlib), in
+    /// order, as written.
+    pub texture_files: Vec<String>,
+}
+
+/// The file a `comment TextureFile NAME` line names (the rest of the line, which may hold
+/// spaces), if `text` is one.
+fn texture_file(text: &str) -> Option<String> {
+    let rest = text.trim_start().strip_prefix("comment")?.trim_start();
+    let name = rest.strip_prefix("TextureFile")?;
+    // `TextureFile` followed by white space, then a name.
+    let name = name.strip_prefix(|c: char| c.is_ascii_whitespace())?.trim();
+    (!name.is_empty()).then(|| name.to_string())
 }
 
 /// Reads the header at the start of `bytes`.
 pub(super) fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut texture_files = Vec::new();
     let mut start = 0;
     let mut line = 0;
     loop {
@@ -119,7 +133,8 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
         }
         let bad = |message: String| Err(PlyError::new(at, message));
         match words.as_slice() {
-            [] | ["comment", ..] | ["obj_info", ..] => {}
+            ["comment", ..] => texture_files.extend(texture_file(&text)),
+            [] | ["obj_info", ..] => {}
             ["format", name, version] => {
                 if format.is_some() {
                     return bad("a second `format` line".into());
@@ -175,6 +190,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
                     elements,
                     body: start,
                     body_line: line + 1,
+                    texture_files,
                 });
             }
             [word, ..] => {

@@ -1,6 +1,7 @@
 use glam::{Vec2, Vec3};
 
 use super::header::Scalar;
+use super::roles::UV_NAMES;
 use super::*;
 
 /// A quad (two triangles after the fan) in the plane z = 0, as ASCII.
@@ -131,9 +132,183 @@ fn unknown_elements_and_properties_are_skipped() {
                 element edge 1\r\nproperty int vertex1\r\nproperty int vertex2\r\nend_header\r\n\
                 1.5 3 7 8 9\r\n255 0 0 0 0.5\r\n255 1 0 0 0.5\r\n255 0 1 0 0.5\r\n\
                 6 0 0 1 0 0 1 3 2 1 0 7\r\n0 1\r\n";
-    let mesh = parse(text).unwrap();
-    assert_eq!(mesh.indices, [[2, 1, 0]]);
-    assert_eq!(mesh.positions[1], Vec3::X);
+    let ply = read_ply(text.as_bytes()).unwrap();
+    let mesh = &ply.mesh;
+    // The face's `texcoord` list gives its corners (vertices 2, 1, 0) their uvs; the vertices
+    // are numbered anew in the order the corners use them.
+    assert_eq!(mesh.indices, [[0, 1, 2]]);
+    assert_eq!(mesh.positions, [Vec3::Y, Vec3::X, Vec3::ZERO]);
+    assert_eq!(mesh.uvs, [Vec2::ZERO, Vec2::X, Vec2::Y]);
+    // `red` alone is no colour.
+    assert!(mesh.colors.is_empty());
+    assert_eq!(
+        ply.warnings,
+        [
+            "element `camera` (1 rows) is read but ignored",
+            "element `vertex`: properties `red`, `confidence` are read but ignored",
+            "element `empty` (99999999999 rows) is read but ignored",
+            "element `face`: property `flags` is read but ignored",
+            "element `edge` (1 rows) is read but ignored",
+        ]
+    );
+}
+
+/// A triangle with colours `red`, `green`, `blue` (and `alpha`) of type `ty`, in `format`.
+fn colored(ty: &str, format: &str, rows: [[f64; 4]; 3]) -> Vec<u8> {
+    let head = format!(
+        "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         property {ty} red\nproperty {ty} green\nproperty {ty} blue\nproperty {ty} alpha\n\
+         element face 1\nproperty list uchar int vertex_indices\n"
+    );
+    let scalar = if ty == "uchar" {
+        Scalar::U8
+    } else {
+        Scalar::F32
+    };
+    let corners = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    if format == "ascii" {
+        let mut text = format!("ply\nformat ascii 1.0\n{head}end_header\n");
+        for (p, c) in corners.iter().zip(rows) {
+            let values: Vec<String> = p.iter().chain(&c).map(f64::to_string).collect();
+            text += &format!("{}\n", values.join(" "));
+        }
+        return (text + "3 0 1 2\n").into_bytes();
+    }
+    let big = format == "big";
+    let mut body = Vec::new();
+    for (p, c) in corners.iter().zip(rows) {
+        put(&mut body, big, &p.map(|v| (Scalar::F32, v)));
+        put(&mut body, big, &c.map(|v| (scalar, v)));
+    }
+    put(&mut body, big, &[(Scalar::U8, 3.0)]);
+    put(
+        &mut body,
+        big,
+        &[(Scalar::I32, 0.0), (Scalar::I32, 1.0), (Scalar::I32, 2.0)],
+    );
+    binary(big, &head, &body)
+}
+
+#[test]
+fn colours_are_read_as_srgb_bytes_or_floats_in_every_format() {
+    let bytes = [
+        [255.0, 0.0, 128.0, 7.0],
+        [0.0, 255.0, 0.0, 7.0],
+        [0.0, 0.0, 255.0, 7.0],
+    ];
+    let floats = bytes.map(|r| r.map(|v| v / 255.0));
+    let mut meshes = Vec::new();
+    for format in ["ascii", "little", "big"] {
+        for (ty, rows) in [("uchar", bytes), ("float", floats)] {
+            let ply = read_ply(&colored(ty, format, rows)).unwrap();
+            assert_eq!(
+                ply.warnings,
+                [
+                    "element `vertex`: property `alpha` is read but ignored (penumbra has no \
+                  vertex transparency)"
+                ]
+            );
+            meshes.push(ply.mesh);
+        }
+    }
+    let red = meshes[0].colors[0];
+    // 128/255 in sRGB is about 0.216 in linear.
+    assert_eq!((red.x, red.y), (1.0, 0.0));
+    assert!((red.z - 0.2158).abs() < 1e-3, "{red}");
+    assert_eq!(meshes[0].colors[1..], [Vec3::Y, Vec3::Z]);
+    for m in &meshes[1..] {
+        assert_eq!(m.positions, meshes[0].positions);
+        assert!(m
+            .colors
+            .iter()
+            .zip(&meshes[0].colors)
+            .all(|(a, b)| (*a - *b).length() < 1e-6));
+    }
+    let nan = [[f64::NAN, 0.0, 0.0, 1.0], [0.0; 4], [0.0; 4]];
+    let e = read_ply(&colored("float", "little", nan)).unwrap_err();
+    assert!(
+        e.message
+            .contains("row 0, property `red`: colour NaN is not a finite"),
+        "{e}"
+    );
+}
+
+#[test]
+fn texture_files_and_face_texcoords_make_a_textured_mesh() {
+    let text = QUAD
+        .replace(
+            "comment a unit square",
+            "comment TextureFile my tex.png\ncomment TextureFile b.png",
+        )
+        .replace(
+            "vertex_indices",
+            "vertex_indices\nproperty list uchar float texcoord",
+        )
+        .replace("4 0 1 2 3", "4 0 1 2 3 8 0 0 1 0 1 1 0 1");
+    let ply = read_ply(text.as_bytes()).unwrap();
+    assert_eq!(ply.texture_file.as_deref(), Some("my tex.png"));
+    assert_eq!(ply.mesh.uvs[2], Vec2::ONE);
+    assert_eq!(
+        ply.warnings,
+        ["only the first `comment TextureFile` is used; ignored: `b.png`"]
+    );
+    let short = text.replace("8 0 0 1 0 1 1 0 1", "3 0 0 1");
+    let e = read_ply(short.as_bytes()).unwrap_err();
+    assert!(e.message.contains("has 3 values for 4 corners"), "{e}");
+    let untextured = QUAD.replace("comment a unit square", "comment TextureFile t.png");
+    let w = read_ply(untextured.as_bytes()).unwrap().warnings;
+    assert_eq!(
+        w,
+        ["the texture file `t.png` is named but the mesh has no texture coordinates"]
+    );
+}
+
+#[test]
+fn bulk_binary_reads_hand_polygons_and_bad_rows_to_the_value_reader() {
+    let head = "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+                element face 3\nproperty list uchar int vertex_indices\n";
+    let mut body = Vec::new();
+    for p in [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ] {
+        put(&mut body, false, &p.map(|v| (Scalar::F32, v)));
+    }
+    let face = |corners: &[f64]| {
+        let mut out = Vec::new();
+        put(&mut out, false, &[(Scalar::U8, corners.len() as f64)]);
+        put(
+            &mut out,
+            false,
+            &corners
+                .iter()
+                .map(|&c| (Scalar::I32, c))
+                .collect::<Vec<_>>(),
+        );
+        out
+    };
+    let mut good = body.clone();
+    for f in [
+        &[0.0, 1.0, 2.0][..],
+        &[0.0, 1.0, 2.0, 3.0],
+        &[3.0, 2.0, 1.0],
+    ] {
+        good.extend(face(f));
+    }
+    let mesh = parse_ply(&binary(false, head, &good)).unwrap();
+    assert_eq!(mesh.indices, [[0, 1, 2], [0, 1, 2], [0, 2, 3], [3, 2, 1]]);
+    let mut bad = body;
+    for f in [&[0.0, 1.0, 2.0][..], &[0.0, -1.0, 2.0], &[0.0, 1.0, 2.0]] {
+        bad.extend(face(f));
+    }
+    let e = parse_ply(&binary(false, head, &bad)).unwrap_err();
+    assert!(
+        e.message
+            .contains("`face` row 1, property `vertex_indices`: vertex index -1"),
+        "{e}"
+    );
 }
 
 #[test]
