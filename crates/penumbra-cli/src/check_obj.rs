@@ -23,6 +23,9 @@ fn has_extension(path: &Path, extension: &str) -> bool {
 }
 
 pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
+    if penumbra::ModelFormat::from_path(path) == Some(penumbra::ModelFormat::Gltf) {
+        return crate::check_gltf::run(path, json);
+    }
     let inspect = match has_extension(path, "ply") {
         true => inspect_ply,
         false => inspect_obj,
