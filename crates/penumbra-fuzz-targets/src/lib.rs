@@ -19,8 +19,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use penumbra::{
-    decode_texture_image, inspect_mtl, inspect_obj_bytes, inspect_ply_bytes, render, Aabb, Light,
-    Override, RenderOptions, RenderSettings, SceneError, SceneFile, SceneFormat, ScenePack, World,
+    decode_texture_image, inspect_gltf_bytes, inspect_mtl, inspect_obj_bytes, inspect_ply_bytes,
+    render, Aabb, Light, Override, RenderOptions, RenderSettings, SceneError, SceneFile,
+    SceneFormat, ScenePack, World,
 };
 
 /// A fuzz target: its name (the folder of its corpus) and its body.
@@ -32,7 +33,7 @@ pub struct Target {
 }
 
 /// Every target.
-pub const TARGETS: [Target; 8] = [
+pub const TARGETS: [Target; 9] = [
     Target {
         name: "scene_toml",
         run: scene_toml,
@@ -56,6 +57,10 @@ pub const TARGETS: [Target; 8] = [
     Target {
         name: "ply",
         run: ply,
+    },
+    Target {
+        name: "gltf",
+        run: gltf,
     },
     Target {
         name: "texture",
@@ -274,6 +279,20 @@ pub fn ply(data: &[u8]) {
     // A mesh without triangles is an error, so the bounds hold at least one vertex.
     assert!(info.triangles > 0, "a PLY without triangles was accepted");
     assert!(info.vertices > 0);
+    check_bounds(&info.bounds, false);
+}
+
+/// A glTF file, GLB or JSON (by its first bytes), with at most 64 MiB of geometry; its
+/// external files are looked for in a folder that does not exist.
+pub fn gltf(data: &[u8]) {
+    const MAX_BYTES: u64 = 64 << 20;
+    let dir = repo_dir().join("fuzz/no-such-folder");
+    let Ok(info) = inspect_gltf_bytes(data, &dir, Some(MAX_BYTES)) else {
+        return;
+    };
+    // A scene without triangles is an error, so the bounds hold at least one vertex.
+    assert!(info.triangles > 0, "a glTF without triangles was accepted");
+    assert!(info.unique_triangles <= info.triangles);
     check_bounds(&info.bounds, false);
 }
 

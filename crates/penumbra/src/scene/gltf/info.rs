@@ -48,10 +48,13 @@ pub fn inspect_gltf(path: &Path) -> Result<GltfInfo, String> {
 }
 
 /// [`inspect_gltf`] for the bytes of a glTF or GLB file whose external files are relative to
-/// `dir`.
-pub fn inspect_gltf_bytes(bytes: &[u8], dir: &Path) -> Result<GltfInfo, String> {
-    let model = parse_gltf(bytes, dir, &Files::disk(), crate::memory::available())
-        .map_err(|e| e.to_string())?;
+/// `dir`, its geometry held to `max_bytes` of memory.
+pub fn inspect_gltf_bytes(
+    bytes: &[u8],
+    dir: &Path,
+    max_bytes: Option<u64>,
+) -> Result<GltfInfo, String> {
+    let model = parse_gltf(bytes, dir, &Files::disk(), max_bytes).map_err(|e| e.to_string())?;
     Ok(summarize(&model))
 }
 

@@ -70,6 +70,13 @@ impl Reader<'_> {
                             model.meshes.len() - 1
                         }
                     };
+                    if !placed_bounds_finite(&model.meshes[k].mesh, matrix) {
+                        return Err(GltfError::new(
+                            at,
+                            "the node's transform takes its mesh beyond the range of 32-bit \
+                             floats",
+                        ));
+                    }
                     model.uses.push(MeshUse { mesh: k, matrix });
                 }
             }
@@ -151,6 +158,26 @@ pub(crate) fn unique(base: &str, taken: impl Fn(&str) -> bool) -> String {
         .map(|k| format!("{base}-{k}"))
         .find(|n| !taken(n))
         .unwrap_or_default()
+}
+
+/// True when the corners of `mesh`'s bounding box stay finite under `matrix`.
+fn placed_bounds_finite(mesh: &crate::geometry::Mesh, matrix: Mat4) -> bool {
+    let b = mesh
+        .positions
+        .iter()
+        .fold(crate::math::Aabb::EMPTY, |b, &p| b.grow(p));
+    if b.is_empty() {
+        return true;
+    }
+    (0..8).all(|k| {
+        let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+        let corner = Vec3::new(
+            pick(1, b.min.x, b.max.x),
+            pick(2, b.min.y, b.max.y),
+            pick(4, b.min.z, b.max.z),
+        );
+        matrix.transform_point3(corner).is_finite()
+    })
 }
 
 /// Nodes no other node names as a child, in index order.
