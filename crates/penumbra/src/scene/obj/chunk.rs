@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3};
 
 use super::lines::{continues, find, for_each_line_from, numbers, rest_of_line};
 use super::NONE;
+use crate::texture::srgb_to_linear;
 
 /// The material of faces before a chunk's first `usemtl`: the one current where it starts.
 pub(super) const INHERITED: u32 = u32::MAX - 1;
@@ -47,6 +48,9 @@ pub(super) enum Deferred {
 #[derive(Default)]
 pub(super) struct Chunk {
     pub positions: Vec<Vec3>,
+    /// Linear vertex colours, one per `v` once a `v` of the chunk has one (white before and
+    /// where one has none), else empty.
+    pub colors: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
     pub normals: Vec<Vec3>,
     /// (v, vt, vn) per face corner; `NONE` for a missing vt or vn.
@@ -118,7 +122,20 @@ pub(super) fn parse(text: &str, first_line: usize) -> Chunk {
                 if !p.iter().all(|c| c.is_finite()) {
                     return Err(at("a vertex coordinate is not a finite number".into()));
                 }
+                // `v x y z r g b` (MeshLab, trimesh, Open3D); a lone fourth number is a `w`.
+                let rgb = numbers::<3>(&mut words, 3);
+                if rgb.is_some_and(|rgb| !rgb.iter().all(|c| c.is_finite())) {
+                    return Err(at("a vertex colour is not a finite number".into()));
+                }
                 c.positions.push(Vec3::from(p));
+                match rgb {
+                    Some(rgb) => {
+                        c.colors.resize(c.positions.len() - 1, Vec3::ONE);
+                        c.colors.push(vertex_color(rgb));
+                    }
+                    None if !c.colors.is_empty() => c.colors.push(Vec3::ONE),
+                    None => {}
+                }
             }
             "vt" => {
                 let t = numbers::<2>(&mut words, 1)
@@ -252,6 +269,12 @@ fn parse_corner(
         ));
     }
     Ok(out)
+}
+
+/// The linear colour of a `v` line's `r g b`: sRGB-encoded display values (as MeshLab, trimesh
+/// and Open3D write them, and Blender reads them), clamped to [0, 1] and decoded.
+fn vertex_color(rgb: [f32; 3]) -> Vec3 {
+    Vec3::from(rgb.map(|c| srgb_to_linear(c.clamp(0.0, 1.0))))
 }
 
 #[cfg(test)]

@@ -89,6 +89,9 @@ struct ObjData {
     positions: Vec<Vec3>,
     uvs: Vec<Vec2>,
     normals: Vec<Vec3>,
+    /// Linear colours, one per `v` once any has one (`v x y z r g b`; white where a `v` has
+    /// none), else empty.
+    colors: Vec<Vec3>,
     /// The faces, chunk by chunk in file order.
     parts: Vec<Part>,
     triangles: usize,
@@ -287,6 +290,12 @@ fn merge(chunks: Vec<Chunk>, dir: &Path, library: Library) -> Result<ObjData, St
             NONE => NONE,
             m => materials[m as usize],
         };
+        if !chunk.colors.is_empty() || !data.colors.is_empty() {
+            let end = data.positions.len() + chunk.positions.len();
+            data.colors.resize(data.positions.len(), Vec3::ONE);
+            data.colors.extend_from_slice(&chunk.colors);
+            data.colors.resize(end, Vec3::ONE);
+        }
         data.positions.extend_from_slice(&chunk.positions);
         data.uvs.extend_from_slice(&chunk.uvs);
         data.normals.extend_from_slice(&chunk.normals);
@@ -379,6 +388,9 @@ fn build_mesh(data: ObjData) -> Result<ObjModel, String> {
                     .filter(|&i| i != NONE)
                     .ok_or("the mesh is too large (more than four billion vertices)")?;
                 mesh.positions.push(data.positions[v as usize]);
+                if let Some(&color) = data.colors.get(v as usize) {
+                    mesh.colors.push(color);
+                }
                 if any_uv {
                     mesh.uvs.push(if vt == NONE {
                         Vec2::ZERO

@@ -196,3 +196,20 @@ fn errors_are_the_first_a_serial_reading_meets() {
         Some("line 1: a texture coordinate `vt` needs numbers (u [v])".into())
     );
 }
+
+#[test]
+fn vertex_colours_are_read_as_srgb_and_agree_across_chunks() {
+    // The first and third `v` carry colours, the second a `w`; every chunking gives one mesh.
+    let obj = b"v 0 0 0 1 0 0.5\nv 1 0 0 1\nv 0 1 0 0 1 0\nf 1 2 3\nv 0 0 1\nf 1 2 4\n";
+    let model = assert_chunking_agrees(obj).unwrap();
+    let colors = &model.mesh.colors;
+    assert_eq!(colors.len(), model.mesh.positions.len());
+    // sRGB 0.5 is about 0.214 linear; a `v` without a colour is white.
+    assert_eq!((colors[0].x, colors[0].y), (1.0, 0.0));
+    assert!((colors[0].z - 0.2140).abs() < 1e-4, "{}", colors[0]);
+    assert_eq!(colors[1..], [Vec3::ONE, Vec3::Y, Vec3::ONE]);
+    let plain = assert_chunking_agrees(b"v 0 0 0 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    assert!(plain.mesh.colors.is_empty());
+    let e = assert_chunking_agrees(b"v 0 0 0 1 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+    assert_eq!(e, "line 1: a vertex colour is not a finite number");
+}
