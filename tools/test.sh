@@ -32,8 +32,9 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 venv="$(cd "$venv" && pwd)"
 py="$venv/bin/python"
+# trimesh (pinned; Pillow for its textures) reads the shared glTF and PLY files as a reference.
 "$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm "ray>=2.9" \
-    "tomli>=1.1; python_version < '3.11'"
+    "tomli>=1.1; python_version < '3.11'" "trimesh==4.5.3" "pillow>=9"
 
 profile="${PENUMBRA_PY_PROFILE:-dev}"
 PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile $profile" \
