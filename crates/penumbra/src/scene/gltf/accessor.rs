@@ -10,8 +10,9 @@ use gltf::json::validation::Checked;
 
 use super::{GltfError, Reader, Result};
 
-/// The most elements an accessor may have: far above any mesh a world holds (2^27 triangles).
-const MAX_ELEMENTS: usize = 1 << 30;
+/// The most elements an accessor may have: a world holds at most 2^27 triangles, whose
+/// 3·2^27 indices fit below 2^29.
+const MAX_ELEMENTS: usize = 1 << 29;
 
 /// How component bytes become a value of the output type.
 pub(super) trait Component: Copy + Default {
@@ -148,13 +149,15 @@ impl Reader<'_> {
             ));
         }
         let (buffer, range) = self.buffers.view(view.clone())?;
+        // In u64 with checks: offsets and counts come from the file.
+        let end = (offset as u64).checked_add(elem as u64);
         let need = match count {
             0 => Some(offset as u64),
             _ => (count as u64 - 1)
                 .checked_mul(stride as u64)
-                .and_then(|v| v.checked_add((offset + elem) as u64)),
+                .and_then(|v| v.checked_add(end?)),
         };
-        match need.filter(|&need| need as usize <= range.len() && need <= usize::MAX as u64) {
+        match need.filter(|&need| need <= range.len() as u64) {
             Some(_) => Ok(Span {
                 buffer,
                 range: range.start + offset..range.end,

@@ -149,11 +149,38 @@ fn check_required(root: &gltf::json::Root) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a POSITION attribute naming an accessor the file does not have: the `gltf`
+/// crate's validation looks that accessor up without checking (gltf-json 1.4.1,
+/// `primitive_validate_hook`) and would panic; found by fuzzing.
+fn check_positions(root: &gltf::json::Root) -> Result<()> {
+    use gltf::json::mesh::Semantic;
+    use gltf::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions));
+            if let Some(i) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(GltfError::new(
+                    format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                    format!(
+                        "accessor {} does not exist (the file has {})",
+                        i.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks every index of the document (the `gltf` crate's validation), so that no lookup
 /// can fail later. POSITION accessors without `min` and `max` (which the spec asks for and
 /// penumbra does not use) are let through.
 fn validate(root: &gltf::json::Root) -> Result<()> {
     use gltf::json::validation::{Error, Validate};
+    check_positions(root)?;
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().to_string();

@@ -339,6 +339,10 @@ fn bad_inputs_name_their_json_path() {
             "buffers[0].byteLength",
         ),
         (
+            |v| v["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9),
+            "meshes[0].primitives[0].attributes.POSITION",
+        ),
+        (
             |v| v["nodes"] = json!([{"mesh": 0, "children": [0]}]),
             "nodes[0]",
         ),
