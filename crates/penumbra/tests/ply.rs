@@ -61,6 +61,62 @@ fn a_ply_mesh_loads_as_an_obj_does_whatever_the_case_of_its_extension() {
     assert!(g.triangles[1].smooth);
 }
 
+/// A MeshLab-style textured, coloured square: `comment TextureFile`, byte colours, and a
+/// per-face `texcoord` list on each of its two triangles.
+const TEXTURED_PLY: &str = "ply\nformat ascii 1.0\ncomment TextureFile tex/red.png\n\
+    element vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+    property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n\
+    element face 2\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\n\
+    end_header\n0 0 0 255 255 255 255\n1 0 0 255 0 0 255\n1 1 0 0 0 255 255\n\
+    0 1 0 255 255 255 255\n3 0 1 2 6 0 0 1 0 1 1\n3 0 2 3 6 0.5 0.5 1 1 0 1\n";
+
+#[test]
+fn a_textured_coloured_ply_keeps_its_colours_texture_and_texcoords() {
+    let dir = TempDir::new("ply_textured");
+    dir.write("square.ply", TEXTURED_PLY);
+    dir.png("tex/red.png", 2, 2, |_, _| [255, 0, 0]);
+    let scene = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
+    )
+    .unwrap();
+    let world = &scene.world;
+    let g = world.geometry();
+    // Vertex 0 has two texcoords (one per face): split in two.
+    assert_eq!((g.triangles.len(), g.positions.len()), (2, 5));
+    let colors = g.triangles[0].vertices.map(|v| g.colors[v as usize]);
+    assert_eq!(colors, [Vec3::ONE, Vec3::X, Vec3::Z]);
+    let uvs = g.triangles[1].vertices.map(|v| g.uvs[v as usize]);
+    assert_eq!(uvs, [Vec2::splat(0.5), Vec2::ONE, Vec2::Y]);
+    let material = &world.materials()[g.triangles[0].material as usize];
+    assert_eq!(material.texture, Some(0));
+    assert_eq!(world.textures().len(), 1);
+    assert!(
+        scene.files.iter().any(|f| f.ends_with("tex/red.png")),
+        "{:?}",
+        scene.files
+    );
+    let info = inspect_ply(&dir.join("square.ply")).unwrap();
+    assert!(info.colors && info.uvs);
+    assert_eq!(info.materials.len(), 1);
+    assert_eq!(
+        info.warnings,
+        [
+            "element `vertex`: property `alpha` is read but ignored (penumbra has no vertex \
+          transparency)"
+        ]
+    );
+    // A missing texture is an image error naming it.
+    std::fs::remove_file(dir.join("tex/red.png")).unwrap();
+    let e = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Asset(AssetKind::Image), "{e}");
+    assert!(e.to_string().contains("red.png"), "{e}");
+}
+
 #[test]
 fn ply_files_are_read_once_and_instanced_by_the_copy_or_instance_rule() {
     let dir = TempDir::new("ply_instances");

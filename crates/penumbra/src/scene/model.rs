@@ -35,8 +35,10 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::error::{AssetKind, ErrorKind, Location};
+use super::obj::obj_bounds;
 use super::parse::Source;
-use super::{inspect_gltf, inspect_obj, inspect_ply, Override, SceneError, SceneFile, SceneFormat};
+use super::ply::ply_bounds;
+use super::{inspect_gltf, Override, SceneError, SceneFile, SceneFormat};
 use crate::math::Aabb;
 
 /// Vertical field of view of the default camera, in degrees.
@@ -94,8 +96,8 @@ impl SceneFile {
             source,
         })?;
         let (bounds, imports) = match format {
-            ModelFormat::Obj => (inspect_obj(path).map(|i| i.bounds), Imports::default()),
-            ModelFormat::Ply => (inspect_ply(path).map(|i| i.bounds), Imports::default()),
+            ModelFormat::Obj => (obj_bounds(path), Imports::default()),
+            ModelFormat::Ply => (ply_bounds(path), Imports::default()),
             ModelFormat::Gltf => match inspect_gltf(path) {
                 Ok(i) => {
                     let imports = Imports {

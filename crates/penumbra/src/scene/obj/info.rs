@@ -56,14 +56,24 @@ pub fn inspect_mtl(bytes: &[u8], path: &Path) -> Result<Vec<(String, Option<Path
         .collect())
 }
 
+/// The bounds of the OBJ file at `path` (read as [`inspect_obj`] reads it): all a model's
+/// scene needs, without the rest of the summary (closedness costs a sort of every edge).
+pub(in crate::scene) fn obj_bounds(path: &Path) -> Result<Aabb, String> {
+    Ok(mesh_bounds(&load_obj(&Files::disk(), path, None)?.mesh))
+}
+
+/// Bounds of every vertex a triangle of `mesh` uses.
+pub(in crate::scene) fn mesh_bounds(mesh: &Mesh) -> Aabb {
+    mesh.indices
+        .iter()
+        .flatten()
+        .fold(Aabb::EMPTY, |b, &i| b.grow(mesh.positions[i as usize]))
+}
+
 /// The summary of a mesh file's model (also a PLY file's, without materials).
 pub(in crate::scene) fn summarize(model: &ObjModel) -> ObjInfo {
     let mesh = &model.mesh;
-    let bounds = mesh
-        .indices
-        .iter()
-        .flatten()
-        .fold(Aabb::EMPTY, |b, &i| b.grow(mesh.positions[i as usize]));
+    let bounds = mesh_bounds(mesh);
     ObjInfo {
         triangles: mesh.indices.len(),
         vertices: mesh.positions.len(),

@@ -44,8 +44,8 @@ use crate::files::Files;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
-pub(super) use info::summarize;
 pub use info::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
+pub(super) use info::{mesh_bounds, obj_bounds, summarize};
 use lines::decode;
 use mtl::Library;
 

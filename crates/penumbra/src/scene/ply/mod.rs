@@ -44,9 +44,10 @@ mod texcoords;
 use std::fmt;
 use std::path::Path;
 
-use super::obj::{summarize, ObjInfo, ObjMaterial, ObjModel, MAX_FILE_BYTES};
+use super::obj::{mesh_bounds, summarize, ObjInfo, ObjMaterial, ObjModel, MAX_FILE_BYTES};
 use crate::files::Files;
 use crate::geometry::Mesh;
+use crate::math::Aabb;
 use body::Body;
 use header::{Element, Format, Kind, Property};
 use roles::{face_roles, ignored, vertex_roles, Role};
@@ -159,6 +160,12 @@ fn model(ply: PlyModel, path: &Path) -> (ObjModel, Vec<String>) {
 pub fn inspect_ply(path: &Path) -> Result<ObjInfo, String> {
     let ply = load_ply(&Files::disk(), path).map_err(|e| e.to_string())?;
     Ok(summary(ply, path))
+}
+
+/// The bounds of the PLY file at `path`: all a model's scene needs (see `obj_bounds`).
+pub(crate) fn ply_bounds(path: &Path) -> Result<Aabb, String> {
+    let ply = load_ply(&Files::disk(), path).map_err(|e| e.to_string())?;
+    Ok(mesh_bounds(&ply.mesh))
 }
 
 /// [`inspect_ply`] for the bytes of a PLY file (a texture file it names is relative to the
