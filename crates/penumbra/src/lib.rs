@@ -92,7 +92,7 @@ pub use image_format::OutputFormat;
 pub use image_io::{check_finite, encode_image, stage_image, write_image, write_image_unless};
 pub use integrator::{LightModel, Shading};
 pub use light::{AreaLight, Light, PointLight};
-pub use material::Material;
+pub use material::{Cutout, Material};
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use names::{escape_controls, file_name_part, UnknownName};
 pub use pool::MAX_THREADS;

@@ -1,5 +1,6 @@
-//! Texture images: PNG and JPEG files decoded to linear RGB texels, with their size checked
-//! against memory before decoding (a small file can claim a huge image).
+//! Texture images: PNG and JPEG files decoded to linear RGB texels (and the alpha channel,
+//! linear as stored, when the file has one), with their size checked against memory before
+//! decoding (a small file can claim a huge image).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -11,12 +12,15 @@ use crate::texture::{srgb_to_linear, Image};
 pub const MAX_TEXELS: u64 = 1 << 26;
 
 /// Memory decoding takes per texel at its peak: the decoder's buffer (up to 8 bytes for
-/// 16-bit RGBA), its float copy (12) and the texels kept (12).
-pub const DECODE_BYTES_PER_TEXEL: u64 = 32;
+/// 16-bit RGBA), its float copy (12, or 16 with alpha), and the texels kept (12, and 4 for
+/// the alpha).
+pub const DECODE_BYTES_PER_TEXEL: u64 = 40;
 
-/// Reads and decodes the PNG or JPEG `path` of `files` (8 or 16 bits, grey, RGB or RGBA;
-/// alpha ignored) to linear RGB, through the sRGB curve when `srgb` is true, else as value/max. With `max_bytes`, an image
-/// whose decoding would take more memory than that is refused before it is decoded.
+/// Reads and decodes the PNG or JPEG `path` of `files` (8 or 16 bits, grey, RGB or RGBA)
+/// to linear RGB, through the sRGB curve when `srgb` is true, else as value/max; an alpha
+/// channel is kept beside the texels as value/max, never through the curve ([`Image::alpha`]).
+/// With `max_bytes`, an image whose decoding would take more memory than that is refused
+/// before it is decoded.
 pub(crate) fn load_texture_image(
     files: &Files,
     path: &Path,
@@ -86,24 +90,44 @@ pub fn decode_texture_image(
     if width == 0 || height == 0 {
         return Err("the image is empty".into());
     }
-    let rgb = img.into_rgb32f();
-    let mut texels = Vec::new();
-    texels
-        .try_reserve_exact(width as usize * height as usize)
-        .map_err(|_| format!("not enough memory for a {width}x{height} image"))?;
-    texels.extend(rgb.pixels().map(|p| {
-        let c = glam::Vec3::from(p.0);
+    let texels = width as usize * height as usize;
+    let room = || format!("not enough memory for a {width}x{height} image");
+    let decode = |c: [f32; 3]| {
+        let c = glam::Vec3::from(c);
         if srgb {
             c.map(srgb_to_linear)
         } else {
             c
         }
-    }));
+    };
+    let (rgb, alpha) = if img.color().has_alpha() {
+        let (mut rgb, mut alpha) = (
+            room_for(texels).ok_or_else(room)?,
+            room_for(texels).ok_or_else(room)?,
+        );
+        for p in img.into_rgba32f().pixels() {
+            let [r, g, b, a] = p.0;
+            rgb.push(decode([r, g, b]));
+            alpha.push(a);
+        }
+        (rgb, Some(alpha))
+    } else {
+        let mut rgb = room_for(texels).ok_or_else(room)?;
+        rgb.extend(img.into_rgb32f().pixels().map(|p| decode(p.0)));
+        (rgb, None)
+    };
     Ok(Image {
         width,
         height,
-        texels,
+        texels: rgb,
+        alpha,
     })
+}
+
+/// An empty vector with room for `n` values, or `None` when memory is short.
+fn room_for<T>(n: usize) -> Option<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok().map(|_| v)
 }
 
 #[cfg(test)]
@@ -144,7 +168,7 @@ mod tests {
                 .into(),
                 half16,
             ),
-            // Alpha is ignored: a fully transparent texel keeps its color.
+            // A fully transparent texel keeps its color (straight alpha).
             (
                 "rgba8.png",
                 image::RgbaImage::from_pixel(1, 1, image::Rgba([128, 128, 128, 0])).into(),
@@ -163,6 +187,10 @@ mod tests {
             for c in linear.texels[0].to_array() {
                 assert!((c - encoded).abs() < 1e-6, "{name}: {c}");
             }
+            // Alpha is kept only where the file has it, as stored whatever the color space.
+            let expected = name.starts_with("rgba").then(|| vec![0.0]);
+            assert_eq!(srgb.alpha, expected, "{name}");
+            assert_eq!(linear.alpha, expected, "{name}");
         }
         let corrupt = dir.join("corrupt.png");
         std::fs::write(&corrupt, b"not a png").unwrap();

@@ -13,6 +13,12 @@
 //! the world's own triangles before any instance, then the smaller instance index, then the
 //! smaller triangle index in the mesh, so that the answer never depends on the order of the
 //! visit.
+//!
+//! A world with cut-outs keeps two sets of instances over the same mesh trees (see
+//! `cutouts`): the instances whose materials may cut and the others. Each set reports its
+//! hits by the world's instance index.
+
+use std::sync::Arc;
 
 use glam::{Affine3A, DMat4, Vec3, Vec3A};
 
@@ -23,9 +29,12 @@ use crate::math::{Aabb, Ray, Transform};
 /// Meshes built once, the instances that place them, and the top-level tree over those.
 #[derive(Clone, Debug, Default)]
 pub struct Instances {
-    meshes: Vec<Bvh>,
+    meshes: Arc<Vec<Bvh>>,
     placements: Vec<Placement>,
     top: Bvh,
+    /// The world's index of each placement, when the placements are some of the world's
+    /// instances (empty: all of them, in order).
+    ids: Vec<u32>,
 }
 
 /// Where an instance puts its mesh: the mesh's index and the map from world to object space.
@@ -47,13 +56,18 @@ impl Instances {
         if instances.is_empty() {
             return Instances::default();
         }
-        let meshes: Vec<Bvh> = meshes
-            .iter()
-            .map(|m| {
-                let corners = |i: usize| m.indices[i].map(|v| m.positions[v as usize]);
-                build::build(m.len(), corners, pool)
-            })
-            .collect();
+        Instances::place(build_meshes(meshes, pool), instances, Vec::new(), pool)
+    }
+
+    /// The top-level tree over `instances` (mesh index into `meshes` and transform) placing
+    /// the mesh trees `meshes` (kept, and counted by [`Instances::node_count`], even without
+    /// instances); `ids` are their world indices (empty: `0, 1, …`).
+    pub(super) fn place(
+        meshes: Arc<Vec<Bvh>>,
+        instances: &[(u32, Transform)],
+        ids: Vec<u32>,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Instances {
         let boxes: Vec<Aabb> = instances
             .iter()
             .map(|(mesh, transform)| world_box(&meshes[*mesh as usize], transform))
@@ -74,7 +88,19 @@ impl Instances {
                 tris: Vec::new(),
                 prim_ids,
             },
+            ids,
         }
+    }
+
+    /// The world's index of placement `index`.
+    #[inline(always)]
+    fn id(&self, index: u32) -> u32 {
+        self.ids.get(index as usize).copied().unwrap_or(index)
+    }
+
+    /// Nodes of the top-level tree alone.
+    pub(super) fn top_node_count(&self) -> usize {
+        self.top.node_count()
     }
 
     /// True when there are no instances.
@@ -138,6 +164,20 @@ impl Instances {
     /// The closest of `best` (a hit of the world's own triangles, or `None`) and every
     /// instance's hits with `t` in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32, best: Option<Hit>) -> Option<Hit> {
+        self.intersect_kept(ray, t_min, t_max, best, |_, _, _, _| true)
+    }
+
+    /// [`Instances::intersect`] with only the hits `keep(placement, triangle, b1, b2)` keeps
+    /// (a placement of this set, a triangle of its mesh).
+    #[inline(always)]
+    pub(super) fn intersect_kept(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        best: Option<Hit>,
+        keep: impl Fn(u32, u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
         if self.top.nodes.is_empty() {
             return best;
         }
@@ -155,11 +195,13 @@ impl Instances {
                     let (local, mesh) = self.enter(index, ray);
                     // Ties at the best `t` so far are looked for too: a smaller key may take them.
                     let limit = if best.is_some() { t.next_up() } else { t_max };
-                    let Some(hit) = traverse::intersect(mesh, &local, t_min, limit) else {
+                    let kept = |tri, b1, b2| keep(index, tri, b1, b2);
+                    let Some(hit) = traverse::intersect_kept(mesh, &local, t_min, limit, kept)
+                    else {
                         continue;
                     };
                     let hit = Hit {
-                        instance: Some(index),
+                        instance: Some(self.id(index)),
                         ..hit
                     };
                     if best.is_none_or(|b| closer(&hit, &b)) {
@@ -185,6 +227,28 @@ impl Instances {
             })
         })
     }
+
+    /// [`Instances::occluded`] counting only the hits `keep(placement, triangle, b1, b2)`
+    /// keeps.
+    pub(super) fn occluded_kept(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        keep: impl Fn(u32, u32, f32, f32) -> bool,
+    ) -> bool {
+        if self.top.nodes.is_empty() {
+            return false;
+        }
+        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+        traverse::walk_any(&self.top.nodes, origin, inv_dir, t_min, t_max, |slots| {
+            self.top.prim_ids[slots].iter().any(|&index| {
+                let (local, mesh) = self.enter(index, ray);
+                let kept = |tri, b1, b2| keep(index, tri, b1, b2);
+                traverse::occluded_kept(mesh, &local, t_min, t_max, kept)
+            })
+        })
+    }
 }
 
 impl Instances {
@@ -207,11 +271,48 @@ impl Instances {
             })
         })
     }
+
+    /// [`Instances::occludes_segment`] counting only the hits `keep(placement, triangle, b1,
+    /// b2)` keeps.
+    pub(super) fn occludes_segment_kept(
+        &self,
+        origin: Vec3,
+        end: Vec3,
+        t_max: f32,
+        keep: impl Fn(u32, u32, f32, f32) -> bool,
+    ) -> bool {
+        if self.top.nodes.is_empty() {
+            return false;
+        }
+        let world = Vec3A::from(end - origin);
+        let (o, inv_dir) = (Vec3A::from(origin), world.recip());
+        traverse::walk_any(&self.top.nodes, o, inv_dir, 0.0, t_max, |slots| {
+            self.top.prim_ids[slots].iter().any(|&index| {
+                let (map, mesh) = self.placement(index);
+                let (a, b) = (map.transform_point3(origin), map.transform_point3(end));
+                let kept = |tri, b1, b2| keep(index, tri, b1, b2);
+                traverse::occluded_kept(mesh, &Ray::new(a, b - a), 0.0, t_max, kept)
+            })
+        })
+    }
+}
+
+/// Each of `meshes` built once into a tree of its own, on the threads of `pool` when there is
+/// one.
+pub(super) fn build_meshes(meshes: &[Mesh], pool: Option<&rayon::ThreadPool>) -> Arc<Vec<Bvh>> {
+    let trees = meshes
+        .iter()
+        .map(|m| {
+            let corners = |i: usize| m.indices[i].map(|v| m.positions[v as usize]);
+            build::build(m.len(), corners, pool)
+        })
+        .collect();
+    Arc::new(trees)
 }
 
 /// True when `a` is closer than `b`: a smaller `t`, or the same `t` and a smaller key (the
 /// world's own triangles first, then by instance, then by triangle).
-fn closer(a: &Hit, b: &Hit) -> bool {
+pub(super) fn closer(a: &Hit, b: &Hit) -> bool {
     let key = |h: &Hit| (h.instance.map_or(0, |i| u64::from(i) + 1), h.triangle);
     a.t < b.t || (a.t == b.t && key(a) < key(b))
 }

@@ -7,9 +7,13 @@
 //! instances answer the renderer's batched shadow queries (fans, bundles of segments, shafts)
 //! with the same kernels inside each instance the batch may meet (see `instance_batches`),
 //! and its camera-ray packets one ray at a time, lane by lane.
+//!
+//! A world with cut-out materials has cut-out levels too (see `cutouts`): every query asks
+//! them last, and a batched query asks them for each of its rays still open, one at a time.
 
 use glam::Vec3;
 
+use super::cutouts::{self, Cutouts, Parts};
 use super::instance_batches;
 use super::instances::Instances;
 use super::{Bvh, Pairs, Segments};
@@ -22,15 +26,28 @@ use crate::simd::SimdPath;
 pub struct Levels {
     flat: Bvh,
     instances: Instances,
+    /// The levels of the triangles whose material may cut; `None` in a world without.
+    cutouts: Option<Box<Cutouts>>,
 }
 
 impl Levels {
-    /// The world's own triangles' tree and the instances.
-    pub(crate) fn new(flat: Bvh, instances: Instances) -> Levels {
-        Levels { flat, instances }
+    /// The levels of a world's `parts`, built on the threads of `pool` when there is one.
+    pub(crate) fn build(parts: &Parts, pool: Option<&rayon::ThreadPool>) -> Levels {
+        let (flat, instances, cutouts) = cutouts::split(parts, pool);
+        Levels {
+            flat,
+            instances,
+            cutouts: cutouts.map(Box::new),
+        }
     }
 
-    /// The tree over the world's own triangles.
+    /// True when some triangle's material may cut (then [`Levels::flat`] and
+    /// [`Levels::instances`] hold the opaque ones only).
+    pub fn has_cutouts(&self) -> bool {
+        self.cutouts.is_some()
+    }
+
+    /// The tree over the world's own triangles (their opaque ones, with cut-outs).
     pub fn flat(&self) -> &Bvh {
         &self.flat
     }
@@ -42,12 +59,23 @@ impl Levels {
 
     /// Nodes of every tree.
     pub fn node_count(&self) -> usize {
-        self.flat.node_count() + self.instances.node_count()
+        let cut = self.cutouts.as_ref().map_or(0, |c| c.node_count());
+        self.flat.node_count() + self.instances.node_count() + cut
     }
 
-    /// Checks the world's own tree against `geometry` (see [`Bvh::validate`]).
+    /// Checks the trees of the world's own triangles against `geometry` (see
+    /// [`Bvh::validate`]): with cut-outs, the opaque tree and the cut-out tree each hold
+    /// their part, and together every triangle once.
     pub fn validate(&self, geometry: &Geometry) -> Result<(), String> {
-        self.flat.validate(geometry)
+        let Some(cut) = &self.cutouts else {
+            return self.flat.validate(geometry);
+        };
+        let ids = cut.triangles();
+        let opaque: Vec<u32> = (0..geometry.len() as u32)
+            .filter(|i| ids.binary_search(i).is_err())
+            .collect();
+        super::validate::validate_subset(&self.flat, geometry, &opaque, false)?;
+        super::validate::validate_subset(cut.flat(), geometry, ids, true)
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`, if any (see [`Bvh::intersect`]; ties
@@ -55,13 +83,22 @@ impl Levels {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let hit = self.flat.intersect(ray, t_min, t_max);
-        self.instances.intersect(ray, t_min, t_max, hit)
+        let hit = self.instances.intersect(ray, t_min, t_max, hit);
+        match &self.cutouts {
+            None => hit,
+            Some(cut) => cut.intersect(ray, t_min, t_max, hit),
+        }
     }
 
     /// True when any triangle meets the ray with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.flat.occluded(ray, t_min, t_max) || self.instances.occluded(ray, t_min, t_max)
+        self.flat.occluded(ray, t_min, t_max)
+            || self.instances.occluded(ray, t_min, t_max)
+            || self
+                .cutouts
+                .as_ref()
+                .is_some_and(|c| c.occluded(ray, t_min, t_max))
     }
 
     /// [`Bvh::intersect_from_on`] over both levels.
@@ -77,9 +114,14 @@ impl Levels {
         self.flat
             .intersect_from_on(path, origin, dirs, t_min, t_max, hits);
         if !self.instances.is_empty() {
-            for (&dir, hit) in dirs.iter().zip(hits) {
+            for (&dir, hit) in dirs.iter().zip(hits.iter_mut()) {
                 let ray = Ray::new(origin, dir);
                 *hit = self.instances.intersect(&ray, t_min, t_max, *hit);
+            }
+        }
+        if let Some(cut) = &self.cutouts {
+            for (&dir, hit) in dirs.iter().zip(hits) {
+                *hit = cut.intersect(&Ray::new(origin, dir), t_min, t_max, *hit);
             }
         }
     }
@@ -110,6 +152,11 @@ impl Levels {
         if !self.instances.is_empty() {
             instance_batches::occlude_from(&self.instances, path, origin, ends, t_max, blocked);
         }
+        if let Some(cut) = &self.cutouts {
+            for (&end, b) in ends.iter().zip(blocked) {
+                *b = *b || cut.occludes_segment(origin, end, t_max);
+            }
+        }
     }
 
     /// [`Bvh::occlude_from`] over both levels, on this process's SIMD path.
@@ -136,6 +183,12 @@ impl Levels {
         if !self.instances.is_empty() {
             instance_batches::occlude_segments(&self.instances, path, segments, t_max, blocked);
         }
+        if let Some(cut) = &self.cutouts {
+            let (o, e) = (segments.origin, segments.end);
+            for (i, b) in blocked.iter_mut().enumerate() {
+                *b = *b || cut.occludes_segment(point(o, i), point(e, i), t_max);
+            }
+        }
     }
 
     /// [`Bvh::occlude_pairs_on`] over both levels.
@@ -144,5 +197,17 @@ impl Levels {
         if !self.instances.is_empty() {
             instance_batches::occlude_pairs(&self.instances, path, pairs, t_max, blocked);
         }
+        if let Some(cut) = &self.cutouts {
+            let (o, e) = (pairs.origins, pairs.ends);
+            let m = o[0].len().max(1);
+            for (k, b) in blocked.iter_mut().enumerate() {
+                *b = *b || cut.occludes_segment(point(o, k % m), point(e, k / m), t_max);
+            }
+        }
     }
+}
+
+/// Point `i` of coordinate slices `c`.
+fn point(c: [&[f32]; 3], i: usize) -> Vec3 {
+    Vec3::new(c[0][i], c[1][i], c[2][i])
 }

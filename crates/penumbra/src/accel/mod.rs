@@ -25,6 +25,22 @@
 //! slot; lanes past the leaf repeat its last triangle and are masked). Ray casting keeps each
 //! slot's exact corners (`SoaTriangle`) and its geometry and primitive ids beside them.
 //!
+//! # Cut-outs
+//!
+//! Triangles whose material may cut (alpha-tested: see `material::Cutout`) are kept apart
+//! (`cutouts`): a world with such materials builds its opaque triangles and instances into
+//! the levels above, and its cut-out triangles (the world's own, and the instances whose
+//! materials may cut, over the same mesh trees) into a second pair of levels, walked by the
+//! generic single-ray walks of `traverse` with a filtered primitive test: one traversal, two
+//! primitive tests, as Embree's filter functions and obvhs's closures do. A hit the alpha
+//! test refuses does not shorten a closest-hit ray, and an any-hit walk looks on past it. The
+//! batched kernels (fans, bundles, shafts, the batches inside instances) are not changed:
+//! after them, each ray or segment of a batch still open asks the cut-out levels alone. So a
+//! world without cut-outs runs exactly the code of before (same bytes, same speed), and a
+//! ray's answer never depends on how it was grouped. Ray casting tests the same alpha after
+//! the watertight test, in its wide walk, for a scene made from a world with cut-outs
+//! (`WideBvh` holds the tests by triangle); its packets then trace one ray at a time.
+//!
 //! # Files
 //!
 //! This file owns the binary layout ([`Bvh`], [`BvhNode`], `TriAccel`), the tuning constants
@@ -48,6 +64,8 @@
 //! - `instances` and `levels`: the second level (meshes built once and placed by instances
 //!   under a top-level tree) and the pair of levels a world queries; `instance_batches`: the
 //!   batched shadow queries inside each instance a batch meets;
+//! - `cutouts`: the cut-out levels, the split of a world's parts between opaque and cut-out
+//!   levels, and (`cutouts::alpha`) the alpha tests of cut-out hits;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with;
 //! - `prim`: the triangle tests, each written once for scalar and lane callers:
 //!   `moller_trumbore` (the renderer's), `watertight` (ray casting's: Woop, Benthin and Wald
@@ -68,6 +86,7 @@ use prim::moller_trumbore::intersect_triangle;
 
 mod build;
 mod closest_fans;
+mod cutouts;
 mod instance_batches;
 mod instances;
 mod lanes;
@@ -86,6 +105,7 @@ pub(crate) mod test_meshes;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use cutouts::{AlphaTests, Parts};
 pub use instances::Instances;
 pub use levels::Levels;
 pub use segments::{Pairs, Segments};

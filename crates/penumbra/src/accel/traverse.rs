@@ -2,7 +2,8 @@
 //! query is made of, generic over what a leaf holds (triangles in a mesh's tree, instances in
 //! the top-level tree; see `instances`): the closest-first walk (`walk_closest`) and the
 //! any-hit walk (`walk_any`). `intersect`, `occluded` and `intersect_batch` are those walks
-//! over triangles.
+//! over triangles; `intersect_kept` and `occluded_kept` are the same walks with a filter on
+//! each hit (the cut-outs' alpha test, see `cutouts`): one traversal, two primitive tests.
 
 use std::ops::Range;
 
@@ -125,7 +126,21 @@ pub(super) fn walk_any(
 }
 
 /// The closest hit with `t` in `(t_min, t_max)`, if any.
-pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<Hit> {
+pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+    intersect_kept(bvh, ray, t_min, t_max, |_, _, _| true)
+}
+
+/// The closest hit with `t` in `(t_min, t_max)` that `keep(prim_id, b1, b2)` keeps, if any:
+/// a hit it refuses does not shorten the ray. `keep` is asked only about a hit that would
+/// become the closest so far.
+#[inline(always)]
+pub(super) fn intersect_kept(
+    bvh: &Bvh,
+    ray: &Ray,
+    t_min: f32,
+    mut t_max: f32,
+    keep: impl Fn(u32, f32, f32) -> bool,
+) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
@@ -148,7 +163,7 @@ pub(super) fn intersect(bvh: &Bvh, ray: &Ray, t_min: f32, mut t_max: f32) -> Opt
                 let hit = tri.hit(ray, t_min, limit);
                 if let Some(h) = hit {
                     let id = bvh.prim_ids[i];
-                    if h.t < *t_max || id < best_id {
+                    if (h.t < *t_max || id < best_id) && keep(id, h.b1, h.b2) {
                         *t_max = h.t;
                         limit = h.t.next_up();
                         best_id = id;
@@ -177,6 +192,28 @@ pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         bvh.tris[slots]
             .iter()
             .any(|tri| tri.hit(ray, t_min, t_max).is_some())
+    })
+}
+
+/// True when a triangle meets the ray with `t` in `(t_min, t_max)` at a hit that
+/// `keep(prim_id, b1, b2)` keeps; stops at the first.
+pub(super) fn occluded_kept(
+    bvh: &Bvh,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+    keep: impl Fn(u32, f32, f32) -> bool,
+) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
+        slots.into_iter().any(|i| {
+            bvh.tris[i]
+                .hit(ray, t_min, t_max)
+                .is_some_and(|h| keep(bvh.prim_ids[i], h.b1, h.b2))
+        })
     })
 }
 

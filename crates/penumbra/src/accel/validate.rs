@@ -8,23 +8,43 @@ use crate::math::Ray;
 
 /// Checks `bvh` against the geometry it was built from; see [`Bvh::validate`].
 pub(super) fn validate(bvh: &Bvh, geometry: &Geometry) -> Result<(), String> {
-    if geometry.is_empty() {
+    let all: Vec<u32> = (0..geometry.len() as u32).collect();
+    validate_subset(bvh, geometry, &all, false)
+}
+
+/// Checks `bvh` against the triangles `ids` of `geometry` (increasing) that it was built
+/// over: each appears exactly once, and every box holds its contents. The tree names them
+/// by their index in `geometry`, or when `local` by their position in `ids`.
+pub(super) fn validate_subset(
+    bvh: &Bvh,
+    geometry: &Geometry,
+    ids: &[u32],
+    local: bool,
+) -> Result<(), String> {
+    if ids.is_empty() {
         return if bvh.nodes.is_empty() {
             Ok(())
         } else {
             Err("nodes without triangles".into())
         };
     }
+    // The triangle of `geometry` that prim id `id` names, if it is one of `ids`.
+    let triangle = |id: u32| -> Option<usize> {
+        match local {
+            true => ids.get(id as usize).map(|&i| i as usize),
+            false => ids.binary_search(&id).ok().map(|_| id as usize),
+        }
+    };
     let mut seen = vec![false; geometry.len()];
     for &id in &bvh.prim_ids {
-        let slot = seen
-            .get_mut(id as usize)
+        let slot = triangle(id)
+            .and_then(|i| seen.get_mut(i))
             .ok_or(format!("triangle id {id} out of range"))?;
         if std::mem::replace(slot, true) {
             return Err(format!("triangle {id} appears twice"));
         }
     }
-    if seen.iter().any(|s| !s) || bvh.tris.len() != geometry.len() {
+    if bvh.prim_ids.len() != ids.len() || bvh.tris.len() != ids.len() {
         return Err("a triangle is missing from the leaves".into());
     }
     let mut leaf_tris = 0;
@@ -42,7 +62,8 @@ pub(super) fn validate(bvh: &Bvh, geometry: &Geometry) -> Result<(), String> {
                 return Err(format!("leaf {i} past the triangle array"));
             }
             for k in first..end {
-                for p in geometry.corners(bvh.prim_ids[k] as usize) {
+                let i = triangle(bvh.prim_ids[k]).ok_or("a leaf past the triangles")?;
+                for p in geometry.corners(i) {
                     if !bounds.contains(p) {
                         return Err(format!("leaf {i} does not hold triangle {k}"));
                     }
@@ -59,10 +80,10 @@ pub(super) fn validate(bvh: &Bvh, geometry: &Geometry) -> Result<(), String> {
             }
         }
     }
-    if leaf_tris != geometry.len() {
+    if leaf_tris != ids.len() {
         return Err(format!(
             "leaves reach {leaf_tris} of {} triangles",
-            geometry.len()
+            ids.len()
         ));
     }
     Ok(())

@@ -7,6 +7,7 @@ mod shapes;
 mod surface;
 mod triangle;
 
+pub(crate) use mesh::material_of;
 pub use mesh::{Geometry, Mesh, Triangle};
 pub use shapes::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 pub use surface::Surface;

@@ -5,6 +5,14 @@
 //! Ray casting copies an instance's triangles into its scene, placed by
 //! [`Geometry::append`], exactly where the renderer's world puts them; rendering shares one
 //! mesh among its instances, ray casting's own hierarchy does not (yet).
+//!
+//! A world's cut-out materials come along: every ray query (closest hit, occlusion, counting
+//! and listing, and through them occupancy and the sign of the signed distance) skips a
+//! crossing where the triangle's alpha test cuts it away, after the watertight test found it
+//! (so a ray through the shared edge of a kept and a cut triangle hits, or not, as the
+//! triangle the edge rule picks says). The closest-point queries (and distances) ignore
+//! alpha: they are not rays. A copy made by [`RaycastingScene::add_instance`] keeps its
+//! geometry's alpha tests; triangles added by [`RaycastingScene::add_triangles`] are opaque.
 
 use std::sync::Arc;
 
@@ -13,7 +21,8 @@ use glam::{Mat4, Vec3};
 use super::lazy::{Span, Triangles};
 use super::run::budget;
 use super::{fits, RaycastError, RaycastingScene};
-use crate::geometry::{Geometry, Mesh, Triangle};
+use crate::accel::AlphaTests;
+use crate::geometry::{material_of, Geometry, Mesh, Triangle};
 use crate::math::Transform;
 use crate::scale::MAX_COORDINATE;
 use crate::world::World;
@@ -27,7 +36,9 @@ impl RaycastingScene {
     /// The triangles of `world`, one geometry per object of the world, instances included
     /// (geometry id = object id; primitive ids count the object's triangles in the order it
     /// added them, or an instance's mesh's). An instance's triangles are copied, placed
-    /// where the renderer places them.
+    /// where the renderer places them. Cut-out materials come along: a ray passes through
+    /// a triangle where its material's alpha test cuts it away, in every ray query (the
+    /// closest-point queries ignore alpha; see the module doc).
     ///
     /// `Err(TooManyTriangles)` when the copies would hold more than
     /// [`MAX_TRIANGLES`](crate::MAX_TRIANGLES) triangles (or 2³² vertices), and
@@ -63,6 +74,7 @@ impl RaycastingScene {
             },
             local_ids: local_ids(own, objects),
             spans: spans(own, objects),
+            alpha: None,
         };
         for p in placed {
             let copy = place(&meshes[p.mesh as usize], &p.transform, p.object);
@@ -72,6 +84,7 @@ impl RaycastingScene {
                 p.object,
             );
         }
+        all.alpha = alpha_tests(world).map(Arc::new);
         Ok(RaycastingScene {
             triangles: Arc::new(all),
             geometries: objects,
@@ -122,11 +135,14 @@ impl RaycastingScene {
         }
         // As in `add_triangles`: forget the structure before the triangles are changed.
         self.accel.reset();
-        Arc::make_mut(&mut self.triangles).push(
+        let triangles = Arc::make_mut(&mut self.triangles);
+        let first = triangles.geometry.len();
+        triangles.push(
             copy.positions,
             copy.triangles.iter().map(|t| t.vertices),
             id,
         );
+        triangles.copy_alpha(geometry_id, first);
         self.geometries += 1;
         Ok(id)
     }
@@ -153,6 +169,12 @@ impl Triangles {
             }));
         let count = self.geometry.len() - first;
         self.local_ids.extend(0..count as u32);
+        if let Some(alpha) = &mut self.alpha {
+            let alpha = Arc::make_mut(alpha);
+            for _ in 0..count {
+                alpha.push_triangle([Default::default(); 3], u32::MAX);
+            }
+        }
         let id = id as usize;
         if self.spans.len() <= id {
             self.spans.resize(id + 1, Span::default());
@@ -161,6 +183,21 @@ impl Triangles {
             vertices: base..self.geometry.positions.len() as u32,
             triangles: first as u32..self.geometry.len() as u32,
         };
+    }
+
+    /// Gives the triangles from `first` on (a copy of geometry `id` just pushed) the alpha
+    /// tests of `id`'s triangles, in primitive-id order.
+    fn copy_alpha(&mut self, id: u32, first: usize) {
+        let Some(alpha) = &mut self.alpha else {
+            return;
+        };
+        let alpha = Arc::make_mut(alpha);
+        let span = self.spans[id as usize].triangles.clone();
+        let own = (span.start as usize..span.end as usize)
+            .filter(|&i| self.geometry.triangles[i].object == id);
+        for (k, i) in own.enumerate() {
+            alpha.set_copy(first + k, i);
+        }
     }
 
     /// Geometry `id` as a mesh of its own: its vertices, and its triangles in primitive-id
@@ -181,6 +218,28 @@ impl Triangles {
             ..Mesh::default()
         }
     }
+}
+
+/// The alpha tests of `world`'s triangles in the order `from_world` copies them (its own,
+/// then each instance's mesh), or `None` when none may be cut out.
+fn alpha_tests(world: &World) -> Option<AlphaTests> {
+    let mut alpha = AlphaTests::of(world.materials(), world.textures())?;
+    let own = world.geometry();
+    for i in 0..own.len() {
+        alpha.push_flat(own, i);
+    }
+    for p in world.placed() {
+        let mesh = &world.meshes()[p.mesh as usize];
+        let materials = world.instance_materials(p);
+        for (i, t) in mesh.indices.iter().enumerate() {
+            let uv = match mesh.has_uvs() {
+                true => t.map(|v| mesh.uvs[v as usize]),
+                false => Default::default(),
+            };
+            alpha.push_triangle(uv, material_of(mesh.slot(i), materials));
+        }
+    }
+    alpha.any_triangle_cuts().then_some(alpha)
 }
 
 /// `mesh` placed by `transform` as object `id`, by [`Geometry::append`]: where the renderer's

@@ -13,6 +13,7 @@ use super::run::QueryOptions;
 use super::RaycastError;
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::wide::WideBvh;
+use crate::accel::AlphaTests;
 use crate::geometry::Geometry;
 
 /// Triangles below this many are built on the calling thread (a few milliseconds).
@@ -31,6 +32,9 @@ pub(crate) struct Triangles {
     pub local_ids: Vec<u32>,
     /// For each geometry id, where its vertices and triangles lie in `geometry`.
     pub spans: Vec<Span>,
+    /// The alpha test of each triangle of `geometry` (by index), when some may be cut out
+    /// (a scene made from a world with cut-out materials); `None` otherwise.
+    pub alpha: Option<Arc<AlphaTests>>,
 }
 
 /// Where one geometry lies in [`Triangles::geometry`]: its vertices are `vertices` (each
@@ -154,7 +158,7 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
         move || {
             let finish = Finish(build);
             let t = &triangles;
-            let accel = WideBvh::build(&t.geometry, &t.local_ids, Some(&pool));
+            let accel = WideBvh::build(&t.geometry, &t.local_ids, t.alpha.clone(), Some(&pool));
             finish.0.finish(State::Built(Arc::new(accel)));
         }
     };

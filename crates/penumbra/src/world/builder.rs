@@ -5,7 +5,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{mesh_bounds, Placed, World, WorldError, MAX_TRIANGLES};
-use crate::accel::{Bvh, Instances, Levels};
+use crate::accel::{Levels, Parts};
 use crate::camera::Camera;
 use crate::geometry::{Geometry, Mesh};
 use crate::light::Light;
@@ -81,7 +81,8 @@ impl WorldBuilder {
 
     /// Adds a material; returns its index.
     pub fn add_material(&mut self, material: Material) -> Result<u32, WorldError> {
-        if let Some(index) = material.texture {
+        let cutout = material.cutout.and_then(|c| c.texture);
+        for index in material.texture.into_iter().chain(cutout) {
             if index as usize >= self.textures.len() {
                 return Err(WorldError::UnknownTexture {
                     index,
@@ -305,20 +306,31 @@ impl WorldBuilder {
     /// [`WorldBuilder::build`] on the threads of `pool`, or on the calling thread without one.
     pub(crate) fn build_on(self, pool: Option<&rayon::ThreadPool>) -> World {
         let start = Instant::now();
-        let flat = match pool {
-            Some(pool) => Bvh::build_parallel(&self.geometry, pool),
-            None => Bvh::build(&self.geometry),
+        let parts = Parts {
+            geometry: &self.geometry,
+            meshes: &self.meshes,
+            instances: self
+                .placed
+                .iter()
+                .map(|p| {
+                    (
+                        p.mesh,
+                        p.transform,
+                        self.materials_at(p.materials.0, p.materials.1),
+                    )
+                })
+                .collect(),
+            materials: &self.materials,
+            textures: &self.textures,
         };
-        let placements: Vec<(u32, Transform)> =
-            self.placed.iter().map(|p| (p.mesh, p.transform)).collect();
-        let instances = Instances::build(&self.meshes, &placements, pool);
+        let accel = Levels::build(&parts, pool);
         World {
             geometry: self.geometry,
             meshes: self.meshes,
             mesh_boxes: self.mesh_boxes,
             placed: self.placed,
             instance_materials: self.instance_materials,
-            accel: Levels::new(flat, instances),
+            accel,
             materials: self.materials,
             textures: self.textures,
             lights: self.lights,

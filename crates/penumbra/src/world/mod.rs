@@ -219,6 +219,12 @@ impl World {
         &self.placed
     }
 
+    /// The materials instance `p`'s slots map to.
+    pub(crate) fn instance_materials(&self, p: &Placed) -> &[u32] {
+        let (first, count) = (p.materials.0 as usize, p.materials.1 as usize);
+        &self.instance_materials[first..first + count]
+    }
+
     /// The closest hit with `t` in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         self.accel.intersect(ray, t_min, t_max)

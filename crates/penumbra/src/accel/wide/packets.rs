@@ -13,6 +13,9 @@
 //! the closest hit is the same total order (the smallest `t`, then the smallest geometry and
 //! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
 //! visit.
+//!
+//! A scene with cut-out triangles (ray casting from a world with cut-out materials) traces
+//! every ray alone: the single-ray walk applies the alpha test.
 
 use super::kernels::Control;
 use super::node::WIDTH;
@@ -53,7 +56,8 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
             if options.cancelled() {
                 return;
             }
-            match lanes::<N>(rays) {
+            // Cut-out triangles are tested one ray at a time, by the filtered single-ray walk.
+            match lanes::<N>(rays).filter(|_| !accel.has_cutouts()) {
                 Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
                 None => {
                     for (ray, hit) in rays.iter().zip(hits) {

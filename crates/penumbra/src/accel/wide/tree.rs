@@ -16,13 +16,13 @@
 
 use glam::Vec3A;
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use super::group::{TriangleGroup, GROUP};
 use super::node::{collapse, WideNode, WIDTH};
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
-use crate::accel::{Bvh, STACK_SIZE};
+use crate::accel::{AlphaTests, Bvh, STACK_SIZE};
 use crate::geometry::Geometry;
 use crate::simd::{prefetch, Isa};
 
@@ -78,6 +78,9 @@ pub(crate) struct WideBvh {
     /// Each leaf slot's part of the surface's border, for the counting rule: made by the
     /// first counting query ([`WideBvh::border`]), which the others do not need.
     border: OnceLock<Vec<Boundary>>,
+    /// The alpha tests of the triangles (by triangle index) when some may be cut out: every
+    /// ray query skips a crossing the test refuses, after the watertight test found it.
+    alpha: Option<Arc<AlphaTests>>,
 }
 
 /// A hit of the closest-hit or every-hit traversal: where, and which triangle.
@@ -94,10 +97,12 @@ pub(crate) struct SlotHit {
 
 impl WideBvh {
     /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
-    /// is its `object`, its primitive id `local_ids[triangle]`.
+    /// is its `object`, its primitive id `local_ids[triangle]`; `alpha`, when given, has the
+    /// alpha test of each triangle.
     pub fn build(
         geometry: &Geometry,
         local_ids: &[u32],
+        alpha: Option<Arc<AlphaTests>>,
         pool: Option<&rayon::ThreadPool>,
     ) -> WideBvh {
         let bvh = match pool {
@@ -136,6 +141,24 @@ impl WideBvh {
             ids,
             normals,
             border: OnceLock::new(),
+            alpha,
+        }
+    }
+
+    /// True when some triangle may be cut out.
+    pub(crate) fn has_cutouts(&self) -> bool {
+        self.alpha.is_some()
+    }
+
+    /// True unless the triangle in leaf slot `slot` is cut out where `crossing` meets it.
+    #[inline(always)]
+    fn keeps(&self, slot: usize, crossing: &Crossing) -> bool {
+        match &self.alpha {
+            None => true,
+            Some(alpha) => {
+                let triangle = self.bvh.prim_ids()[slot];
+                alpha.keeps_flat(triangle, crossing.b1, crossing.b2)
+            }
         }
     }
 
@@ -260,6 +283,9 @@ impl WideBvh {
             stack,
             |group, lane, c, t_max| {
                 if ANY {
+                    if !self.keeps(group.first as usize + lane, &c) {
+                        return true;
+                    }
                     best = Some((group, lane, c));
                     return false;
                 }
@@ -272,7 +298,7 @@ impl WideBvh {
                         c.t < *t_max || (c.t == *t_max && self.key(i) < self.key(b))
                     }
                 };
-                if closer {
+                if closer && self.keeps(group.first as usize + lane, &c) {
                     *t_max = c.t;
                     best = Some((group, lane, c));
                 }
@@ -393,7 +419,10 @@ impl WideBvh {
             rule,
             stack,
             |g, lane, c, _| {
-                f(self.slot_hit(g.first as usize + lane, c));
+                let slot = g.first as usize + lane;
+                if self.keeps(slot, &c) {
+                    f(self.slot_hit(slot, c));
+                }
                 true
             },
         );

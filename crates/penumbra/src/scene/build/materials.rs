@@ -8,7 +8,7 @@ use glam::Vec2;
 
 use super::{list, Builder, Result};
 use crate::light::{AreaLight, Light, PointLight};
-use crate::material::Material;
+use crate::material::{Cutout, Material};
 use crate::math::Rgb;
 use crate::scene::desc::{ColorSpace, LightDesc, MaterialDesc, Num, TextureDesc, TextureKindDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
@@ -23,6 +23,7 @@ pub(super) struct Phong {
     pub(super) specular: Option<Rgb>,
     pub(super) shininess: Option<f32>,
     pub(super) texture: Option<u32>,
+    pub(super) cutout: Option<Cutout>,
 }
 
 /// The material `p` describes.
@@ -35,6 +36,7 @@ pub(super) fn material(p: Phong) -> Material {
         specular: p.specular.unwrap_or(defaults.specular),
         shininess: p.shininess.unwrap_or(defaults.shininess),
         texture: p.texture,
+        cutout: p.cutout,
     }
 }
 
@@ -61,8 +63,9 @@ impl Builder<'_> {
             },
         )?;
         self.read.insert(file);
+        let alpha_bytes = img.alpha.as_ref().map_or(0, |a| a.len() as u64 * 4);
         self.budget.texture_bytes +=
-            img.width as u64 * img.height as u64 * super::budget::BYTES_PER_TEXEL;
+            img.width as u64 * img.height as u64 * super::budget::BYTES_PER_TEXEL + alpha_bytes;
         let img = Arc::new(img);
         self.images.insert(key, img.clone());
         Ok(img)
@@ -102,24 +105,56 @@ impl Builder<'_> {
                 ));
             }
         }
-        let textures = &self.file.desc.textures;
-        let texture = match &m.texture {
-            None => None,
-            Some(name) => Some(textures.get(name).map(|(i, _)| i as u32).ok_or_else(|| {
-                let known: Vec<&str> = textures.names().collect();
-                self.err(
-                    ErrorKind::UnknownName,
-                    &path.key("texture"),
-                    format!("unknown texture \"{name}\"{}", list(&known)),
-                )
-            })?),
-        };
+        let texture = self.texture_index(&path.key("texture"), m.texture.as_deref())?;
         Ok(material(Phong {
             diffuse: m.diffuse.map(|c| c.rgb()),
             ambient: m.ambient.map(|c| c.rgb()),
             specular: m.specular.map(|c| c.rgb()),
             shininess: m.shininess.map(Num::f32),
             texture,
+            cutout: self.cutout(path, m)?,
+        }))
+    }
+
+    /// The index of the texture called `name`, if one is named.
+    fn texture_index(&self, path: &KeyPath, name: Option<&str>) -> Result<Option<u32>> {
+        let Some(name) = name else {
+            return Ok(None);
+        };
+        let textures = &self.file.desc.textures;
+        let index = textures.get(name).map(|(i, _)| i as u32).ok_or_else(|| {
+            let known: Vec<&str> = textures.names().collect();
+            self.err(
+                ErrorKind::UnknownName,
+                path,
+                format!("unknown texture \"{name}\"{}", list(&known)),
+            )
+        })?;
+        Ok(Some(index))
+    }
+
+    /// The cut-out of `m`'s `alpha`, `alpha_texture` and `alpha_cutoff` keys: none without
+    /// any of them.
+    fn cutout(&self, path: &KeyPath, m: &MaterialDesc) -> Result<Option<Cutout>> {
+        if m.alpha.is_none() && m.alpha_texture.is_none() && m.alpha_cutoff.is_none() {
+            return Ok(None);
+        }
+        let defaults = Cutout::default();
+        let unit = |key: &str, v: Option<Num>, default: f32| match v.map(Num::f32) {
+            None => Ok(default),
+            Some(x) if (0.0..=1.0).contains(&x) => Ok(x),
+            Some(x) => Err(self.bad(
+                &path.key(key),
+                format!("{key} must be within [0, 1], not {x}"),
+            )),
+        };
+        let factor = unit("alpha", m.alpha, defaults.factor)?;
+        let cutoff = unit("alpha_cutoff", m.alpha_cutoff, defaults.cutoff)?;
+        let texture = self.texture_index(&path.key("alpha_texture"), m.alpha_texture.as_deref())?;
+        Ok(Some(Cutout {
+            texture,
+            factor,
+            cutoff,
         }))
     }
 

@@ -3,6 +3,7 @@
 //! transform: copied, or, for a mesh file the scene places many times, built once and
 //! instanced.
 
+use std::path::Path;
 use std::rc::Rc;
 
 use glam::Vec3;
@@ -11,6 +12,7 @@ use super::materials::{material, Phong};
 use super::placements::Placement;
 use super::{Builder, Result};
 use crate::geometry::{self, Mesh};
+use crate::material::Cutout;
 use crate::math::Transform;
 use crate::scene::desc::{ColorDesc, ObjectDesc, ShapeDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
@@ -264,16 +266,16 @@ impl Builder<'_> {
                 None => None,
                 Some(t) => {
                     let what = format!("texture (map_Kd of material \"{}\")", m.name);
-                    let image = self.image(path, t.clone(), true, &what)?;
-                    Some(self.world.add_texture(Texture {
-                        kind: TextureKind::Image(ImageTexture {
-                            image,
-                            filter: Filter::Bilinear,
-                            wrap: Wrap::Repeat,
-                        }),
-                        uv_scale: glam::Vec2::ONE,
-                        uv_offset: glam::Vec2::ZERO,
-                    }))
+                    Some(self.mtl_texture(path, t, true, &what)?)
+                }
+            };
+            // `map_d`: a cut-out at 0.5 of the image's alpha, or of its grey level as stored.
+            let cutout = match &m.dissolve_texture {
+                None => None,
+                Some(t) => {
+                    let what = format!("texture (map_d of material \"{}\")", m.name);
+                    let texture = self.mtl_texture(path, t, false, &what)?;
+                    Some(Cutout::with_texture(texture, 0.5))
                 }
             };
             let built = material(Phong {
@@ -282,6 +284,7 @@ impl Builder<'_> {
                 specular: m.specular.map(Vec3::from),
                 shininess: m.shininess.map(|s| s.max(0.0)),
                 texture,
+                cutout,
             });
             // A decoded image texture is at most 1.
             let (most, _) = self.reflected(&built, 1.0);
@@ -299,5 +302,20 @@ impl Builder<'_> {
             loaded.world_materials = Some(ids.clone());
         }
         Ok((mesh, Some(ids)))
+    }
+
+    /// A texture of an MTL file's `file` (a `map_Kd` in sRGB, or a `map_d` read as stored),
+    /// bilinear and repeating, added to the world; returns its index.
+    fn mtl_texture(&mut self, path: &KeyPath, file: &Path, srgb: bool, what: &str) -> Result<u32> {
+        let image = self.image(path, file.to_path_buf(), srgb, what)?;
+        Ok(self.world.add_texture(Texture {
+            kind: TextureKind::Image(ImageTexture {
+                image,
+                filter: Filter::Bilinear,
+                wrap: Wrap::Repeat,
+            }),
+            uv_scale: glam::Vec2::ONE,
+            uv_offset: glam::Vec2::ZERO,
+        }))
     }
 }

@@ -146,4 +146,11 @@ pub struct MaterialDesc {
     pub shininess: Option<Num>,
     /// Name of a texture multiplying k_a and k_d.
     pub texture: Option<String>,
+    /// Cut-out alpha factor in [0, 1] (default 1); any of the three `alpha` keys makes the
+    /// material a cut-out.
+    pub alpha: Option<Num>,
+    /// Name of a texture whose alpha channel (its luminance without one) multiplies `alpha`.
+    pub alpha_texture: Option<String>,
+    /// The least alpha kept, in [0, 1] (default 0.5).
+    pub alpha_cutoff: Option<Num>,
 }

@@ -59,6 +59,8 @@ pub(crate) struct ObjMaterial {
     pub shininess: Option<f32>,
     /// `map_Kd`, resolved against the MTL file's folder.
     pub diffuse_texture: Option<PathBuf>,
+    /// `map_d` (the dissolve texture foliage is cut out with), resolved likewise.
+    pub dissolve_texture: Option<PathBuf>,
 }
 
 /// An OBJ file as one mesh. Triangle material slot `k < materials.len()` is `materials[k]`;

@@ -1,11 +1,11 @@
 //! MTL material libraries: the [`Library`] of every `mtllib` an OBJ file names, and the
 //! resolution of the file names they contain.
 //!
-//! Read: `newmtl`, `Kd`, `Ka`, `Ks` (one number means grey), `Ns` and `map_Kd` (relative to
-//! the MTL file's folder; options such as `-s` or `-clamp` are skipped and the rest of the
-//! line is the file name, spaces included). Everything else (`illum`, `Ni`, `d`, `Tr`, `Tf`,
-//! `Ke`, other maps) is ignored, as are statements before the first `newmtl`. Errors are
-//! messages that name the MTL file and the line.
+//! Read: `newmtl`, `Kd`, `Ka`, `Ks` (one number means grey), `Ns`, `map_Kd` and `map_d`
+//! (relative to the MTL file's folder; options such as `-s` or `-clamp` are skipped and the
+//! rest of the line is the file name, spaces included). Everything else (`illum`, `Ni`, `d`,
+//! `Tr`, `Tf`, `Ke`, other maps) is ignored, as are statements before the first `newmtl`.
+//! Errors are messages that name the MTL file and the line.
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -123,6 +123,7 @@ fn parse_mtl(text: &str, path: &Path, library: &mut Library) -> Result<(), Strin
                 specular: None,
                 shininess: None,
                 diffuse_texture: None,
+                dissolve_texture: None,
             });
             current = Some(index);
             return Ok(());
@@ -155,9 +156,13 @@ fn parse_mtl(text: &str, path: &Path, library: &mut Library) -> Result<(), Strin
                     .ok_or_else(|| at("`Ns` needs a number"))?;
                 m.shininess = Some(p);
             }
-            "map_Kd" => {
+            "map_Kd" | "map_d" => {
                 if let Some(file) = texture_file_name(line, words) {
-                    m.diffuse_texture = Some(resolve(&library.files, dir, file));
+                    let file = Some(resolve(&library.files, dir, file));
+                    match keyword {
+                        "map_Kd" => m.diffuse_texture = file,
+                        _ => m.dissolve_texture = file,
+                    }
                 }
             }
             _ => {}
@@ -166,7 +171,8 @@ fn parse_mtl(text: &str, path: &Path, library: &mut Library) -> Result<(), Strin
     })
 }
 
-/// The file name of a `map_Kd` statement: what follows its options, to the end of the line.
+/// The file name of a `map_Kd` or `map_d` statement: what follows its options, to the end of
+/// the line.
 fn texture_file_name<'a>(
     line: &'a str,
     mut words: std::str::SplitAsciiWhitespace<'a>,
@@ -235,7 +241,7 @@ mod tests {
     #[test]
     fn reads_every_supported_statement_and_leaves_the_rest_unset() {
         let library =
-            parse("newmtl all\nKd 0.1 0.2 0.3\nKa 0.25\nKs 1 1 1 1\nNs 7.5\nmap_Kd d.png\nnewmtl none of it\nillum 2\n")
+            parse("newmtl all\nKd 0.1 0.2 0.3\nKa 0.25\nKs 1 1 1 1\nNs 7.5\nmap_Kd d.png\nmap_d -clamp on leaf mask.png\nnewmtl none of it\nillum 2\nd 0.5\n")
                 .unwrap();
         assert_eq!(library.len(), 2);
         let all = material(&library, "all");
@@ -248,6 +254,7 @@ mod tests {
                 specular: Some([1.0; 3]),
                 shininess: Some(7.5),
                 diffuse_texture: Some(Path::new("lib").join("d.png")),
+                dissolve_texture: Some(Path::new("lib").join("leaf mask.png")),
             }
         );
         // Nothing given is nothing set: the scene's defaults apply later.

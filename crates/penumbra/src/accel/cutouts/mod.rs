@@ -1,0 +1,191 @@
+//! Cut-outs in the engine: the triangles whose material may cut (see [`Cutout`]) kept apart
+//! from the opaque ones, and walked with an alpha test on each hit.
+//!
+//! A world with cut-out materials splits its triangles in two when it is built. The opaque
+//! ones (the world's own, and the instances whose materials cannot cut) form the levels every
+//! kernel already walks: single rays, fans, bundles, shafts, the batches inside instances.
+//! The cut-out ones form a second pair of levels of the same kind ([`Cutouts`]): a tree over
+//! the world's own cut-out triangles, and the instances whose materials may cut, over the
+//! same mesh trees. Those are walked by the generic single-ray walks of `traverse` with a
+//! filtered primitive test (`intersect_kept`, `occluded_kept`): a hit the alpha test refuses
+//! does not shorten a closest-hit ray, and an any-hit walk looks on past it. The batched
+//! kernels are not changed: after them, each of a batch's rays or segments not yet blocked
+//! (or its closest hit, for a camera fan) asks the cut-out levels on its own.
+//!
+//! So a world without cut-out materials has no cut-out levels, and its queries are exactly
+//! those of before; and each ray gets the same answer whichever way it was grouped, since the
+//! opaque kernels agree with the single-ray walks and the cut-out part is asked one ray at a
+//! time. The alpha test is one function ([`Cutout::keeps`] at the uv the hit's barycentrics
+//! interpolate, `alpha::AlphaTests::keeps`) on every path.
+
+mod alpha;
+
+use glam::Vec3;
+
+use super::instances::{build_meshes, closer, Instances};
+use super::{build, traverse, Bvh};
+use crate::geometry::{Geometry, Hit, Mesh};
+use crate::material::Material;
+use crate::math::{Ray, Transform};
+use crate::texture::Texture;
+pub(crate) use alpha::AlphaTests;
+
+/// A world's parts, as the engine is built from them.
+pub(crate) struct Parts<'a> {
+    /// The world's own triangles.
+    pub geometry: &'a Geometry,
+    /// The meshes placed by instances.
+    pub meshes: &'a [Mesh],
+    /// Each instance: its mesh, its object-to-world transform (invertible), and the
+    /// materials its mesh's slots map to.
+    pub instances: Vec<(u32, Transform, &'a [u32])>,
+    /// The world's materials.
+    pub materials: &'a [Material],
+    /// The world's textures.
+    pub textures: &'a [Texture],
+}
+
+/// The cut-out levels: the world's own cut-out triangles and the instances whose materials
+/// may cut, with the alpha tests of their hits.
+#[derive(Clone, Debug)]
+pub(crate) struct Cutouts {
+    /// The tree over the world's own cut-out triangles, numbered in the order of the world's.
+    flat: Bvh,
+    /// The world's index of each of those.
+    flat_ids: Vec<u32>,
+    /// The instances whose materials may cut.
+    instances: Instances,
+    alpha: AlphaTests,
+}
+
+/// The opaque levels (the world's own opaque triangles' tree and the other instances) and,
+/// when some triangle's material may cut, the cut-out levels.
+pub(crate) fn split(
+    parts: &Parts,
+    pool: Option<&rayon::ThreadPool>,
+) -> (Bvh, Instances, Option<Cutouts>) {
+    let placements = |list: &[&(u32, Transform, &[u32])]| -> Vec<(u32, Transform)> {
+        list.iter().map(|(m, t, _)| (*m, *t)).collect()
+    };
+    let geometry = parts.geometry;
+    let used = |a: &AlphaTests| {
+        geometry.triangles.iter().any(|t| a.cuts(t.material))
+            || parts.instances.iter().any(|i| a.instance_cuts(i.2))
+    };
+    let Some(mut alpha) = AlphaTests::of(parts.materials, parts.textures).filter(used) else {
+        // Nothing is cut out: the levels of a world without cut-outs.
+        let flat = build::build(geometry.len(), |i| geometry.corners(i), pool);
+        let all: Vec<_> = parts.instances.iter().collect();
+        let instances = Instances::build(parts.meshes, &placements(&all), pool);
+        return (flat, instances, None);
+    };
+    let (cut, opaque): (Vec<u32>, Vec<u32>) = (0..geometry.len() as u32)
+        .partition(|&i| alpha.cuts(geometry.triangles[i as usize].material));
+    let flat = subset(geometry, &opaque, pool);
+    let cut_flat = build::build(cut.len(), |j| geometry.corners(cut[j] as usize), pool);
+    for &i in &cut {
+        alpha.push_flat(geometry, i as usize);
+    }
+    // `cut` is in the world's order (a partition keeps it), so the cut-out tree's tie rule
+    // (the smaller number) agrees with the world's.
+    let (mut cut_list, mut opaque_list) = (Vec::new(), Vec::new());
+    let (mut cut_ids, mut opaque_ids) = (Vec::new(), Vec::new());
+    for (index, inst) in parts.instances.iter().enumerate() {
+        if alpha.instance_cuts(inst.2) {
+            alpha.push_instance(parts.meshes, inst.0, inst.2);
+            cut_list.push(inst);
+            cut_ids.push(index as u32);
+        } else {
+            opaque_list.push(inst);
+            opaque_ids.push(index as u32);
+        }
+    }
+    let meshes = match parts.instances.is_empty() {
+        true => Default::default(),
+        false => build_meshes(parts.meshes, pool),
+    };
+    let instances = Instances::place(meshes.clone(), &placements(&opaque_list), opaque_ids, pool);
+    let cut_instances = Instances::place(meshes, &placements(&cut_list), cut_ids, pool);
+    let cutouts = Cutouts {
+        flat: cut_flat,
+        flat_ids: cut,
+        instances: cut_instances,
+        alpha,
+    };
+    (flat, instances, Some(cutouts))
+}
+
+/// The tree over the triangles `ids` of `geometry`, reporting their indices in `geometry`.
+fn subset(geometry: &Geometry, ids: &[u32], pool: Option<&rayon::ThreadPool>) -> Bvh {
+    let mut bvh = build::build(ids.len(), |j| geometry.corners(ids[j] as usize), pool);
+    for id in &mut bvh.prim_ids {
+        *id = ids[*id as usize];
+    }
+    bvh
+}
+
+impl Cutouts {
+    /// Nodes of the cut-out trees (the mesh trees are counted with the opaque instances').
+    pub(crate) fn node_count(&self) -> usize {
+        self.flat.node_count() + self.instances.top_node_count()
+    }
+
+    /// The world's own cut-out triangles, by their index in the world's geometry.
+    pub(crate) fn triangles(&self) -> &[u32] {
+        &self.flat_ids
+    }
+
+    /// The tree over the world's own cut-out triangles.
+    pub(crate) fn flat(&self) -> &Bvh {
+        &self.flat
+    }
+
+    /// The closest of `best` and the kept hits of cut-out triangles with `t` in `(t_min,
+    /// t_max)`, by the rule of `instances::closer` (ties go to the smaller key).
+    pub(crate) fn intersect(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        best: Option<Hit>,
+    ) -> Option<Hit> {
+        // Ties with `best` are looked for too: a smaller key may take them.
+        let limit = best.map_or(t_max, |b| b.t.next_up());
+        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
+        let own = traverse::intersect_kept(&self.flat, ray, t_min, limit, keep).map(|h| Hit {
+            triangle: self.flat_ids[h.triangle as usize],
+            ..h
+        });
+        let best = match (best, own) {
+            (Some(b), Some(h)) if !closer(&h, &b) => Some(b),
+            (b, h) => h.or(b),
+        };
+        let keep = |p, tri, b1, b2| self.alpha.keeps_instance(p, tri, b1, b2);
+        self.instances.intersect_kept(ray, t_min, t_max, best, keep)
+    }
+
+    /// True when a kept hit of a cut-out triangle meets the ray with `t` in `(t_min, t_max)`.
+    pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
+        traverse::occluded_kept(&self.flat, ray, t_min, t_max, keep)
+            || self
+                .instances
+                .occluded_kept(ray, t_min, t_max, |p, tri, b1, b2| {
+                    self.alpha.keeps_instance(p, tri, b1, b2)
+                })
+    }
+
+    /// True when a kept hit of a cut-out triangle meets the segment from `origin` to `end`
+    /// for some `t` in `(0, t_max)`, as the renderer's shadow queries define it (an
+    /// instance traces the segment between the mapped end points).
+    pub(crate) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
+        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
+        let ray = Ray::new(origin, end - origin);
+        traverse::occluded_kept(&self.flat, &ray, 0.0, t_max, keep)
+            || self
+                .instances
+                .occludes_segment_kept(origin, end, t_max, |p, tri, b1, b2| {
+                    self.alpha.keeps_instance(p, tri, b1, b2)
+                })
+    }
+}
