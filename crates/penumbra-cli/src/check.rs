@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use penumbra::{desc::ShapeDesc, Aabb, SceneDesc, World, WorldStats};
+use penumbra::{desc::ShapeDesc, Aabb, Light, SceneDesc, World, WorldStats};
 use serde_json::{json, Value};
 
 use crate::args::CheckArgs;
@@ -58,6 +58,13 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             "instances": s.instances,
             "lights": s.lights,
             "light_samples": light_samples(world, None),
+            "environments": environments(world).iter().map(|e| json!({
+                "light": e.light,
+                "width": e.size.0,
+                "height": e.size.1,
+                "mean_radiance": e.mean.to_array(),
+                "peak_radiance": e.peak.to_array(),
+            })).collect::<Vec<Value>>(),
             "materials": s.materials,
             "textures": s.textures,
             "cameras": cameras,
@@ -92,12 +99,24 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
                 "s"
             }
         ),
+    ];
+    for e in environments(world) {
+        lines.push(format!(
+            "    lights[{}]  environment {}x{}, mean radiance {}, peak {}",
+            e.light,
+            e.size.0,
+            e.size.1,
+            rgb_text(e.mean),
+            rgb_text(e.peak)
+        ));
+    }
+    lines.extend([
         format!("  materials  {}", s.materials),
         format!("  textures   {}", s.textures),
         format!("  cameras    {}", cameras.join(", ")),
         format!("  bounds     {}", bounds_text(world.bounds())),
         format!("  objects    {}", objects.len()),
-    ];
+    ]);
     let key_width = objects.iter().map(|o| o.key.len()).max().unwrap_or(0);
     let kind_width = objects.iter().map(|o| o.kind.len()).max().unwrap_or(0);
     for o in &objects {
@@ -110,6 +129,39 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
         ));
     }
     say(&lines.join("\n"))
+}
+
+/// An environment light as `check` reports it: its map's size, and its mean (over the sphere)
+/// and largest radiance, scaled by its intensity.
+struct EnvironmentInfo {
+    /// Index in the scene's lights.
+    light: usize,
+    size: (u32, u32),
+    mean: glam::Vec3,
+    peak: glam::Vec3,
+}
+
+fn environments(world: &World) -> Vec<EnvironmentInfo> {
+    let lights = world.lights().iter().enumerate();
+    lights
+        .filter_map(|(light, l)| match l {
+            Light::Environment(e) => {
+                let (mean, peak) = e.map.mean_and_peak();
+                Some(EnvironmentInfo {
+                    light,
+                    size: e.map.size(),
+                    mean: mean * e.intensity,
+                    peak: peak * e.intensity,
+                })
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// `(r, g, b)` with 4 decimals.
+fn rgb_text(c: glam::Vec3) -> String {
+    format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z)
 }
 
 /// One object of the scene as `check` lists it.

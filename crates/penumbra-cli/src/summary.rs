@@ -7,8 +7,8 @@ use std::time::Duration;
 use penumbra::{Aabb, Film, Light, RenderSettings, RenderStats, World};
 use serde_json::{json, Value};
 
-/// Light samples per shading point: N² for each area light (N from `n`, else the light's
-/// own), 1 for each point light.
+/// Light samples per shading point: N² for each area light, environment and sun with an
+/// angular size (N from `n`, else the light's own), 1 for each point, spot or point-like sun.
 pub fn light_samples(world: &World, n: Option<u32>) -> u64 {
     world
         .lights()
@@ -16,6 +16,11 @@ pub fn light_samples(world: &World, n: Option<u32>) -> u64 {
         .map(|l| match l {
             Light::Area(a) => n.unwrap_or(a.n) as u64 * n.unwrap_or(a.n) as u64,
             Light::Point(_) => 1,
+            Light::Environment(e) => n.unwrap_or(e.n) as u64 * n.unwrap_or(e.n) as u64,
+            Light::Directional(d) if d.cos_half_angle < 1.0 => {
+                n.unwrap_or(d.n) as u64 * n.unwrap_or(d.n) as u64
+            }
+            Light::Directional(_) | Light::Spot(_) => 1,
         })
         .sum()
 }

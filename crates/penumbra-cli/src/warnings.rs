@@ -11,6 +11,13 @@ pub fn light_warnings(world: &World, model: LightModel) -> Vec<String> {
     let positions = &world.geometry().positions;
     let mut out = Vec::new();
     for (i, light) in world.lights().iter().enumerate() {
+        if let Light::Environment(e) = light {
+            if e.map.mean_and_peak().1 == glam::Vec3::ZERO || e.intensity == 0.0 {
+                out.push(format!(
+                    "lights[{i}]: the environment is black everywhere: it lights nothing"
+                ));
+            }
+        }
         let Light::Area(a) = light else {
             continue;
         };

@@ -297,3 +297,28 @@ fn check_counts_instances_and_a_placement_material_is_used() {
     let line = format!("({} in memory: {n} instances of 1 mesh)", 14 + k);
     assert!(r.out().contains(&line), "{}", r.out());
 }
+
+#[test]
+fn check_reports_an_environment_map_and_warns_when_it_is_black() {
+    let dir = TempDir::new("check-environment");
+    // A 4×2 map: radiance 2 on the top row, 0 on the bottom. Bilinear between them, the mean
+    // over the sphere is 1.
+    let img = image::Rgb32FImage::from_fn(4, 2, |_, y| image::Rgb([2.0 - 2.0 * y as f32; 3]));
+    img.save(dir.join("sky.exr")).unwrap();
+    let sky = "[[lights]]\ntype = \"environment\"\nfile = \"sky.exr\"\nintensity = 0.5\n";
+    dir.write("s.toml", format!("{BASE_TOML}\n{sky}"));
+    let v = json(&ok(run_in(dir.path(), ["check", "s.toml", "--json"])));
+    let env = &v["environments"][0];
+    assert_eq!(
+        (env["width"].as_u64(), env["height"].as_u64()),
+        (Some(4), Some(2))
+    );
+    let mean = env["mean_radiance"][0].as_f64().unwrap();
+    assert!((mean - 0.5).abs() < 1e-6, "{mean}");
+    assert_eq!(env["peak_radiance"][0].as_f64(), Some(1.0));
+    let black = "[[lights]]\ntype = \"environment\"\ncolor = [0, 0, 0]\n";
+    dir.write("b.toml", format!("{BASE_TOML}\n{black}"));
+    let r = ok(run_in(dir.path(), ["check", "b.toml"]));
+    assert!(r.stderr.contains("black everywhere"), "{}", r.stderr);
+    assert!(r.out().contains("environment 2x2"), "{}", r.out());
+}

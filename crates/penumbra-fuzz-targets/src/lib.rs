@@ -247,6 +247,11 @@ pub fn check_world(world: &World) {
                 .iter()
                 .all(|v| v.is_finite()),
             Light::Point(p) => p.position.is_finite() && p.intensity.is_finite(),
+            Light::Environment(e) => e.intensity.is_finite() && e.rotation.is_finite(),
+            Light::Directional(d) => d.direction.is_finite() && d.irradiance.is_finite(),
+            Light::Spot(s) => [s.position, s.direction, s.intensity]
+                .iter()
+                .all(|v| v.is_finite()),
         };
         assert!(finite, "{light:?}");
     }

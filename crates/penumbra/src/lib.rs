@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod distribution;
 mod encode8;
 mod files;
 mod film;
@@ -91,7 +92,10 @@ pub use image_error::ImageError;
 pub use image_format::OutputFormat;
 pub use image_io::{check_finite, encode_image, stage_image, write_image, write_image_unless};
 pub use integrator::{LightModel, Shading};
-pub use light::{AreaLight, Light, PointLight};
+pub use light::{
+    AreaLight, DirectionalLight, EnvironmentError, EnvironmentLight, EnvironmentMap,
+    EnvironmentSample, Light, PointLight, SpotLight,
+};
 pub use material::{Cutout, Material};
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use names::{escape_controls, file_name_part, UnknownName};

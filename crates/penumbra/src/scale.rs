@@ -77,13 +77,17 @@ pub(crate) fn longest_edge(triangles: impl Iterator<Item = [Vec3; 3]>) -> f32 {
 }
 
 /// The points a light's shadow rays end at: an area light's corners (the hull of its
-/// samples), or a point light's position.
+/// samples), a point or spot light's position; none for an environment or a sun.
 pub(crate) fn light_points(light: &Light) -> impl Iterator<Item = Vec3> {
     let points = match light {
-        Light::Area(a) => [a.u + a.v, a.u - a.v, a.v - a.u, -a.u - a.v].map(|d| a.center + d),
-        Light::Point(p) => [p.position; 4],
+        Light::Area(a) => Some([a.u + a.v, a.u - a.v, a.v - a.u, -a.u - a.v].map(|d| a.center + d)),
+        Light::Point(p) => Some([p.position; 4]),
+        // Shadow rays toward an environment or a sun end outside the scene's bounds (see the
+        // integrator), never at a point of the file.
+        Light::Environment(_) | Light::Directional(_) => None,
+        Light::Spot(s) => Some([s.position; 4]),
     };
-    points.into_iter()
+    points.into_iter().flatten()
 }
 
 /// The bounds and longest edge of a world's triangles.

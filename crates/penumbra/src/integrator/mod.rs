@@ -75,6 +75,11 @@ pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 pub(crate) struct Scratch {
     /// Jittered sample points.
     points: Points,
+    /// The samples of a light whose samples each bring their own light (an environment, a
+    /// sun, a spot): the unit direction toward each and what it brings.
+    directional: Vec<(Vec3, Rgb)>,
+    /// A sun's directions.
+    toward: Vec<Vec3>,
     directions: Directions,
     spec: Vec<f32>,
     /// Every sample of every light, in light and sample order: its point, the light it sends
@@ -134,6 +139,9 @@ pub(crate) struct Integrator<'w> {
     /// Every light sample by axis, in light and sample order, when every point has the same
     /// ones (no jittered light).
     fixed_ends: Option<[Vec<f32>; 3]>,
+    /// The centre and radius of a sphere around the scene's geometry: shadow rays toward an
+    /// environment end outside it.
+    sphere: (Vec3, f32),
     path: SimdPath,
 }
 
@@ -148,7 +156,16 @@ impl<'w> Integrator<'w> {
             .collect();
         let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
         let fixed_ends = fixed_ends(&lights);
+        let bounds = world.bounds();
+        let sphere = match bounds.is_empty() {
+            true => (Vec3::ZERO, 1.0),
+            false => {
+                let center = 0.5 * (bounds.min + bounds.max);
+                (center, (0.5 * (bounds.max - bounds.min).length()).max(1e-3))
+            }
+        };
         Self {
+            sphere,
             world,
             settings,
             bundles: batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count()),
@@ -232,6 +249,34 @@ impl<'w> Integrator<'w> {
                     scratch.points.fill(|all| light.sample_points(rng, all));
                     &scratch.points
                 }
+                Source::Environment(light) => {
+                    scratch.directional.clear();
+                    light.sample_directions(rng, &mut scratch.directional);
+                    self.far_points(x, scratch);
+                    &scratch.points
+                }
+                Source::Sun(light) => {
+                    scratch.toward.clear();
+                    light.sample_directions(rng, &mut scratch.toward);
+                    scratch.directional.clear();
+                    let e = light.irradiance;
+                    scratch
+                        .directional
+                        .extend(scratch.toward.iter().map(|&d| (d, e)));
+                    self.far_points(x, scratch);
+                    &scratch.points
+                }
+                Source::Spot { light, physical } => {
+                    let to = light.position - x;
+                    let d2 = to.length_squared();
+                    let l = to / d2.sqrt();
+                    let e = light.intensity * light.falloff(-l);
+                    let e = if *physical { e / d2 } else { e };
+                    scratch.directional.clear();
+                    scratch.directional.push((l, e));
+                    scratch.points.fill(|all| all.push(light.position));
+                    &scratch.points
+                }
             };
             let n = points.len();
             if ends {
@@ -265,7 +310,19 @@ impl<'w> Integrator<'w> {
                 b: &mut scratch.b[base..end],
                 blocked: &mut scratch.blocked[base..end],
             };
-            M::contribute(plan, lobe, dirs, &scratch.spec, lanes);
+            match plan.source {
+                Source::Environment(_) | Source::Sun(_) | Source::Spot { .. } => {
+                    M::contribute_directional(
+                        plan,
+                        lobe,
+                        dirs,
+                        &scratch.spec,
+                        &scratch.directional,
+                        lanes,
+                    )
+                }
+                _ => M::contribute(plan, lobe, dirs, &scratch.spec, lanes),
+            }
             let behind = &mut scratch.behind[base..end];
             let (lx, ly, lz) = (&dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
             for i in 0..n {
@@ -279,6 +336,19 @@ impl<'w> Integrator<'w> {
         }
         scratch.blocked.truncate(count);
         scratch.behind.truncate(count);
+    }
+
+    /// Fills `scratch.points` with the end points of shadow rays from `x` along each of
+    /// `scratch.directional`'s directions: twice the way out of the scene's bounding sphere,
+    /// so that every segment leaves it.
+    #[inline(always)]
+    fn far_points(&self, x: Vec3, scratch: &mut Scratch) {
+        let (center, radius) = self.sphere;
+        let far = 2.0 * ((x - center).length() + radius);
+        let directional = &scratch.directional;
+        scratch
+            .points
+            .fill(|all| all.extend(directional.iter().map(|&(d, _)| x + far * d)));
     }
 
     /// Blocks the gathered samples that something occludes: shadow rays leave from `front`

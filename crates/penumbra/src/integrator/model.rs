@@ -66,6 +66,18 @@ pub(super) trait Model {
     /// Fills `out` for the samples of `plan` in the directions `dirs`, with specular lobe
     /// values `spec`.
     fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes);
+
+    /// Fills `out` for directional samples: each `(direction, e)` of `samples` brings the
+    /// plan's weight × `e` (for an environment: 1/N² × radiance / density) from its direction,
+    /// with no falloff.
+    fn contribute_directional(
+        plan: &LightPlan,
+        lobe: &Lobe,
+        dirs: &Directions,
+        spec: &[f32],
+        samples: &[(Vec3, Rgb)],
+        out: Lanes,
+    );
 }
 
 /// The seed's model: every sample a point light of the plan's weight, both ways, no falloff;
@@ -93,6 +105,29 @@ impl Model for Seed {
             // Below the surface, or NaN for a sample on the shaded point: no light.
             let lit = c > 0.0;
             blocked[i] = !lit | dark;
+        }
+    }
+
+    #[inline(always)]
+    fn contribute_directional(
+        plan: &LightPlan,
+        lobe: &Lobe,
+        dirs: &Directions,
+        spec: &[f32],
+        samples: &[(Vec3, Rgb)],
+        out: Lanes,
+    ) {
+        let n = out.r.len();
+        let (kd, ks) = (lobe.kd, lobe.ks);
+        let (cos, spec, samples) = (&dirs.cos[..n], &spec[..n], &samples[..n]);
+        for i in 0..n {
+            let (c, s, e) = (cos[i], spec[i], plan.weight * samples[i].1);
+            out.r[i] = e.x * (kd.x * c + ks.x * s);
+            out.g[i] = e.y * (kd.y * c + ks.y * s);
+            out.b[i] = e.z * (kd.z * c + ks.z * s);
+            // Below the surface (or a NaN cosine), or bringing nothing: no light.
+            let lit = c > 0.0;
+            out.blocked[i] = !lit | (e == Vec3::ZERO);
         }
     }
 }
@@ -140,6 +175,30 @@ impl Model for Physical {
             // NaN cosines (a sample on the shaded point) count as no light.
             let lit = c > 0.0;
             blocked[i] = !lit | !emits | dark;
+        }
+    }
+
+    #[inline(always)]
+    fn contribute_directional(
+        plan: &LightPlan,
+        lobe: &Lobe,
+        dirs: &Directions,
+        spec: &[f32],
+        samples: &[(Vec3, Rgb)],
+        out: Lanes,
+    ) {
+        let n = out.r.len();
+        let (ks, norm) = (lobe.ks, lobe.specular_norm);
+        let kd_pi = lobe.kd * (1.0 / PI);
+        let (cos, spec, samples) = (&dirs.cos[..n], &spec[..n], &samples[..n]);
+        for i in 0..n {
+            let (c, sn, e) = (cos[i], norm * spec[i], plan.weight * samples[i].1);
+            out.r[i] = e.x * ((kd_pi.x + ks.x * sn) * c);
+            out.g[i] = e.y * ((kd_pi.y + ks.y * sn) * c);
+            out.b[i] = e.z * ((kd_pi.z + ks.z * sn) * c);
+            // Below the surface (or a NaN cosine), or bringing nothing: no light.
+            let lit = c > 0.0;
+            out.blocked[i] = !lit | (e == Vec3::ZERO);
         }
     }
 }

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::ShadingSettings;
-use crate::light::{AreaLight, Light};
+use crate::light::{AreaLight, DirectionalLight, EnvironmentLight, Light, SpotLight};
 use crate::math::Rgb;
 use crate::sampling::Rng;
 
@@ -24,6 +24,15 @@ pub(super) enum Source {
     Fixed(Points),
     /// A jittered area light, drawn afresh at every shading point.
     Jittered(AreaLight),
+    /// An environment, its directions drawn afresh at every shading point, each with its own
+    /// weight (radiance / density / N²).
+    Environment(EnvironmentLight),
+    /// A sun: N² directions over its cone (drawn afresh at every shading point when it has
+    /// one), each bringing irradiance / N².
+    Sun(DirectionalLight),
+    /// A spot: one sample at its position, weighed by the cone's falloff toward the point
+    /// (and 1/d² under the physical model).
+    Spot { light: SpotLight, physical: bool },
 }
 
 /// Points, as they are and by coordinate.
@@ -110,6 +119,9 @@ impl LightPlan {
         match &self.source {
             Source::Fixed(points) => points.len() as u64,
             Source::Jittered(light) => u64::from(light.sample_count()),
+            Source::Environment(light) => u64::from(light.sample_count()),
+            Source::Sun(light) => u64::from(light.sample_count()),
+            Source::Spot { .. } => 1,
         }
     }
 }
@@ -150,5 +162,37 @@ pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) ->
                 source,
             }
         }
+        Light::Environment(el) => {
+            let el = EnvironmentLight {
+                n: settings.light_samples.unwrap_or(el.n),
+                ..el.clone()
+            };
+            LightPlan {
+                // Each sample carries its own weight.
+                weight: Rgb::ONE / el.sample_count() as f32,
+                facing: None,
+                source: Source::Environment(el),
+            }
+        }
+        Light::Directional(dl) => {
+            let n = match dl.cos_half_angle < 1.0 {
+                true => settings.light_samples.unwrap_or(dl.n),
+                false => 1,
+            };
+            let dl = DirectionalLight { n, ..dl.clone() };
+            LightPlan {
+                weight: Rgb::ONE / dl.sample_count() as f32,
+                facing: None,
+                source: Source::Sun(dl),
+            }
+        }
+        Light::Spot(sl) => LightPlan {
+            weight: Rgb::ONE,
+            facing: None,
+            source: Source::Spot {
+                light: sl.clone(),
+                physical,
+            },
+        },
     }
 }

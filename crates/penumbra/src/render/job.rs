@@ -12,6 +12,7 @@ use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
 use crate::geometry::Surface;
 use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
+use crate::light::Light;
 use crate::math::{Ray, Rgb};
 use crate::sampling::{jittered_offset, Rng};
 use crate::world::World;
@@ -51,6 +52,20 @@ pub(super) struct Buffers {
 }
 
 impl Job<'_> {
+    /// What a camera ray in direction `d` that hits nothing sees: the environments marked
+    /// visible, summed, or the background when there is none.
+    fn miss(&self, d: Vec3) -> Rgb {
+        let mut visible = self.world.lights().iter().filter_map(|l| match l {
+            Light::Environment(e) if e.visible => Some(e),
+            _ => None,
+        });
+        let Some(first) = visible.next() else {
+            return self.settings.background;
+        };
+        let d = d.normalize();
+        visible.fold(first.radiance(d), |sum, e| sum + e.radiance(d))
+    }
+
     /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their
     /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took;
     /// `None` once the render is cancelled.
@@ -153,7 +168,7 @@ impl Job<'_> {
         for (pixel, x) in xs.enumerate() {
             let mut sum = Rgb::ZERO;
             let mut albedo = Rgb::ZERO;
-            for hit in &hits[pixel * spp..(pixel + 1) * spp] {
+            for (i, hit) in hits.iter().enumerate().skip(pixel * spp).take(spp) {
                 if hit.is_some() {
                     if self.aovs.is_some() {
                         albedo += aov::albedo(self.world, &surfaces[next]);
@@ -163,7 +178,7 @@ impl Job<'_> {
                     shadow += rays;
                     next += 1;
                 } else {
-                    sum += settings.background;
+                    sum += self.miss(dirs[i]);
                 }
             }
             out.push(sum / spp as f32);

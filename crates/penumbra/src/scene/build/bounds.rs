@@ -10,6 +10,7 @@
 
 use super::{Builder, Result};
 use crate::integrator::LightModel;
+use crate::light::Light;
 use crate::material::Material;
 use crate::math::Rgb;
 use crate::scene::desc::{ColorDesc, LightDesc, MaterialDesc, Num};
@@ -49,16 +50,20 @@ pub(super) fn texture_peak(t: &Texture) -> f64 {
     }
 }
 
-/// The key of a light to blame for its emission: `intensity`, else `color`.
+/// The key of a light to blame for its emission: `intensity`, else `file` (an environment
+/// map), else `color`.
 pub(super) fn light_key(l: &LightDesc) -> &'static str {
-    let intensity = match l {
-        LightDesc::Area(a) => a.intensity.is_some(),
-        LightDesc::Point(p) => p.intensity.is_some(),
+    let (intensity, file) = match l {
+        LightDesc::Area(a) => (a.intensity.is_some(), false),
+        LightDesc::Point(p) => (p.intensity.is_some(), false),
+        LightDesc::Environment(e) => (e.intensity.is_some(), e.file.is_some()),
+        LightDesc::Directional(d) => (d.intensity.is_some(), false),
+        LightDesc::Spot(s) => (s.intensity.is_some(), false),
     };
-    if intensity {
-        "intensity"
-    } else {
-        "color"
+    match (intensity, file) {
+        (true, _) => "intensity",
+        (false, true) => "file",
+        (false, false) => "color",
     }
 }
 
@@ -83,15 +88,20 @@ pub(super) fn material_key(path: &KeyPath, m: &MaterialDesc, term: Term) -> KeyP
     }
 }
 
-/// What light `l` emits at most, summed over its samples: color × intensity, times the area
-/// for a physical area light (its samples weigh |u × v|/N² each). From the file's numbers, in
-/// f64: the f32 product may already be infinite.
-pub(super) fn emission(l: &LightDesc, model: LightModel) -> f64 {
+/// What light `l` (built as `built`) emits at most, summed over its samples: color ×
+/// intensity, times the area for a physical area light (its samples weigh |u × v|/N² each).
+/// From the file's numbers, in f64: the f32 product may already be infinite. An environment
+/// map's sample weighs radiance / density, at most 64 × 4π times its largest texel (a
+/// bilinear value is at most 4 times its cell's mean luminance, and a channel at most 14
+/// times the luminance).
+pub(super) fn emission(l: &LightDesc, built: &Light, model: LightModel) -> f64 {
     let color_intensity = |c: Option<ColorDesc>, i: Option<Num>| {
         c.map_or(1.0, |c| peak(c.rgb())) * i.map_or(1.0, |i| i.0.abs())
     };
     match l {
         LightDesc::Point(p) => color_intensity(p.color, p.intensity),
+        LightDesc::Directional(d) => color_intensity(d.color, d.intensity),
+        LightDesc::Spot(s) => color_intensity(s.color, s.intensity),
         LightDesc::Area(a) => {
             let e = color_intensity(a.color, a.intensity);
             match model {
@@ -101,6 +111,14 @@ pub(super) fn emission(l: &LightDesc, model: LightModel) -> f64 {
                     e * u.cross(v).length().max(1.0)
                 }
             }
+        }
+        LightDesc::Environment(e) => {
+            let Light::Environment(env) = built else {
+                return 0.0;
+            };
+            let (_, texel) = env.map.mean_and_peak();
+            let intensity = e.intensity.map_or(1.0, |i| i.0.abs());
+            intensity * peak(texel) * 64.0 * 4.0 * std::f64::consts::PI
         }
     }
 }

@@ -7,10 +7,14 @@ use std::sync::Arc;
 use glam::Vec2;
 
 use super::{list, Builder, Result};
-use crate::light::{AreaLight, Light, PointLight};
+use crate::light::{
+    AreaLight, DirectionalLight, EnvironmentLight, EnvironmentMap, Light, PointLight, SpotLight,
+};
 use crate::material::{Cutout, Material};
 use crate::math::Rgb;
-use crate::scene::desc::{ColorSpace, LightDesc, MaterialDesc, Num, TextureDesc, TextureKindDesc};
+use crate::scene::desc::{
+    ColorSpace, EnvironmentLightDesc, LightDesc, MaterialDesc, Num, TextureDesc, TextureKindDesc,
+};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 use crate::texture_file::load_texture_image;
@@ -158,7 +162,7 @@ impl Builder<'_> {
         }))
     }
 
-    pub(super) fn light(&self, path: &KeyPath, l: &LightDesc, default_n: u32) -> Result<Light> {
+    pub(super) fn light(&mut self, path: &KeyPath, l: &LightDesc, default_n: u32) -> Result<Light> {
         let color = |c: Option<crate::scene::desc::ColorDesc>, i: Option<Num>| {
             c.map_or(Rgb::ONE, |c| c.rgb()) * i.map_or(1.0, Num::f32)
         };
@@ -178,7 +182,121 @@ impl Builder<'_> {
                 position: p.position.vec3(),
                 intensity: color(p.color, p.intensity),
             }),
+            LightDesc::Environment(e) => Light::Environment(EnvironmentLight {
+                map: self.environment_map(path, e)?,
+                intensity: e.intensity.map_or(1.0, Num::f32),
+                rotation: e.rotation.map_or(0.0, Num::f32),
+                n: match e.samples {
+                    Some(n) => self.light_n(&path.key("samples"), n)?,
+                    None => default_n,
+                },
+                visible: e.visible.unwrap_or(true),
+            }),
+            LightDesc::Directional(d) => {
+                let angle = self.angle(&path.key("angle"), d.angle, 0.0, 0.0, 90.0)?;
+                Light::Directional(DirectionalLight {
+                    direction: self.direction(&path.key("direction"), d.direction.vec3())?,
+                    irradiance: color(d.color, d.intensity),
+                    cos_half_angle: (0.5 * angle).to_radians().cos(),
+                    n: match (angle > 0.0, d.samples) {
+                        (false, _) => 1,
+                        (true, Some(n)) => self.light_n(&path.key("samples"), n)?,
+                        (true, None) => default_n,
+                    },
+                })
+            }
+            LightDesc::Spot(s) => {
+                let inner = self.angle(&path.key("inner_angle"), s.inner_angle, 0.0, 0.0, 90.0)?;
+                let outer = self.angle(&path.key("outer_angle"), s.outer_angle, 45.0, 0.0, 90.0)?;
+                if outer < inner {
+                    let message = format!(
+                        "outer_angle ({outer}°) must not be smaller than inner_angle ({inner}°)"
+                    );
+                    return Err(self.bad(&path.key("outer_angle"), message));
+                }
+                Light::Spot(SpotLight {
+                    position: s.position.vec3(),
+                    direction: self.direction(&path.key("direction"), s.direction.vec3())?,
+                    intensity: color(s.color, s.intensity),
+                    cos_inner: inner.to_radians().cos(),
+                    cos_outer: outer.to_radians().cos(),
+                })
+            }
         })
+    }
+
+    /// The unit vector along `v` at `path`; a zero (or unnormalizable) vector is an error.
+    fn direction(&self, path: &KeyPath, v: glam::Vec3) -> Result<glam::Vec3> {
+        v.try_normalize()
+            .ok_or_else(|| self.bad(path, "the direction must not be zero"))
+    }
+
+    /// The angle in degrees at `path` (or `default`), which must lie in `[lo, hi]`.
+    fn angle(
+        &self,
+        path: &KeyPath,
+        angle: Option<Num>,
+        default: f32,
+        lo: f32,
+        hi: f32,
+    ) -> Result<f32> {
+        let a = angle.map_or(default, Num::f32);
+        if !(lo..=hi).contains(&a) {
+            let message = format!("the angle must be between {lo} and {hi} degrees, not {a}");
+            return Err(self.bad(path, message));
+        }
+        Ok(a)
+    }
+
+    /// The map of environment light `e` at `path`: its `file` (Radiance `.hdr` and `.exr`
+    /// linear, other images through the sRGB curve) or its uniform `color`.
+    fn environment_map(
+        &mut self,
+        path: &KeyPath,
+        e: &EnvironmentLightDesc,
+    ) -> Result<Arc<EnvironmentMap>> {
+        if let Some(i) = e.intensity.filter(|i| i.0 < 0.0) {
+            let message = format!("intensity must not be negative, not {}", i.0);
+            return Err(self.bad(&path.key("intensity"), message));
+        }
+        let map = match (&e.file, e.color) {
+            (Some(_), Some(_)) => {
+                let message = "give `file` or `color`, not both";
+                return Err(self.bad(&path.key("color"), message));
+            }
+            (None, None) => {
+                let message = "an environment light needs `file` (an equirectangular map) or \
+                               `color` (a uniform sky)";
+                return Err(self.bad(path, message));
+            }
+            (None, Some(c)) => {
+                let c = c.rgb();
+                if c.cmplt(Rgb::ZERO).any() {
+                    return Err(self.bad(&path.key("color"), "color must not be negative"));
+                }
+                EnvironmentMap::uniform(c)
+            }
+            (Some(file), None) => {
+                let resolved = self.file.resolve(file);
+                let linear = resolved
+                    .extension()
+                    .and_then(|x| x.to_str())
+                    .is_some_and(|x| ["hdr", "exr"].contains(&&*x.to_ascii_lowercase()));
+                let image = self.image(&path.key("file"), resolved, !linear, "environment map")?;
+                EnvironmentMap::new(image.width, image.height, image.texels.clone())
+            }
+        };
+        let key = if e.file.is_some() { "file" } else { "color" };
+        let map = map.map_err(|err| {
+            self.err(
+                ErrorKind::Asset(AssetKind::Image),
+                &path.key(key),
+                err.to_string(),
+            )
+        })?;
+        // The sampling distribution: about 8 bytes per texel beside the texels.
+        self.budget.texture_bytes += u64::from(map.size().0) * u64::from(map.size().1) * 8;
+        Ok(Arc::new(map))
     }
 
     /// The index of the material called `name`.

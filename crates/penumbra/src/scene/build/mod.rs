@@ -132,7 +132,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     for (i, l) in desc.lights.iter().enumerate() {
         let path = KeyPath::root("lights").index(i);
         let light = b.light(&path, l, default_light_samples)?;
-        let emitted = bounds::emission(l, settings.light_model);
+        let emitted = bounds::emission(l, &light, settings.light_model);
         emission += emitted;
         b.check_emission(&path, bounds::light_key(l), emitted, emission)?;
         b.world.add_light(light);

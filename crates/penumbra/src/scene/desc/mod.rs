@@ -39,7 +39,10 @@ mod values;
 
 use serde::Deserialize;
 
-pub use lights::{AreaLightDesc, LightDesc, LightType, PointLightDesc};
+pub use lights::{
+    AreaLightDesc, DirectionalLightDesc, EnvironmentLightDesc, LightDesc, LightType,
+    PointLightDesc, SpotLightDesc,
+};
 pub use objects::{
     CubeDesc, InstancesDesc, MeshDesc, ObjectDesc, ObjectType, PlacementDesc, QuadDesc, ShapeDesc,
     SphereDesc, TransformsDesc, TriangleDesc,

@@ -1,10 +1,20 @@
-//! Lights of SPEC §6 (docs/spec.md): parallelogram area lights sampled on an N×N grid, and point lights.
-//! Lights are not geometry: camera rays do not see them and they cast no shadows.
+//! Lights of SPEC §6 (docs/spec.md): parallelogram area lights sampled on an N×N grid, point
+//! and spot lights, directional (sun) lights, and environment maps sampled N×N by importance.
+//! Lights are not geometry: they cast no shadows, and camera rays see only an environment
+//! marked visible.
+
+mod environment;
+mod punctual;
+
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use crate::distribution::ONE_BELOW;
 use crate::math::{unit_cross, Rgb};
 use crate::sampling::{jittered_offset, Rng};
+pub use environment::{EnvironmentError, EnvironmentMap, EnvironmentSample};
+pub use punctual::{DirectionalLight, SpotLight};
 
 /// A light source.
 #[derive(Clone, Debug, PartialEq)]
@@ -13,6 +23,75 @@ pub enum Light {
     Area(AreaLight),
     /// A point emitting equally in all directions.
     Point(PointLight),
+    /// Radiance arriving from every direction at infinity.
+    Environment(EnvironmentLight),
+    /// Light from one direction (or a small cone) at infinity: the sun.
+    Directional(DirectionalLight),
+    /// A point shining into a cone.
+    Spot(SpotLight),
+}
+
+/// An environment map as a light: the map, oriented about +y and scaled.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentLight {
+    /// The radiance map (shared: a scene's views reuse one).
+    pub map: Arc<EnvironmentMap>,
+    /// Scale on the map's radiance.
+    pub intensity: f32,
+    /// Rotation about +y in degrees (Mitsuba's `to_world = rotate([0, 1, 0], rotation)`).
+    pub rotation: f32,
+    /// N: N×N samples per shading point, one in each stratum.
+    pub n: u32,
+    /// Whether camera rays that miss see the map (else the background).
+    pub visible: bool,
+}
+
+impl EnvironmentLight {
+    /// (sin, cos) of the rotation.
+    fn sin_cos(&self) -> (f32, f32) {
+        self.rotation.to_radians().sin_cos()
+    }
+
+    /// A world direction in the map's frame: the inverse rotation about +y.
+    pub fn to_map(&self, d: Vec3) -> Vec3 {
+        let (s, c) = self.sin_cos();
+        Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+    }
+
+    /// A direction of the map's frame in the world: the rotation about +y.
+    pub fn to_world(&self, d: Vec3) -> Vec3 {
+        let (s, c) = self.sin_cos();
+        Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
+    }
+
+    /// Radiance arriving from the world direction `d` (unit), scaled.
+    pub fn radiance(&self, d: Vec3) -> Rgb {
+        self.map.radiance(self.to_map(d)) * self.intensity
+    }
+
+    /// Number of samples, N².
+    pub fn sample_count(&self) -> u32 {
+        self.n * self.n
+    }
+
+    /// Appends the N² samples of one shading point in stratum order (stratum `(k, l)` at
+    /// index `k·N + l`), each a world direction with its scaled radiance divided by its
+    /// density, drawing two numbers per stratum from `rng`.
+    pub fn sample_directions(&self, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
+        let n = self.n as f32;
+        for k in 0..self.n {
+            for l in 0..self.n {
+                let xi = rng.uniform2();
+                let u = Vec2::new((k as f32 + xi.x) / n, (l as f32 + xi.y) / n);
+                let u = u.min(Vec2::splat(ONE_BELOW));
+                let s = self.map.sample(u);
+                out.push((
+                    self.to_world(s.direction),
+                    s.radiance * (self.intensity / s.pdf),
+                ));
+            }
+        }
+    }
 }
 
 /// A parallelogram light sampled on an `n × n` grid.

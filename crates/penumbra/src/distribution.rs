@@ -1,0 +1,182 @@
+//! Piecewise-constant distributions for importance sampling (Pharr, Jakob and Humphreys,
+//! "Physically Based Rendering", 4th ed., §A.1 and §A.5): a 1D one over `n` equal cells of
+//! `[0, 1)`, and a 2D one over a grid, sampled by inverting the marginal CDF over rows and then
+//! the row's conditional CDF. Inversion keeps stratification: strata of `[0, 1)²` map to
+//! disjoint regions. The CDFs are kept in f64, so that a faint cell beside a sun millions of
+//! times brighter keeps its probability (only a cell below about 1e-16 of the total would
+//! not).
+
+use glam::Vec2;
+
+/// A distribution over `n` equal cells of `[0, 1)` with probabilities proportional to
+/// non-negative weights.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Distribution1D {
+    /// `cdf[i]` = P(cell < i), `n + 1` entries from 0 to 1.
+    cdf: Vec<f64>,
+    /// Sum of the weights (0 for an all-zero distribution, which samples uniformly).
+    total: f64,
+}
+
+impl Distribution1D {
+    /// The distribution of `weights` (finite, ≥ 0). All zero (or empty) samples uniformly.
+    pub(crate) fn new(weights: &[f32]) -> Distribution1D {
+        let total: f64 = weights.iter().map(|&w| f64::from(w.max(0.0))).sum();
+        let n = weights.len();
+        let mut cdf = Vec::with_capacity(n + 1);
+        cdf.push(0.0);
+        let mut sum = 0.0f64;
+        for (i, &w) in weights.iter().enumerate() {
+            sum += match total > 0.0 {
+                true => f64::from(w.max(0.0)),
+                false => 1.0,
+            };
+            let denominator = if total > 0.0 { total } else { n as f64 };
+            cdf.push(match i + 1 == n {
+                true => 1.0,
+                false => sum / denominator,
+            });
+        }
+        Distribution1D { cdf, total }
+    }
+
+    /// Number of cells.
+    pub(crate) fn len(&self) -> usize {
+        self.cdf.len() - 1
+    }
+
+    /// Sum of the weights it was made from.
+    pub(crate) fn total(&self) -> f64 {
+        self.total
+    }
+
+    /// Probability of cell `i`.
+    pub(crate) fn probability(&self, i: usize) -> f64 {
+        self.cdf[i + 1] - self.cdf[i]
+    }
+
+    /// The cell `u` in `[0, 1)` falls in and `u`'s position inside it, in `[0, 1)`. Cells of
+    /// probability 0 are never chosen.
+    pub(crate) fn sample(&self, u: f32) -> (usize, f32) {
+        // The last i with cdf[i] <= u, among cells 0..n.
+        let (n, u) = (self.len(), f64::from(u));
+        let i = self.cdf[1..n].partition_point(|&c| c <= u);
+        let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
+        let inside = match hi > lo {
+            true => (((u - lo) / (hi - lo)) as f32).clamp(0.0, ONE_BELOW),
+            false => 0.5,
+        };
+        (i, inside)
+    }
+}
+
+/// The largest f32 below 1.
+pub(crate) const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// A distribution over a `width × height` grid of cells (row-major, row 0 first) with
+/// probabilities proportional to non-negative weights.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Distribution2D {
+    /// One per row: the row's cells.
+    rows: Vec<Distribution1D>,
+    /// Over the rows, by their sums.
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// The distribution of `weights`, `width × height` of them row by row.
+    pub(crate) fn new(weights: &[f32], width: usize, height: usize) -> Distribution2D {
+        assert_eq!(weights.len(), width * height, "one weight per cell");
+        let rows: Vec<Distribution1D> = weights
+            .chunks_exact(width.max(1))
+            .map(Distribution1D::new)
+            .collect();
+        let sums: Vec<f32> = rows.iter().map(|r| r.total() as f32).collect();
+        Distribution2D {
+            marginal: Distribution1D::new(&sums),
+            rows,
+        }
+    }
+
+    /// Probability of cell `(x, y)`.
+    pub(crate) fn probability(&self, x: usize, y: usize) -> f64 {
+        self.marginal.probability(y) * self.rows[y].probability(x)
+    }
+
+    /// The cell `u` in `[0, 1)²` maps to, and `u`'s position inside it in `[0, 1)²`.
+    pub(crate) fn sample(&self, u: Vec2) -> ((usize, usize), Vec2) {
+        let (y, fy) = self.marginal.sample(u.y);
+        let (x, fx) = self.rows[y].sample(u.x);
+        ((x, y), Vec2::new(fx, fy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_dimension_follows_the_weights() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]);
+        assert_eq!(d.probability(0), 0.25);
+        assert_eq!(d.probability(1), 0.0);
+        assert_eq!(d.probability(2), 0.75);
+        assert_eq!(d.sample(0.0), (0, 0.0));
+        assert_eq!(d.sample(0.125), (0, 0.5));
+        // The empty cell is skipped: 0.25 is the start of cell 2.
+        assert_eq!(d.sample(0.25), (2, 0.0));
+        assert_eq!(d.sample(0.625), (2, 0.5));
+        let (i, f) = d.sample(ONE_BELOW);
+        assert_eq!(i, 2);
+        assert!(f < 1.0);
+    }
+
+    #[test]
+    fn all_zero_is_uniform() {
+        let d = Distribution1D::new(&[0.0; 4]);
+        assert_eq!(d.probability(3), 0.25);
+        let (i, f) = d.sample(0.6);
+        assert_eq!(i, 2);
+        assert!((f - 0.4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn strata_map_to_cells_in_proportion() {
+        // Counting where a fine grid of u lands recovers the probabilities.
+        let weights = [0.0, 2.0, 1.0, 1.0, 0.0, 4.0];
+        let d = Distribution2D::new(&weights, 3, 2);
+        let total: f32 = weights.iter().sum();
+        let n = 400;
+        let mut counts = [0u32; 6];
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let ((x, y), f) = d.sample(u);
+                assert!(f.cmpge(Vec2::ZERO).all() && f.cmplt(Vec2::ONE).all());
+                counts[y * 3 + x] += 1;
+            }
+        }
+        for (c, (&count, &w)) in counts.iter().zip(&weights).enumerate() {
+            let expected = w / total;
+            let got = count as f32 / (n * n) as f32;
+            assert!(
+                (got - expected).abs() < 2e-3,
+                "cell {c}: {got} vs {expected}"
+            );
+            assert!((d.probability(c % 3, c / 3) as f32 - expected).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn a_tiny_cell_among_large_ones_keeps_its_probability() {
+        // A sun of one bright texel in a 4096 × 2048 map of faint sky still gets sampled.
+        let (w, h) = (4096, 2048);
+        let mut weights = vec![1e-3f32; w * h];
+        weights[1000 * w + 3000] = 1e6;
+        let d = Distribution2D::new(&weights, w, h);
+        let p = d.probability(3000, 1000);
+        let expected = 1e6 / (1e6 + 1e-3 * (w * h - 1) as f64);
+        assert!((p - expected).abs() < 1e-4);
+        assert!(d.probability(0, 0) > 0.0);
+    }
+}

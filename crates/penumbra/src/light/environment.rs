@@ -1,0 +1,386 @@
+//! Environment maps: an equirectangular (latitude-longitude) image of the radiance arriving
+//! from every direction at infinity, oriented, looked up and importance-sampled.
+//!
+//! # Orientation (normative, SPEC §6)
+//!
+//! The same as Mitsuba 3's `envmap` emitter with `to_world = rotate(axis=[0, 1, 0],
+//! angle=rotation)`. In the map's own frame a unit direction `d` has texture coordinates
+//! `u = atan2(d.x, −d.z) / 2π` (wrapped into `[0, 1)`) and `v = acos(d.y) / π`: the top row
+//! (`v = 0`) is +y, the centre column (`u = ½`) faces +z, `u = ¼` faces +x and `u = ¾` faces −x.
+//! A world direction is rotated into the map's frame by the inverse of the rotation about +y.
+//!
+//! # Lookup
+//!
+//! As Mitsuba reads the map: texel `(i, j)` of a `W × H` image sits at `u = (i + ½) / W`,
+//! `v = j / (H − 1)` (the top row at the +y pole, the bottom row at the −y pole), and radiance
+//! between texels is bilinear, wrapping across `u = 0`.
+//!
+//! # Sampling
+//!
+//! The bilinear cells between neighbouring texels (`W` columns, wrapping, by `H − 1` rows) are
+//! chosen in proportion to the mean luminance of their four corners times their solid angle,
+//! then a direction uniformly in the cell's solid angle (uniform in φ and in cos θ). So the
+//! density of a direction is `P(cell) / Ω(cell)`: finite everywhere, with no 1/sin θ spike at
+//! the poles, and positive wherever the radiance is.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use crate::distribution::Distribution2D;
+use crate::math::Rgb;
+
+/// Luminance of linear Rec. 709 RGB (the weights Mitsuba's `luminance` uses).
+pub(crate) fn luminance(c: Rgb) -> f32 {
+    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
+}
+
+/// Why texels cannot make an environment map.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EnvironmentError {
+    /// Fewer than 2 × 2 texels (or a texel count that does not match).
+    #[error("an environment map needs at least 2×2 texels, not {width}×{height}")]
+    TooSmall {
+        /// Width given.
+        width: u32,
+        /// Height given.
+        height: u32,
+    },
+    /// A texel is NaN, infinite or negative.
+    #[error("texel ({x}, {y}) is {value}: radiance must be finite and not negative")]
+    BadTexel {
+        /// Column.
+        x: u32,
+        /// Row (0 at the top).
+        y: u32,
+        /// The offending channel's value.
+        value: f32,
+    },
+}
+
+/// An equirectangular radiance map with its sampling distribution, built once per scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentMap {
+    width: u32,
+    height: u32,
+    /// Linear RGB radiance, row-major from the top row (+y).
+    texels: Vec<Rgb>,
+    /// Over the `width × (height − 1)` bilinear cells.
+    cells: Distribution2D,
+    /// cos θ of each texel row, `height` of them, from 1 at the top to −1 at the bottom.
+    cos_rows: Vec<f32>,
+}
+
+/// A direction drawn from a map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnvironmentSample {
+    /// Unit direction in the map's frame.
+    pub direction: Vec3,
+    /// Radiance arriving from it.
+    pub radiance: Rgb,
+    /// Density over solid angle, > 0.
+    pub pdf: f32,
+}
+
+impl EnvironmentMap {
+    /// A map of `width × height` linear RGB texels, row 0 at the top (+y).
+    pub fn new(width: u32, height: u32, texels: Vec<Rgb>) -> Result<Self, EnvironmentError> {
+        if width < 2 || height < 2 || texels.len() != width as usize * height as usize {
+            return Err(EnvironmentError::TooSmall { width, height });
+        }
+        if let Some(i) = texels
+            .iter()
+            .position(|t| !t.is_finite() || t.cmplt(Vec3::ZERO).any())
+        {
+            let t = texels[i];
+            let value = [t.x, t.y, t.z]
+                .into_iter()
+                .find(|v| !v.is_finite() || *v < 0.0)
+                .unwrap_or(f32::NAN);
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            return Err(EnvironmentError::BadTexel { x, y, value });
+        }
+        let (w, h) = (width as usize, height as usize);
+        let cos_rows: Vec<f32> = (0..h)
+            .map(|j| match j {
+                0 => 1.0,
+                j if j == h - 1 => -1.0,
+                j => (PI * j as f32 / (h - 1) as f32).cos(),
+            })
+            .collect();
+        let lum: Vec<f32> = texels.iter().map(|&t| luminance(t)).collect();
+        let mut weights = Vec::with_capacity(w * (h - 1));
+        for j in 0..h - 1 {
+            // Every cell of a row spans the same solid angle: weigh by the band's height.
+            let band = cos_rows[j] - cos_rows[j + 1];
+            let (top, bottom) = (&lum[j * w..(j + 1) * w], &lum[(j + 1) * w..(j + 2) * w]);
+            for i in 0..w {
+                let k = (i + 1) % w;
+                weights.push(0.25 * (top[i] + top[k] + bottom[i] + bottom[k]) * band);
+            }
+        }
+        Ok(EnvironmentMap {
+            width,
+            height,
+            texels,
+            cells: Distribution2D::new(&weights, w, h - 1),
+            cos_rows,
+        })
+    }
+
+    /// A map of one radiance in every direction.
+    pub fn uniform(radiance: Rgb) -> Result<Self, EnvironmentError> {
+        EnvironmentMap::new(2, 2, vec![radiance; 4])
+    }
+
+    /// `(width, height)` in texels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    fn texel(&self, i: usize, j: usize) -> Rgb {
+        self.texels[j * self.width as usize + i % self.width as usize]
+    }
+
+    /// Radiance arriving from the unit direction `d` of the map's frame (see the module docs).
+    pub fn radiance(&self, d: Vec3) -> Rgb {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let u = d.x.atan2(-d.z) * (0.5 / PI) - 0.5 / w;
+        let u = u - u.floor();
+        let v = (d.y.clamp(-1.0, 1.0).acos() / PI).clamp(0.0, 1.0);
+        let (x, y) = (u * w, v * (h - 1.0));
+        let i = (x as usize).min(self.width as usize - 1);
+        let j = (y as usize).min(self.height as usize - 2);
+        let (fx, fy) = (x - i as f32, y - j as f32);
+        let top = self.texel(i, j) * (1.0 - fx) + self.texel(i + 1, j) * fx;
+        let bottom = self.texel(i, j + 1) * (1.0 - fx) + self.texel(i + 1, j + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The direction `u` in `[0, 1)²` maps to, its radiance and density. Strata of `u` map to
+    /// disjoint sets of directions.
+    pub fn sample(&self, u: Vec2) -> EnvironmentSample {
+        let ((i, j), f) = self.cells.sample(u);
+        let w = self.width as f32;
+        let phi = 2.0 * PI * ((i as f32 + 0.5 + f.x) / w);
+        let (c0, c1) = (self.cos_rows[j], self.cos_rows[j + 1]);
+        let cos_theta = (c0 + (c1 - c0) * f.y).clamp(-1.0, 1.0);
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let direction = Vec3::new(phi.sin() * sin_theta, cos_theta, -phi.cos() * sin_theta);
+        EnvironmentSample {
+            direction,
+            radiance: self.radiance(direction),
+            pdf: self.cell_pdf(i, j),
+        }
+    }
+
+    /// Density over solid angle of the directions in cell `(i, j)`.
+    fn cell_pdf(&self, i: usize, j: usize) -> f32 {
+        let solid_angle = 2.0 * PI / self.width as f32 * (self.cos_rows[j] - self.cos_rows[j + 1]);
+        (self.cells.probability(i, j) / f64::from(solid_angle)) as f32
+    }
+
+    /// Density over solid angle with which [`sample`](Self::sample) draws the unit direction
+    /// `d` of the map's frame.
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        let w = self.width as f32;
+        let u = d.x.atan2(-d.z) * (0.5 / PI);
+        let x = (u - u.floor()) * w - 0.5;
+        let i = (x.floor() as i64).rem_euclid(i64::from(self.width)) as usize;
+        let cos_theta = d.y.clamp(-1.0, 1.0);
+        // The band whose cos θ range holds d's (rows run from cos 1 down to −1).
+        let j = self.cos_rows[1..self.height as usize - 1].partition_point(|&c| c > cos_theta);
+        self.cell_pdf(i, j)
+    }
+
+    /// Mean radiance over the sphere (weighted by solid angle) and the largest texel.
+    pub fn mean_and_peak(&self) -> (Rgb, Rgb) {
+        let mut sum = glam::DVec3::ZERO;
+        let mut total = 0.0f64;
+        let (w, h) = (self.width as usize, self.height as usize);
+        for j in 0..h - 1 {
+            let band = f64::from(self.cos_rows[j] - self.cos_rows[j + 1]);
+            for i in 0..w {
+                let c = self.texel(i, j) + self.texel(i + 1, j);
+                let c = c + self.texel(i, j + 1) + self.texel(i + 1, j + 1);
+                sum += c.as_dvec3() * (0.25 * band);
+                total += band;
+            }
+        }
+        let peak = self.texels.iter().fold(Vec3::ZERO, |m, &t| m.max(t));
+        ((sum / total).as_vec3(), peak)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A map dark everywhere but one texel.
+    fn spot(w: u32, h: u32, at: (u32, u32)) -> EnvironmentMap {
+        let mut texels = vec![Vec3::ZERO; (w * h) as usize];
+        texels[(at.1 * w + at.0) as usize] = Vec3::ONE;
+        EnvironmentMap::new(w, h, texels).unwrap()
+    }
+
+    #[test]
+    fn orientation_is_mitsubas() {
+        // 8 columns: texel i is centred at u = (i + ½)/8. Column 2 (u = 0.3125) is near +x
+        // (u = ¼), column 4 (u = 0.5625) near +z, column 6 near −x, column 0 near −z.
+        let (w, h) = (8, 5);
+        for (column, toward) in [(2, Vec3::X), (4, Vec3::Z), (6, -Vec3::X), (0, -Vec3::Z)] {
+            let map = spot(w, h, (column, 2));
+            // The texel's own direction: u = (column + ½)/8, v = ½ (the horizon).
+            let phi = 2.0 * PI * (column as f32 + 0.5) / w as f32;
+            let d = Vec3::new(phi.sin(), 0.0, -phi.cos());
+            assert!(
+                (map.radiance(d) - Vec3::ONE).length() < 1e-5,
+                "column {column}"
+            );
+            assert!(d.dot(toward) > 0.9, "column {column} faces {toward}");
+        }
+        // The top row is +y, the bottom row −y.
+        let row = |j: u32| {
+            let texels = (0..w * h)
+                .map(|k| Vec3::splat(f32::from(k / w == j)))
+                .collect();
+            EnvironmentMap::new(w, h, texels).unwrap()
+        };
+        assert_eq!(row(0).radiance(Vec3::Y), Vec3::ONE);
+        assert_eq!(row(4).radiance(-Vec3::Y), Vec3::ONE);
+        assert_eq!(row(0).radiance(-Vec3::Y), Vec3::ZERO);
+        assert_eq!(row(2).radiance(Vec3::Y), Vec3::ZERO);
+    }
+
+    #[test]
+    fn lookup_agrees_with_mitsuba() {
+        // Mitsuba 3.9.1 (`scalar_rgb`), an `envmap` of a 4×3 bitmap whose red channel is
+        // 0..12 row by row: `emitter.eval` with `si.wi = −d` for these directions d.
+        let texels = (0..12).map(|k| Vec3::new(k as f32, 1.0, 2.0)).collect();
+        let map = EnvironmentMap::new(4, 3, texels).unwrap();
+        let cases = [
+            ([0.0, 0.0, -1.0], 5.5),
+            ([1.0, 0.0, 0.0], 4.5),
+            ([0.0, 0.0, 1.0], 5.5),
+            ([-1.0, 0.0, 0.0], 6.5),
+            ([0.0, 1.0, 0.0], 1.5),
+            ([0.0, -1.0, 0.0], 9.5),
+            ([0.3, 0.5, -0.2], 1.71659),
+        ];
+        for (d, red) in cases {
+            let got = map.radiance(Vec3::from(d).normalize());
+            assert!((got.x - red).abs() < 1e-4, "{d:?}: {} vs {red}", got.x);
+            assert_eq!((got.y, got.z), (1.0, 2.0));
+        }
+    }
+
+    #[test]
+    fn lookup_is_bilinear_and_wraps() {
+        let (w, h) = (4, 3);
+        let texels = (0..w * h).map(|k| Vec3::splat(k as f32)).collect();
+        let map = EnvironmentMap::new(w, h, texels).unwrap();
+        // Halfway between columns 3 and 0 (u = 0 exactly) on the horizon row: (7 + 4) / 2.
+        let d = Vec3::new(0.0, 0.0, -1.0);
+        assert!((map.radiance(d).x - 5.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn samples_carry_their_density_and_radiance() {
+        let texels = (0..16 * 9)
+            .map(|k| Vec3::new(1.0 + (k % 7) as f32, 2.0, (k % 5) as f32))
+            .collect();
+        let map = EnvironmentMap::new(16, 9, texels).unwrap();
+        for a in 0..20 {
+            for b in 0..20 {
+                let u = Vec2::new((a as f32 + 0.3) / 20.0, (b as f32 + 0.7) / 20.0);
+                let s = map.sample(u);
+                assert!((s.direction.length() - 1.0).abs() < 1e-5);
+                assert!(s.pdf > 0.0);
+                assert!((map.pdf(s.direction) / s.pdf - 1.0).abs() < 1e-3, "{u}");
+                assert_eq!(s.radiance, map.radiance(s.direction));
+            }
+        }
+    }
+
+    #[test]
+    fn the_estimator_integrates_the_map() {
+        // ∫ L(ω) cos⁺θ_y dω over the sphere, by stratified importance sampling, against a
+        // fine uniform quadrature: the irradiance on an upward-facing plane.
+        let (w, h) = (32, 17);
+        let texels = (0..w * h)
+            .map(|k| {
+                let (i, j) = (k % w, k / w);
+                Vec3::splat(if (3..6).contains(&i) && (2..5).contains(&j) {
+                    50.0
+                } else {
+                    0.2
+                })
+            })
+            .collect();
+        let map = EnvironmentMap::new(w, h, texels).unwrap();
+        // A fine grid of strata: its midpoints cover every cell in proportion.
+        let n = 512;
+        let mut estimate = 0.0f64;
+        for a in 0..n {
+            for b in 0..n {
+                let s = map.sample(Vec2::new(
+                    (a as f32 + 0.5) / n as f32,
+                    (b as f32 + 0.5) / n as f32,
+                ));
+                estimate += f64::from(s.radiance.x * s.direction.y.max(0.0) / s.pdf);
+            }
+        }
+        estimate /= (n * n) as f64;
+        let m = 1000;
+        let mut reference = 0.0f64;
+        for a in 0..m {
+            for b in 0..m {
+                // Uniform in φ and cos θ: dω = 4π / m².
+                let phi = 2.0 * PI * (a as f32 + 0.5) / m as f32;
+                let c = 1.0 - 2.0 * (b as f32 + 0.5) / m as f32;
+                let s = (1.0 - c * c).sqrt();
+                let d = Vec3::new(phi.sin() * s, c, -phi.cos() * s);
+                reference += f64::from(map.radiance(d).x * c.max(0.0));
+            }
+        }
+        reference *= 4.0 * std::f64::consts::PI / (m * m) as f64;
+        assert!(
+            (estimate / reference - 1.0).abs() < 0.01,
+            "{estimate} vs {reference}"
+        );
+    }
+
+    #[test]
+    fn uniform_sky_has_its_radiance_everywhere() {
+        let map = EnvironmentMap::uniform(Vec3::new(0.5, 1.0, 2.0)).unwrap();
+        let d = Vec3::new(0.3, -0.4, 0.5).normalize();
+        assert!((map.radiance(d) - Vec3::new(0.5, 1.0, 2.0)).length() < 1e-6);
+        // Uniform over the sphere: 1 / 4π.
+        let s = map.sample(Vec2::new(0.3, 0.8));
+        assert!((s.pdf * 4.0 * PI - 1.0).abs() < 1e-5);
+        let (mean, peak) = map.mean_and_peak();
+        assert!((mean - Vec3::new(0.5, 1.0, 2.0)).length() < 1e-6);
+        assert_eq!(peak, Vec3::new(0.5, 1.0, 2.0));
+    }
+
+    #[test]
+    fn bad_maps_are_refused() {
+        assert_eq!(
+            EnvironmentMap::new(1, 4, vec![Vec3::ONE; 4]),
+            Err(EnvironmentError::TooSmall {
+                width: 1,
+                height: 4
+            })
+        );
+        let mut texels = vec![Vec3::ONE; 6];
+        texels[4] = Vec3::new(0.0, -1.0, 0.0);
+        assert_eq!(
+            EnvironmentMap::new(3, 2, texels),
+            Err(EnvironmentError::BadTexel {
+                x: 1,
+                y: 1,
+                value: -1.0
+            })
+        );
+    }
+}
