@@ -1,6 +1,7 @@
 //! Benchmarks of loading: the BVH build over a 200k-triangle soup, serial and on a pool of two
 //! threads, and the reading of `assets/meshes/nefertiti_70k.obj` (parsing, merging and adding
-//! it to a world, without the BVH) on one and two threads.
+//! it to a world, without the BVH) on one and two threads, and an environment map's sampling
+//! distribution at 4096 × 2048.
 //!
 //! ```text
 //! cargo bench -p penumbra --bench build
@@ -85,5 +86,28 @@ fn bench_obj_parse(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_bvh_build, bench_obj_parse);
+/// An environment map's sampling distribution at 4096 × 2048 (a "4k" HDRI): a smooth sky
+/// with a small bright sun, so that the sums span many orders of magnitude.
+fn bench_environment_map(c: &mut Criterion) {
+    let (w, h) = (4096u32, 2048u32);
+    let texels: Vec<glam::Vec3> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let sun = if x.abs_diff(3000) < 8 && y.abs_diff(700) < 8 { 5e4 } else { 0.0 };
+            glam::Vec3::splat(0.2 + y as f32 / h as f32 + sun)
+        })
+        .collect();
+    let mut group = c.benchmark_group("environment");
+    group.sample_size(10);
+    group.bench_function("distribution_4096x2048", |b| {
+        b.iter_batched(
+            || texels.clone(),
+            |texels| penumbra::EnvironmentMap::new(w, h, texels).unwrap(),
+            criterion::BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_bvh_build, bench_obj_parse, bench_environment_map);
 criterion_main!(benches);

@@ -99,12 +99,13 @@ fn table() -> Vec<Case> {
         toml("unknown key before type in [[lights]]",
              edit(BASE, POINT_LIGHT, "colour = 1\ntype = \"point\"\nposition = [0, 5, 5]\n"))
             .parse_error(UnknownKey, value_of("colour = 1"), Some("lights[0].colour"),
-                         &["unknown key `colour` (an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity)"]),
+                         &["unknown key `colour` (an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity; an environment light takes: file, rotation, samples, visible, color, intensity; a directional light takes: direction, angle, samples, color, intensity; a spot light takes: position, direction, inner_angle, outer_angle, color, intensity)"]),
         toml("unknown object type", edit(BASE, "type = \"cube\"", "type = \"cylinder\""))
             .parse_error(BadValue, value_of("type = \"cylinder\""), Some("objects[1].type"),
                          &["cylinder", "sphere"]),
-        toml("unknown light type", edit(BASE, "type = \"point\"", "type = \"spot\""))
-            .parse_error(BadValue, value_of("type = \"spot\""), Some("lights[0].type"), &["spot", "area"]),
+        toml("unknown light type", edit(BASE, "type = \"point\"", "type = \"laser\""))
+            .parse_error(BadValue, value_of("type = \"laser\""), Some("lights[0].type"),
+                         &["laser", "area", "environment", "spot"]),
         toml("unknown texture type", format!("{BASE}\n[textures.t]\ntype = \"noise\"\n"))
             .parse_error(BadValue, value_of("type = \"noise\""), Some("textures.t.type"),
                          &["noise", "checker"]),
@@ -412,7 +413,7 @@ fn table() -> Vec<Case> {
         json("JSON: unknown key before type",
              edit(BASE_JSON, "{\"type\": \"point\"", "{\"colour\": [1, 0, 0], \"type\": \"point\""))
             .parse_error(UnknownKey, value_of("\"colour\": [1, 0, 0]"), Some("lights[0].colour"),
-                         &["(an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity)"]),
+                         &["(an area light takes: center, u, v, samples, jitter, color, intensity; a point light takes: position, color, intensity; an environment light takes: file, rotation, samples, visible, color, intensity; a directional light takes: direction, angle, samples, color, intensity; a spot light takes: position, direction, inner_angle, outer_angle, color, intensity)"]),
         json("JSON: key of another object kind, with the keys it takes",
              edit(BASE_JSON, "\"size\": 1}", "\"size\": 1, \"file\": [1]}"))
             .parse_error(UnknownKey, value_of("\"file\": [1]"), Some("objects[1].file"),
