@@ -60,8 +60,7 @@ impl EnvironmentLight {
 
     /// A direction of the map's frame in the world: the rotation about +y.
     pub fn to_world(&self, d: Vec3) -> Vec3 {
-        let (s, c) = self.sin_cos();
-        Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
+        rotate_y(self.sin_cos(), d)
     }
 
     /// Radiance arriving from the world direction `d` (unit), scaled.
@@ -79,6 +78,7 @@ impl EnvironmentLight {
     /// density, drawing two numbers per stratum from `rng`.
     pub fn sample_directions(&self, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
         let n = self.n as f32;
+        let rotation = self.sin_cos();
         for k in 0..self.n {
             for l in 0..self.n {
                 let xi = rng.uniform2();
@@ -86,12 +86,17 @@ impl EnvironmentLight {
                 let u = u.min(Vec2::splat(ONE_BELOW));
                 let s = self.map.sample(u);
                 out.push((
-                    self.to_world(s.direction),
+                    rotate_y(rotation, s.direction),
                     s.radiance * (self.intensity / s.pdf),
                 ));
             }
         }
     }
+}
+
+/// `d` rotated about +y by the angle of `(sin, cos)`.
+fn rotate_y((s, c): (f32, f32), d: Vec3) -> Vec3 {
+    Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
 }
 
 /// A parallelogram light sampled on an `n × n` grid.
