@@ -93,7 +93,11 @@ fn bench_environment_map(c: &mut Criterion) {
     let texels: Vec<glam::Vec3> = (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let sun = if x.abs_diff(3000) < 8 && y.abs_diff(700) < 8 { 5e4 } else { 0.0 };
+            let sun = if x.abs_diff(3000) < 8 && y.abs_diff(700) < 8 {
+                5e4
+            } else {
+                0.0
+            };
             glam::Vec3::splat(0.2 + y as f32 / h as f32 + sun)
         })
         .collect();
@@ -109,5 +113,10 @@ fn bench_environment_map(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_bvh_build, bench_obj_parse, bench_environment_map);
+criterion_group!(
+    benches,
+    bench_bvh_build,
+    bench_obj_parse,
+    bench_environment_map
+);
 criterion_main!(benches);

@@ -355,6 +355,9 @@ fn importance_sampling_beats_uniform_sampling_tenfold_on_a_sunset() {
             / 200.0
     };
     let (importance, uniform) = (mse(true), mse(false));
-    eprintln!("MSE: importance {importance:.4e}, uniform {uniform:.4e}, ratio {:.1}", uniform / importance);
+    eprintln!(
+        "MSE: importance {importance:.4e}, uniform {uniform:.4e}, ratio {:.1}",
+        uniform / importance
+    );
     assert!(uniform >= 10.0 * importance, "{importance} vs {uniform}");
 }
