@@ -279,3 +279,35 @@ fn bad_files_exit_2_naming_the_file_and_the_json_path() {
         "{line}"
     );
 }
+
+#[test]
+fn instances_of_a_gltf_file_place_its_node_graph_under_each_transform() {
+    let dir = TempDir::new("gltf-instances");
+    dir.write("t.gltf", triangle().to_string());
+    dir.write(
+        "s.toml",
+        "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0, 0, 30]\nlook_at = [0, 0, 0]\n\
+         fov = 40\n\n[materials.red]\ndiffuse = [0.9, 0.1, 0.1]\n\n[[objects]]\n\
+         type = \"instances\"\nfile = \"t.gltf\"\nmaterial = \"red\"\ntransforms = [\n\
+         { translate = [0, 0, 0] },\n{ translate = [0, 5, 0] },\n{ translate = [0, 10, 0] },\n]\n",
+    );
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let s: Value = serde_json::from_slice(&r.stdout).unwrap();
+    // Two nodes place the triangle, under each of three transforms.
+    assert_eq!(s["triangles"], 6);
+    assert_eq!(s["bounds"]["min"], json!([0.0, 0.0, 0.0]));
+    assert_eq!(s["bounds"]["max"], json!([6.0, 11.0, 0.0]));
+    assert_eq!(s["objects"][0]["triangles"], 6);
+    // `cameras` is a key of `type = "mesh"` only, and of glTF files only.
+    dir.write(
+        "obj.toml",
+        "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0, 0, 30]\nlook_at = [0, 0, 0]\n\
+         fov = 40\n[[objects]]\ntype = \"mesh\"\nfile = \"t.obj\"\ncameras = true\n",
+    );
+    dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let line = error_line(&run_in(dir.path(), ["check", "obj.toml"]), 2);
+    assert!(
+        line.contains("objects[0].cameras") && line.contains("glTF files"),
+        "{line}"
+    );
+}

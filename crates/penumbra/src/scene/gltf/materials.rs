@@ -27,7 +27,7 @@ impl Reader<'_> {
         for material in doc.materials() {
             let i = material.index().unwrap_or_default();
             let used = used.get(i).copied().unwrap_or(false);
-            let mut m = self.material(&material, i);
+            let m = self.material(&material, i);
             if used {
                 self.note_ignored(&material);
                 if m.alpha != AlphaMode::Opaque {
@@ -35,12 +35,8 @@ impl Reader<'_> {
                         .note("{n} material(s) with alphaMode MASK or BLEND are rendered opaque");
                 }
                 if let Some(t) = &m.texture {
-                    if model.images[t.image].is_none() {
-                        let image = doc.images().nth(t.image);
-                        match image {
-                            Some(image) => model.images[t.image] = Some(self.buffers.image(image)?),
-                            None => m.texture = None,
-                        }
+                    if model.images.get(t.image).is_some_and(Option::is_none) {
+                        model.images[t.image] = Some(self.buffers.image(doc, t.image)?);
                     }
                 }
             }

@@ -457,3 +457,24 @@ fn color_0_as_normalized_u8_rgba_becomes_vertex_colours() {
     assert_eq!(colors[1], Vec3::Y);
     assert!((colors[2] - Vec3::new(0.0, 0.0, 0.2)).length() < 1e-6);
 }
+
+#[test]
+fn an_image_in_a_buffer_view_needs_no_mime_type_and_an_image_needs_a_source() {
+    let mut v = triangle();
+    v["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": 0, "byteLength": 8}));
+    v["images"] = json!([{"bufferView": 2}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    v["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let model = read(&v).unwrap();
+    assert!(matches!(model.images[0], Some(super::ImageSource::Bytes(ref b)) if b.len() == 8));
+    v["images"] = json!([{"name": "nothing"}]);
+    let e = error(&v);
+    assert!(
+        e.starts_with("images[0].uri: ") && e.contains("neither"),
+        "{e}"
+    );
+}
