@@ -2,7 +2,7 @@
 //! description a TOML file would give, with one `type = "mesh"` object naming it, a camera
 //! that frames its bounds and a default light rig. Overrides, packs and building then work on
 //! it unchanged. A glTF file with cameras uses them instead (`cameras = true`: the first is
-//! the view), and one with point lights uses them instead of the rig (`lights = true`, under
+//! the view), and one with lights uses them instead of the rig (`lights = true`, under
 //! the physical light model, whose 1/d² falloff is glTF's).
 //!
 //! The defaults, from the mesh's bounds (centre c, bounding-sphere radius r = half the

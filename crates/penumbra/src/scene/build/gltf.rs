@@ -15,12 +15,14 @@ use glam::{Mat4, Vec3};
 use super::placements::Placement;
 use super::{Builder, Result};
 use crate::camera::Camera;
-use crate::light::{Light, PointLight};
+use crate::light::{DirectionalLight, Light, PointLight, SpotLight};
 use crate::material::Material;
 use crate::math::Transform;
 use crate::scene::desc::{ObjectDesc, ShapeDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
-use crate::scene::gltf::{load_gltf, unique, GltfMaterial, GltfModel, ImageSource};
+use crate::scene::gltf::{
+    load_gltf, unique, GltfLight, GltfLightKind, GltfMaterial, GltfModel, ImageSource,
+};
 use crate::texture::{Image, ImageTexture, Texture, TextureKind};
 use crate::texture_file::decode_texture_image;
 use crate::world::{flatten_instances, DEFAULT_MATERIAL};
@@ -139,7 +141,7 @@ impl Builder<'_> {
         Ok(added)
     }
 
-    /// The point lights of every object with `lights = true`, each with its object's path.
+    /// The lights of every object with `lights = true`, each with its object's path.
     pub(super) fn gltf_lights(&mut self) -> Result<Vec<(KeyPath, Light)>> {
         let mut lights = Vec::new();
         for (i, o) in self.file.desc.objects.iter().enumerate() {
@@ -153,14 +155,7 @@ impl Builder<'_> {
             let model = self.gltf_for_key(&path, &m.file, "lights")?;
             let world = object_matrix(o);
             for l in &model.lights {
-                // Candela to penumbra's point intensity: 1:1 (docs/scene-format.md).
-                lights.push((
-                    path.clone(),
-                    Light::Point(PointLight {
-                        position: world.transform_point3(l.position),
-                        intensity: l.color * l.intensity,
-                    }),
-                ));
+                lights.push((path.clone(), gltf_light(l, world)));
             }
         }
         Ok(lights)
@@ -368,4 +363,36 @@ fn object_matrix(o: &ObjectDesc) -> Mat4 {
         o.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
         o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
     )
+}
+
+/// The penumbra light of glTF light `l` placed by `world`: candela (point, spot) and lux
+/// (directional) map 1:1 onto a point light's intensity and a directional light's irradiance
+/// (docs/scene-format.md).
+fn gltf_light(l: &GltfLight, world: Mat4) -> Light {
+    let intensity = l.color * l.intensity;
+    let position = world.transform_point3(l.position);
+    // A direction squashed to zero by the placement keeps the file's own.
+    let direction = world
+        .transform_vector3(l.direction)
+        .try_normalize()
+        .unwrap_or(l.direction);
+    match l.kind {
+        GltfLightKind::Point => Light::Point(PointLight {
+            position,
+            intensity,
+        }),
+        GltfLightKind::Spot { inner, outer } => Light::Spot(SpotLight {
+            position,
+            direction,
+            intensity,
+            cos_inner: inner.cos(),
+            cos_outer: outer.cos(),
+        }),
+        GltfLightKind::Directional => Light::Directional(DirectionalLight {
+            direction,
+            irradiance: intensity,
+            cos_half_angle: 1.0,
+            n: 1,
+        }),
+    }
 }

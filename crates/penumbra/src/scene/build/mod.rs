@@ -138,10 +138,12 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         b.world.add_light(light);
     }
     for (path, light) in b.gltf_lights()? {
-        let crate::light::Light::Point(p) = &light else {
-            continue;
-        };
-        let emitted = bounds::peak(p.intensity);
+        let emitted = bounds::peak(match &light {
+            crate::light::Light::Point(p) => p.intensity,
+            crate::light::Light::Spot(s) => s.intensity,
+            crate::light::Light::Directional(d) => d.irradiance,
+            _ => continue,
+        });
         emission += emitted;
         b.check_emission(&path, "lights", emitted, emission)?;
         b.world.add_light(light);

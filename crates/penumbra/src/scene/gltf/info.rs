@@ -32,7 +32,7 @@ pub struct GltfInfo {
     pub textures: usize,
     /// The perspective cameras' names, in scene order.
     pub cameras: Vec<String>,
-    /// Point lights.
+    /// Lights (point, spot and directional).
     pub lights: usize,
     /// The file's `extensionsUsed`.
     pub extensions: Vec<String>,

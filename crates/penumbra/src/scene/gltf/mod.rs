@@ -16,7 +16,7 @@
 //!   down the image, penumbra's t up) and COLOR_0.
 //! - **Materials, cameras, lights:** see [`GltfMaterial`], [`GltfCamera`], [`GltfLight`].
 //! - Everything else is ignored with a warning (animations, skins, morph targets, emissive,
-//!   normal, occlusion and metallic-roughness maps, spot and directional lights, orthographic
+//!   normal, occlusion and metallic-roughness maps, orthographic
 //!   cameras, extensions penumbra does not read). A file that *requires* an extension penumbra
 //!   does not read (Draco, meshopt, basisu, …) is refused, naming it.
 //!
@@ -98,7 +98,7 @@ pub(crate) struct GltfModel {
     pub images: Vec<Option<ImageSource>>,
     /// Perspective cameras of the scene's nodes, in scene order, with unique names.
     pub cameras: Vec<GltfCamera>,
-    /// Point lights of the scene's nodes, in scene order.
+    /// Lights of the scene's nodes, in scene order.
     pub lights: Vec<GltfLight>,
     /// The file's `extensionsUsed`.
     pub extensions: Vec<String>,
@@ -203,15 +203,35 @@ impl GltfCamera {
     }
 }
 
-/// A point light of a node (KHR_lights_punctual), in the file's space.
+/// A light of a node (KHR_lights_punctual), in the file's space.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct GltfLight {
-    /// Where it is.
+    /// Where it is (the node's origin).
     pub position: Vec3,
+    /// Where it shines: the node's −z.
+    pub direction: Vec3,
     /// Linear RGB colour.
     pub color: Vec3,
-    /// Luminous intensity in candela.
+    /// Luminous intensity in candela (point, spot) or illuminance in lux (directional).
     pub intensity: f32,
+    /// Its kind.
+    pub kind: GltfLightKind,
+}
+
+/// The kinds of KHR_lights_punctual lights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum GltfLightKind {
+    /// Emitting equally every way.
+    Point,
+    /// A cone about `direction`, with half-angles in radians.
+    Spot {
+        /// Full intensity inside.
+        inner: f32,
+        /// Nothing outside.
+        outer: f32,
+    },
+    /// Parallel light travelling along `direction`.
+    Directional,
 }
 
 /// Reads the glTF or GLB file at `path` through `files`. `max_bytes` bounds the memory its

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 use glam::{Mat4, Vec3};
 use gltf::khr_lights_punctual::Kind;
 
-use super::{GltfCamera, GltfError, GltfLight, GltfModel, MeshUse, Reader, Result};
+use super::{GltfCamera, GltfError, GltfLight, GltfLightKind, GltfModel, MeshUse, Reader, Result};
 
 impl Reader<'_> {
     /// Walks the chosen scene into `model`: mesh uses (each mesh read once), cameras and
@@ -131,21 +131,28 @@ impl Reader<'_> {
         light: gltf::khr_lights_punctual::Light,
         matrix: Mat4,
     ) {
-        match light.kind() {
-            Kind::Point => {
-                if light.range().is_some() {
-                    self.ignored
-                        .note("{n} point light range(s) are ignored (light falls off as 1/d²)");
-                }
-                model.lights.push(GltfLight {
-                    position: matrix.transform_point3(Vec3::ZERO),
-                    color: Vec3::from(light.color()),
-                    intensity: light.intensity(),
-                });
-            }
-            Kind::Spot { .. } => self.ignored.note("{n} spot light(s) are ignored"),
-            Kind::Directional => self.ignored.note("{n} directional light(s) are ignored"),
+        let kind = match light.kind() {
+            Kind::Point => GltfLightKind::Point,
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => GltfLightKind::Spot {
+                inner: inner_cone_angle,
+                outer: outer_cone_angle,
+            },
+            Kind::Directional => GltfLightKind::Directional,
+        };
+        if light.range().is_some() && kind != GltfLightKind::Directional {
+            self.ignored
+                .note("{n} light range(s) are ignored (light falls off as 1/d²)");
         }
+        model.lights.push(GltfLight {
+            position: matrix.transform_point3(Vec3::ZERO),
+            direction: matrix.transform_vector3(Vec3::NEG_Z).normalize_or_zero(),
+            color: Vec3::from(light.color()),
+            intensity: light.intensity(),
+            kind,
+        });
     }
 }
 

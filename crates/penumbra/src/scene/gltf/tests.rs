@@ -7,7 +7,7 @@ use gltf::mesh::Mode;
 use serde_json::{json, Value};
 
 use super::meshes::triangles;
-use super::{parse_gltf, GltfError, GltfModel};
+use super::{parse_gltf, GltfError, GltfLightKind, GltfModel};
 use crate::files::Files;
 
 /// Standard base64 with padding.
@@ -244,28 +244,43 @@ fn khr_texture_transform_becomes_scale_and_offset_with_t_up() {
 }
 
 #[test]
-fn a_point_light_and_a_camera_are_read_at_their_nodes() {
+fn lights_and_a_camera_are_read_at_their_nodes() {
     let mut v = triangle();
     v["extensionsUsed"] = json!(["KHR_lights_punctual"]);
     v["extensions"] = json!({"KHR_lights_punctual": {"lights": [
         {"type": "point", "color": [1, 0.5, 0.25], "intensity": 20},
-        {"type": "spot", "spot": {}},
+        {"type": "spot", "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.4}, "range": 5},
+        {"type": "directional", "intensity": 3},
     ]}});
     v["cameras"] =
         json!([{"type": "perspective", "name": "cam", "perspective": {"yfov": 0.5, "znear": 0.1}}]);
+    // The directional light's node turns −z down to −y (−90° about x).
+    let s = std::f32::consts::FRAC_1_SQRT_2;
     v["nodes"] = json!([
         {"mesh": 0},
         {"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}},
         {"translation": [0, 0, 4], "camera": 0},
         {"extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"rotation": [-s, 0, 0, s], "extensions": {"KHR_lights_punctual": {"light": 2}}},
     ]);
-    v["scenes"] = json!([{"nodes": [0, 1, 2, 3]}]);
+    v["scenes"] = json!([{"nodes": [0, 1, 2, 3, 4]}]);
     let model = read(&v).unwrap();
-    assert_eq!(model.lights.len(), 1);
+    assert_eq!(model.lights.len(), 3);
     assert_eq!(model.lights[0].position, Vec3::new(1.0, 2.0, 3.0));
     assert_eq!(model.lights[0].intensity, 20.0);
+    assert_eq!(model.lights[0].kind, GltfLightKind::Point);
+    assert_eq!(
+        model.lights[1].kind,
+        GltfLightKind::Spot {
+            inner: 0.1,
+            outer: 0.4
+        }
+    );
+    assert_eq!(model.lights[1].direction, Vec3::NEG_Z);
+    assert_eq!(model.lights[2].kind, GltfLightKind::Directional);
+    assert!((model.lights[2].direction - Vec3::NEG_Y).length() < 1e-6);
     assert!(
-        model.warnings.iter().any(|w| w.contains("spot")),
+        model.warnings.iter().any(|w| w.contains("range")),
         "{:?}",
         model.warnings
     );
