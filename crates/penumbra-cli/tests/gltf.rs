@@ -311,3 +311,37 @@ fn instances_of_a_gltf_file_place_its_node_graph_under_each_transform() {
         "{line}"
     );
 }
+
+#[test]
+fn a_masked_material_below_its_cutoff_is_cut_away() {
+    let dir = TempDir::new("gltf-mask");
+    let scene = "[film]\nwidth = 8\nheight = 8\n[camera]\nposition = [0.25, 0.25, 2]\n\
+                 look_at = [0.25, 0.25, 0]\nfov = 10\n[[lights]]\ntype = \"point\"\n\
+                 position = [0, 0, 3]\n[[objects]]\ntype = \"mesh\"\nfile = \"t.gltf\"\n";
+    dir.write("s.toml", scene);
+    let centre = |alpha: Value| {
+        let mut v = triangle();
+        v["materials"] = json!([{
+            "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.2]},
+            "alphaMode": alpha,
+        }]);
+        v["meshes"][0]["primitives"][0]["material"] = json!(0);
+        dir.write("t.gltf", v.to_string());
+        let out = dir.join("o.png");
+        ok(run_in(
+            dir.path(),
+            [
+                "render".as_ref(),
+                "s.toml".as_ref(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ],
+        ));
+        harness::image(&out).get_pixel(4, 4)[0]
+    };
+    // Opaque, the triangle is lit; masked at the default cutoff 0.5, alpha 0.2 is cut away
+    // and the background shows.
+    assert!(centre(json!("OPAQUE")) > 50);
+    assert_eq!(centre(json!("MASK")), 0);
+    assert_eq!(centre(json!("BLEND")), 0);
+}

@@ -16,12 +16,12 @@ use super::placements::Placement;
 use super::{Builder, Result};
 use crate::camera::Camera;
 use crate::light::{DirectionalLight, Light, PointLight, SpotLight};
-use crate::material::Material;
+use crate::material::{Cutout, Material};
 use crate::math::Transform;
 use crate::scene::desc::{ObjectDesc, ShapeDesc};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::gltf::{
-    load_gltf, unique, GltfLight, GltfLightKind, GltfMaterial, GltfModel, ImageSource,
+    load_gltf, unique, AlphaMode, GltfLight, GltfLightKind, GltfMaterial, GltfModel, ImageSource,
 };
 use crate::texture::{Image, ImageTexture, Texture, TextureKind};
 use crate::texture_file::decode_texture_image;
@@ -70,6 +70,17 @@ pub(crate) fn phong_of(m: &GltfMaterial) -> (Vec3, f32) {
         false => f32::INFINITY,
     };
     (specular, shininess.clamp(SHININESS.0, SHININESS.1))
+}
+
+/// The cut-out threshold of an alpha mode: none for OPAQUE; `alphaCutoff` for MASK; 0.5 for
+/// BLEND, read as a cut-out (as pbrt and Blender's alpha clip read it: a ray tracer without
+/// transparency keeps a texel whose alpha is at least half).
+pub(crate) fn cutout_of(alpha: AlphaMode) -> Option<f32> {
+    match alpha {
+        AlphaMode::Opaque => None,
+        AlphaMode::Mask(cutoff) => Some(cutoff),
+        AlphaMode::Blend => Some(0.5),
+    }
 }
 
 impl Builder<'_> {
@@ -280,10 +291,11 @@ impl Builder<'_> {
         }
         let mut ids = Vec::with_capacity(model.materials.len());
         for m in &model.materials {
-            let texture = match &m.texture {
+            let (texture, alpha_texture) = match &m.texture {
                 Some(t) if model.images.get(t.image).is_some_and(Option::is_some) => {
                     let image = self.gltf_image(at, key, model, t.image)?;
-                    Some(self.world.add_texture(Texture {
+                    let has_alpha = image.alpha.is_some();
+                    let id = self.world.add_texture(Texture {
                         kind: TextureKind::Image(ImageTexture {
                             image,
                             filter: t.filter,
@@ -291,10 +303,17 @@ impl Builder<'_> {
                         }),
                         uv_scale: t.uv_scale,
                         uv_offset: t.uv_offset,
-                    }))
+                    });
+                    // A texture without an alpha channel is opaque (alpha 1) in glTF.
+                    (Some(id), has_alpha.then_some(id))
                 }
-                _ => None,
+                _ => (None, None),
             };
+            let cutout = cutout_of(m.alpha).map(|cutoff| Cutout {
+                texture: alpha_texture,
+                factor: m.base_color.w,
+                cutoff,
+            });
             let (specular, shininess) = phong_of(m);
             let diffuse = m.base_color.truncate();
             // Fields penumbra adds to materials later take their defaults.
@@ -305,6 +324,7 @@ impl Builder<'_> {
                 specular,
                 shininess,
                 texture,
+                cutout,
                 ..Material::default()
             };
             let (most, _) = self.reflected(&built, 1.0);

@@ -30,9 +30,11 @@ impl Reader<'_> {
             let m = self.material(&material, i);
             if used {
                 self.note_ignored(&material);
-                if m.alpha != AlphaMode::Opaque {
-                    self.ignored
-                        .note("{n} material(s) with alphaMode MASK or BLEND are rendered opaque");
+                if m.alpha == AlphaMode::Blend {
+                    self.ignored.note(
+                        "{n} material(s) with alphaMode BLEND are read as cut-outs at alpha 0.5 \
+                         (no partial transparency)",
+                    );
                 }
                 if let Some(t) = &m.texture {
                     if model.images.get(t.image).is_some_and(Option::is_none) {

@@ -133,7 +133,7 @@ pub(crate) enum AlphaMode {
     Opaque,
     /// Cut out below the cutoff.
     Mask(f32),
-    /// Blended; read as a cut-out at 0.5.
+    /// Blended; read as a cut-out at 0.5 (see `build::gltf::cutout_of`).
     Blend,
 }
 
