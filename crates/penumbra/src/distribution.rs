@@ -26,16 +26,19 @@ impl Distribution1D {
         let mut cdf = Vec::with_capacity(n + 1);
         cdf.push(0.0);
         let mut sum = 0.0f64;
-        for (i, &w) in weights.iter().enumerate() {
-            sum += match total > 0.0 {
-                true => f64::from(w.max(0.0)),
-                false => 1.0,
-            };
-            let denominator = if total > 0.0 { total } else { n as f64 };
-            cdf.push(match i + 1 == n {
-                true => 1.0,
-                false => sum / denominator,
-            });
+        if total > 0.0 {
+            let scale = 1.0 / total;
+            cdf.extend(weights.iter().map(|&w| {
+                sum += f64::from(w.max(0.0));
+                sum * scale
+            }));
+        } else {
+            let scale = 1.0 / n as f64;
+            cdf.extend((1..=n).map(|i| i as f64 * scale));
+        }
+        // Exactly 1 at the end, whatever the rounding of the sums.
+        if let Some(last) = cdf.last_mut().filter(|_| n > 0) {
+            *last = 1.0;
         }
         Distribution1D { cdf, total }
     }

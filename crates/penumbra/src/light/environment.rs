@@ -115,7 +115,7 @@ impl EnvironmentMap {
             let band = cos_rows[j] - cos_rows[j + 1];
             let (top, bottom) = (&lum[j * w..(j + 1) * w], &lum[(j + 1) * w..(j + 2) * w]);
             for i in 0..w {
-                let k = (i + 1) % w;
+                let k = if i + 1 == w { 0 } else { i + 1 };
                 weights.push(0.25 * (top[i] + top[k] + bottom[i] + bottom[k]) * band);
             }
         }
