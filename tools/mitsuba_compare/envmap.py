@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Environment lights against Mitsuba 3: diffuse boxes on a ground plane lit by an HDR map.
+"""Environment and directional lights against Mitsuba 3: diffuse boxes on a ground plane lit
+by an HDR map, or by a sun.
 
 For each map and rotation, renders the same scene with penumbra (`light_model = "physical"`,
 an `environment` light, visible) and with Mitsuba 3 (`envmap` emitter with
@@ -11,6 +12,11 @@ minutes). See README.md in this folder.
 
     python3 tools/mitsuba_compare/envmap.py --penumbra target/release/penumbra \
         --maps ../shared/assets/hdri/venice_sunset_1k.hdr --rotations 0 90
+    python3 tools/mitsuba_compare/envmap.py --sun 3 -1 -2 -1.5   # irradiance, direction
+
+With `--sun E DX DY DZ`, the light is a penumbra `directional` light of irradiance E travelling
+along (DX, DY, DZ) against Mitsuba's `directional` emitter with the same `irradiance` and
+`direction` (no map, black background).
 """
 
 import argparse
@@ -53,7 +59,16 @@ SCENE = {
 }
 
 
-def penumbra_toml(sc, env, rotation, spp, n):
+def light_toml(env, rotation, n, sun):
+    if sun:
+        e, *d = sun
+        return ["[[lights]]", 'type = "directional"', f"direction = {toml_vec(d)}",
+                f"intensity = {float(e)!r}", ""]
+    return ["[[lights]]", 'type = "environment"', f"file = {json.dumps(os.path.abspath(env))}",
+            f"rotation = {float(rotation)!r}", f"samples = {n}", ""]
+
+
+def penumbra_toml(sc, env, rotation, spp, n, sun=None):
     cam = sc["camera"]
     lines = [
         "[film]", f"width = {sc['width']}", f"height = {sc['height']}", "",
@@ -62,9 +77,7 @@ def penumbra_toml(sc, env, rotation, spp, n):
         f"fov = {float(cam['fov'])!r}", "",
         "[render]", 'light_model = "physical"', 'sampler = "grid"', f"samples = {spp}",
         "ambient = 0", "",
-        "[[lights]]", 'type = "environment"', f"file = {json.dumps(os.path.abspath(env))}",
-        f"rotation = {float(rotation)!r}", f"samples = {n}", "",
-    ]
+    ] + light_toml(env, rotation, n, sun)
     for name, kd in sc["materials"].items():
         lines += [f"[materials.{name}]", f"diffuse = {toml_vec(kd)}", "specular = [0, 0, 0]", ""]
     for q in sc["quads"]:
@@ -78,18 +91,18 @@ def penumbra_toml(sc, env, rotation, spp, n):
     return "\n".join(lines)
 
 
-def render_penumbra(exe, sc, env, rotation, spp, n, out_dir):
+def render_penumbra(exe, sc, env, rotation, spp, n, out_dir, sun=None):
     import subprocess
 
     scene = os.path.join(out_dir, "scene.toml")
     with open(scene, "w") as f:
-        f.write(penumbra_toml(sc, env, rotation, spp, n))
+        f.write(penumbra_toml(sc, env, rotation, spp, n, sun))
     img = os.path.join(out_dir, "penumbra.pfm")
     subprocess.run([exe, "render", scene, "-o", img, "--quiet"], check=True)
     return read_pfm(img)
 
 
-def render_mitsuba(sc, env, rotation, spp, seed):
+def render_mitsuba(sc, env, rotation, spp, seed, sun=None):
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
@@ -112,9 +125,14 @@ def render_mitsuba(sc, env, rotation, spp, seed):
             "film": {"type": "hdrfilm", "width": sc["width"], "height": sc["height"],
                      "pixel_format": "rgb", "rfilter": {"type": "box"}},
         },
-        "env": {"type": "envmap", "filename": os.path.abspath(env),
-                "to_world": T().rotate(axis=[0, 1, 0], angle=float(rotation))},
     }
+    if sun:
+        e, *direction = sun
+        d["sun"] = {"type": "directional", "direction": [float(x) for x in direction],
+                    "irradiance": {"type": "rgb", "value": [float(e)] * 3}}
+    else:
+        d["env"] = {"type": "envmap", "filename": os.path.abspath(env),
+                    "to_world": T().rotate(axis=[0, 1, 0], angle=float(rotation))}
     for i, q in enumerate(sc["quads"]):
         c = vec(q["corner"]) + vec(q["u"]) / 2 + vec(q["v"]) / 2
         d[f"quad{i}"] = {"type": "rectangle",
@@ -130,7 +148,9 @@ def render_mitsuba(sc, env, rotation, spp, seed):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--penumbra", default="target/release/penumbra")
-    ap.add_argument("--maps", nargs="+", required=True)
+    ap.add_argument("--maps", nargs="+", default=[])
+    ap.add_argument("--sun", nargs=4, type=float, metavar=("E", "DX", "DY", "DZ"),
+                    help="compare a directional light instead of maps")
     ap.add_argument("--rotations", nargs="+", type=float, default=[0.0, 90.0])
     ap.add_argument("--spp", type=int, default=16, help="penumbra pixel samples (a square)")
     ap.add_argument("--n", type=int, default=16, help="penumbra environment samples N (N×N)")
@@ -141,13 +161,18 @@ def main():
     args = ap.parse_args()
 
     ok = True
-    for env in args.maps:
-        for rotation in args.rotations:
-            name = f"{os.path.splitext(os.path.basename(env))[0]}_rot{rotation:g}"
+    cases = [(env, rot) for env in args.maps for rot in args.rotations]
+    if args.sun:
+        cases = [(None, 0.0)]
+    for env, rotation in cases:
+        if True:
+            name = "sun" if args.sun else \
+                f"{os.path.splitext(os.path.basename(env))[0]}_rot{rotation:g}"
             out = os.path.join(args.out, name)
             os.makedirs(out, exist_ok=True)
-            p = render_penumbra(args.penumbra, SCENE, env, rotation, args.spp, args.n, out)
-            m = render_mitsuba(SCENE, env, rotation, args.mitsuba_spp, seed=1)
+            p = render_penumbra(args.penumbra, SCENE, env, rotation, args.spp, args.n, out,
+                                args.sun)
+            m = render_mitsuba(SCENE, env, rotation, args.mitsuba_spp, seed=1, sun=args.sun)
             p8, m8 = srgb8(p), srgb8(m)
             db = psnr(p8.astype(np.float64) / 255, m8.astype(np.float64) / 255)
             mean = float(p.mean() / m.mean()) - 1.0
