@@ -26,8 +26,8 @@ impl Reader {
     /// What it reads, as a message says it.
     fn accepts(self) -> &'static str {
         match self {
-            Reader::Render => "`penumbra render` reads a .toml or .json scene file or a .obj or .ply mesh (rendered with a default camera and lights)",
-            Reader::Check => "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh",
+            Reader::Render => "`penumbra render` reads a .toml or .json scene file, or a .obj, .ply, .gltf or .glb model (rendered with its own or a default camera and lights)",
+            Reader::Check => "`penumbra check` reads a .toml or .json scene file, or a .obj, .ply, .gltf or .glb model",
         }
     }
 }

@@ -68,7 +68,7 @@ fn a_format_that_disagrees_with_the_name_says_so_in_flag_values() {
 #[test]
 fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
     let dir = scene_dir("file-kinds");
-    dir.write("model.glb", "glTF");
+    dir.write("model.fbx", "Kaydara FBX Binary");
     dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     dir.write(
         "tri.ply",
@@ -76,11 +76,13 @@ fn a_file_of_another_kind_is_told_what_each_subcommand_reads() {
          property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
          end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
     );
-    let check = "`penumbra check` reads a .toml or .json scene file or a .obj or .ply mesh";
-    let render = "`penumbra render` reads a .toml or .json scene file or a .obj or .ply mesh";
+    let check = "`penumbra check` reads a .toml or .json scene file, or a .obj, .ply, .gltf or \
+                 .glb model";
+    let render = "`penumbra render` reads a .toml or .json scene file, or a .obj, .ply, .gltf or \
+                  .glb model";
     for (args, want) in [
-        (["check", "model.glb"], check),
-        (["render", "model.glb"], render),
+        (["check", "model.fbx"], check),
+        (["render", "model.fbx"], render),
     ] {
         let line = error_line(&run_in(dir.path(), args), 2);
         assert!(line.starts_with(&format!("error: {}: ", args[1])), "{line}");
