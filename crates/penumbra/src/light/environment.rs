@@ -69,6 +69,9 @@ pub struct EnvironmentMap {
     cells: Distribution2D,
     /// cos θ of each texel row, `height` of them, from 1 at the top to −1 at the bottom.
     cos_rows: Vec<f32>,
+    /// Mean radiance over the sphere and the largest texel (see [`Self::mean_and_peak`]).
+    mean: Rgb,
+    peak: Rgb,
 }
 
 /// A direction drawn from a map.
@@ -119,13 +122,17 @@ impl EnvironmentMap {
                 weights.push(0.25 * (top[i] + top[k] + bottom[i] + bottom[k]) * band);
             }
         }
-        Ok(EnvironmentMap {
+        let mut map = EnvironmentMap {
             width,
             height,
             texels,
             cells: Distribution2D::new(&weights, w, h - 1),
             cos_rows,
-        })
+            mean: Rgb::ZERO,
+            peak: Rgb::ZERO,
+        };
+        (map.mean, map.peak) = map.measure();
+        Ok(map)
     }
 
     /// A map of one radiance in every direction.
@@ -208,8 +215,14 @@ impl EnvironmentMap {
         self.cell_pdf(i, j)
     }
 
-    /// Mean radiance over the sphere (weighted by solid angle) and the largest texel.
+    /// Mean radiance over the sphere (weighted by solid angle) and the largest texel, measured
+    /// once when the map is made.
     pub fn mean_and_peak(&self) -> (Rgb, Rgb) {
+        (self.mean, self.peak)
+    }
+
+    /// [`Self::mean_and_peak`] from the texels.
+    fn measure(&self) -> (Rgb, Rgb) {
         let mut sum = glam::DVec3::ZERO;
         let mut total = 0.0f64;
         let (w, h) = (self.width as usize, self.height as usize);

@@ -12,7 +12,7 @@ use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
 use crate::geometry::Surface;
 use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
-use crate::light::Light;
+use crate::light::{EnvironmentLight, Light};
 use crate::math::{Ray, Rgb};
 use crate::sampling::{jittered_offset, Rng};
 use crate::world::World;
@@ -33,6 +33,20 @@ pub(super) struct Job<'a> {
     pub(super) aovs: Option<AovContext>,
     /// Checked before every sample is shaded.
     pub(super) cancel: Option<&'a AtomicBool>,
+    /// The environments camera rays that miss see (see [`visible_environments`]).
+    pub(super) sky: Vec<&'a EnvironmentLight>,
+}
+
+/// The environment lights of `world` marked visible, found once per render rather than per
+/// missed camera ray.
+pub(super) fn visible_environments(world: &World) -> Vec<&EnvironmentLight> {
+    let lights = world.lights().iter();
+    lights
+        .filter_map(|l| match l {
+            Light::Environment(e) if e.visible => Some(e),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Buffers one worker reuses from one batch of pixels to the next.
@@ -55,15 +69,12 @@ impl Job<'_> {
     /// What a camera ray in direction `d` that hits nothing sees: the environments marked
     /// visible, summed, or the background when there is none.
     fn miss(&self, d: Vec3) -> Rgb {
-        let mut visible = self.world.lights().iter().filter_map(|l| match l {
-            Light::Environment(e) if e.visible => Some(e),
-            _ => None,
-        });
-        let Some(first) = visible.next() else {
+        let Some((first, rest)) = self.sky.split_first() else {
             return self.settings.background;
         };
         let d = d.normalize();
-        visible.fold(first.radiance(d), |sum, e| sum + e.radiance(d))
+        rest.iter()
+            .fold(first.radiance(d), |sum, e| sum + e.radiance(d))
     }
 
     /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their

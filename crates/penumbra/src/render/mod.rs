@@ -271,6 +271,7 @@ fn render_impl(
         offsets: fixed_offsets(settings.sampler, settings.samples_per_axis()),
         aovs: with_aovs.then(|| AovContext::new(world)),
         cancel: options.cancel,
+        sky: job::visible_environments(world),
     };
 
     // Tiles are numbered row by row; none is stored, so the render's memory is the film's.
