@@ -114,6 +114,32 @@ fn the_milk_truck_stores_its_wheel_mesh_once() {
 }
 
 #[test]
+fn a_scene_placing_the_milk_truck_builds_its_wheel_mesh_once() {
+    // The project's own copy, so this runs wherever the repository does.
+    let truck = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/gltf/CesiumMilkTruck.glb");
+    let dir = TempDir::new("gltf-truck");
+    dir.write(
+        "s.toml",
+        format!(
+            "[film]\nwidth = 8\nheight = 8\n\n[camera]\nposition = [0, 2, 8]\n\
+             look_at = [0, 1, 0]\nfov = 40\n\n[[objects]]\ntype = \"mesh\"\nfile = {:?}\n",
+            truck.to_str().unwrap()
+        ),
+    );
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let s: Value = serde_json::from_slice(&r.stdout).unwrap();
+    let file = check_json(&truck);
+    // The world, not only the file: the wheel mesh is built once and placed by both wheel
+    // nodes as instances; the body, used once, is copied in.
+    assert_eq!(s["triangles"], file["triangles"]);
+    assert_eq!(s["unique_triangles"], file["unique_triangles"]);
+    assert_eq!(
+        (s["meshes"].as_u64(), s["instances"].as_u64()),
+        (Some(1), Some(2))
+    );
+}
+
+#[test]
 fn the_pine_loads_without_its_absent_normal_maps() {
     let Some(path) = shared("smallpine/scene.gltf") else {
         return;

@@ -1,7 +1,8 @@
 //! glTF objects: a `type = "mesh"` or `"instances"` object naming a `.gltf` or `.glb` file
 //! places the file's node graph under the object's transform (and each placement's). Each
 //! glTF mesh is read once per scene; a mesh the scene places several times is built once
-//! and instanced unless [`flatten_instances`] says copying is better. Materials come from the
+//! and instanced, as the file's node graph says (glTF does not use [`flatten_instances`]:
+//! its nodes name the sharing, and `check` reports a file's meshes stored once). Materials come from the
 //! file (unless the object names one), each image decoded once. Cameras and point lights of
 //! the file are added before the scene's objects (see [`Builder::gltf_cameras_and_lights`]).
 
@@ -25,7 +26,9 @@ use crate::scene::gltf::{
 };
 use crate::texture::{Image, ImageTexture, Texture, TextureKind};
 use crate::texture_file::decode_texture_image;
-use crate::world::{flatten_instances, DEFAULT_MATERIAL};
+#[cfg(doc)]
+use crate::world::flatten_instances;
+use crate::world::DEFAULT_MATERIAL;
 
 /// Shininess bounds of the roughness mapping: 2/α² − 2 is 0 at roughness 1 and infinite at 0.
 const SHININESS: (f32, f32) = (1.0, 10_000.0);
@@ -240,7 +243,7 @@ impl Builder<'_> {
                         ),
                     ));
                 }
-                let added = match flatten_instances(mesh.mesh.len(), uses[u.mesh]) {
+                let added = match uses[u.mesh] <= 1 {
                     true => {
                         self.take_triangles(&at, mesh.mesh.len())?;
                         self.world.add_mesh(&mesh.mesh, &transform, &materials)
