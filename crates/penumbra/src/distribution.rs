@@ -88,12 +88,20 @@ pub(crate) struct Distribution2D {
 
 impl Distribution2D {
     /// The distribution of `weights`, `width × height` of them row by row.
+    #[cfg(test)]
     pub(crate) fn new(weights: &[f32], width: usize, height: usize) -> Distribution2D {
         assert_eq!(weights.len(), width * height, "one weight per cell");
-        let rows: Vec<Distribution1D> = weights
-            .chunks_exact(width.max(1))
-            .map(Distribution1D::new)
-            .collect();
+        Distribution2D::from_rows(
+            weights
+                .chunks_exact(width.max(1))
+                .map(Distribution1D::new)
+                .collect(),
+        )
+    }
+
+    /// The distribution whose rows are `rows` (each over the same number of cells), weighing
+    /// each row by its total.
+    pub(crate) fn from_rows(rows: Vec<Distribution1D>) -> Distribution2D {
         let sums: Vec<f32> = rows.iter().map(|r| r.total() as f32).collect();
         Distribution2D {
             marginal: Distribution1D::new(&sums),

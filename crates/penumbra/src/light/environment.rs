@@ -26,8 +26,9 @@
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
-use crate::distribution::Distribution2D;
+use crate::distribution::{Distribution1D, Distribution2D};
 use crate::math::Rgb;
 
 /// Luminance of linear Rec. 709 RGB (the weights Mitsuba's `luminance` uses).
@@ -91,19 +92,23 @@ impl EnvironmentMap {
         if width < 2 || height < 2 || texels.len() != width as usize * height as usize {
             return Err(EnvironmentError::TooSmall { width, height });
         }
-        if let Some(i) = texels
+        let (w, h) = (width as usize, height as usize);
+        // One parallel pass over the texel rows checks them and sums them; every figure is
+        // per row, and rows are combined in order, so nothing depends on the thread count.
+        let rows: Vec<RowStats> = texels.par_chunks_exact(w).map(RowStats::of).collect();
+        if let Some((y, x)) = rows
             .iter()
-            .position(|t| !t.is_finite() || t.cmplt(Vec3::ZERO).any())
+            .enumerate()
+            .find_map(|(y, r)| r.bad.map(|x| (y, x)))
         {
-            let t = texels[i];
+            let t = texels[y * w + x];
             let value = [t.x, t.y, t.z]
                 .into_iter()
                 .find(|v| !v.is_finite() || *v < 0.0)
                 .unwrap_or(f32::NAN);
-            let (x, y) = (i as u32 % width, i as u32 / width);
+            let (x, y) = (x as u32, y as u32);
             return Err(EnvironmentError::BadTexel { x, y, value });
         }
-        let (w, h) = (width as usize, height as usize);
         let cos_rows: Vec<f32> = (0..h)
             .map(|j| match j {
                 0 => 1.0,
@@ -111,28 +116,40 @@ impl EnvironmentMap {
                 j => (PI * j as f32 / (h - 1) as f32).cos(),
             })
             .collect();
-        let lum: Vec<f32> = texels.iter().map(|&t| luminance(t)).collect();
-        let mut weights = Vec::with_capacity(w * (h - 1));
-        for j in 0..h - 1 {
+        // The bilinear cells row by row, in parallel: a row's weights and distribution depend
+        // on its two texel rows alone.
+        let cells = (0..h - 1).into_par_iter().map(|j| {
             // Every cell of a row spans the same solid angle: weigh by the band's height.
             let band = cos_rows[j] - cos_rows[j + 1];
-            let (top, bottom) = (&lum[j * w..(j + 1) * w], &lum[(j + 1) * w..(j + 2) * w]);
-            for i in 0..w {
-                let k = if i + 1 == w { 0 } else { i + 1 };
-                weights.push(0.25 * (top[i] + top[k] + bottom[i] + bottom[k]) * band);
-            }
+            let lum = |j: usize| texels[j * w..(j + 1) * w].iter().map(|&t| luminance(t));
+            let pairs: Vec<f32> = lum(j).zip(lum(j + 1)).map(|(a, b)| a + b).collect();
+            let weights: Vec<f32> = (0..w)
+                .map(|i| {
+                    let k = if i + 1 == w { 0 } else { i + 1 };
+                    0.25 * (pairs[i] + pairs[k]) * band
+                })
+                .collect();
+            Distribution1D::new(&weights)
+        });
+        let cells = Distribution2D::from_rows(cells.collect());
+        // The mean over the bilinear cells: a cell's four corners each weigh ¼ of its band,
+        // and across a row every texel is the corner of two cells.
+        let (mut sum, mut total) = (glam::DVec3::ZERO, 0.0f64);
+        for j in 0..h - 1 {
+            let band = f64::from(cos_rows[j] - cos_rows[j + 1]);
+            sum += (rows[j].sum + rows[j + 1].sum) * (0.5 * band);
+            total += band * w as f64;
         }
-        let mut map = EnvironmentMap {
+        let peak = rows.iter().fold(Rgb::ZERO, |m, r| m.max(r.peak));
+        Ok(EnvironmentMap {
             width,
             height,
             texels,
-            cells: Distribution2D::new(&weights, w, h - 1),
+            cells,
             cos_rows,
-            mean: Rgb::ZERO,
-            peak: Rgb::ZERO,
-        };
-        (map.mean, map.peak) = map.measure();
-        Ok(map)
+            mean: (sum / total).as_vec3(),
+            peak,
+        })
     }
 
     /// A map of one radiance in every direction.
@@ -220,23 +237,26 @@ impl EnvironmentMap {
     pub fn mean_and_peak(&self) -> (Rgb, Rgb) {
         (self.mean, self.peak)
     }
+}
 
-    /// [`Self::mean_and_peak`] from the texels.
-    fn measure(&self) -> (Rgb, Rgb) {
-        let mut sum = glam::DVec3::ZERO;
-        let mut total = 0.0f64;
-        let (w, h) = (self.width as usize, self.height as usize);
-        for j in 0..h - 1 {
-            let band = f64::from(self.cos_rows[j] - self.cos_rows[j + 1]);
-            for i in 0..w {
-                let c = self.texel(i, j) + self.texel(i + 1, j);
-                let c = c + self.texel(i, j + 1) + self.texel(i + 1, j + 1);
-                sum += c.as_dvec3() * (0.25 * band);
-                total += band;
-            }
-        }
-        let peak = self.texels.iter().fold(Vec3::ZERO, |m, &t| m.max(t));
-        ((sum / total).as_vec3(), peak)
+/// What one pass learns of a row of texels.
+struct RowStats {
+    /// The first texel that is NaN, infinite or negative.
+    bad: Option<usize>,
+    /// Sum of the texels.
+    sum: glam::DVec3,
+    /// Per channel, the largest texel.
+    peak: Rgb,
+}
+
+impl RowStats {
+    fn of(row: &[Rgb]) -> RowStats {
+        let bad = row
+            .iter()
+            .position(|t| !t.is_finite() || t.cmplt(Vec3::ZERO).any());
+        let sum = row.iter().fold(glam::DVec3::ZERO, |s, t| s + t.as_dvec3());
+        let peak = row.iter().fold(Rgb::ZERO, |m, &t| m.max(t));
+        RowStats { bad, sum, peak }
     }
 }
 
@@ -390,6 +410,26 @@ mod tests {
         let (mean, peak) = map.mean_and_peak();
         assert!((mean - Vec3::new(0.5, 1.0, 2.0)).length() < 1e-6);
         assert_eq!(peak, Vec3::new(0.5, 1.0, 2.0));
+    }
+
+    #[test]
+    fn the_map_is_the_same_for_any_thread_count() {
+        // Rows are built in parallel: distribution, mean and peak must not depend on it.
+        let (w, h) = (64, 33);
+        let texels: Vec<Rgb> = (0..w * h)
+            .map(|k| Vec3::new((k % 13) as f32 * 0.1, (k % 7) as f32 * 3.0, 1e-3 * k as f32))
+            .collect();
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+            pool.unwrap()
+                .install(|| EnvironmentMap::new(w, h, texels.clone()).unwrap())
+        };
+        let one = build(1);
+        assert_eq!(one, build(3));
+        assert_eq!(
+            one.mean_and_peak().1,
+            Vec3::new(1.2, 18.0, 1e-3 * (w * h - 1) as f32)
+        );
     }
 
     #[test]
