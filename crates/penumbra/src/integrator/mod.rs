@@ -251,7 +251,7 @@ impl<'w> Integrator<'w> {
                 }
                 Source::Environment(light) => {
                     scratch.directional.clear();
-                    light.sample_directions(rng, &mut scratch.directional);
+                    light.sample_directions(lobe.n, rng, &mut scratch.directional);
                     self.far_points(x, scratch);
                     &scratch.points
                 }

@@ -75,6 +75,16 @@ pub struct EnvironmentMap {
     peak: Rgb,
 }
 
+/// A direction drawn from a map, with where in the map it was drawn.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Drawn {
+    /// Unit direction in the map's frame.
+    pub direction: Vec3,
+    /// The bilinear cell (column, row band) and the position across its columns.
+    cell: (usize, usize),
+    fx: f32,
+}
+
 /// A direction drawn from a map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EnvironmentSample {
@@ -162,10 +172,6 @@ impl EnvironmentMap {
         (self.width, self.height)
     }
 
-    fn texel(&self, i: usize, j: usize) -> Rgb {
-        self.texels[j * self.width as usize + i % self.width as usize]
-    }
-
     /// Radiance arriving from the unit direction `d` of the map's frame (see the module docs).
     pub fn radiance(&self, d: Vec3) -> Rgb {
         let w = self.width as f32;
@@ -187,8 +193,12 @@ impl EnvironmentMap {
     fn bilinear(&self, i: usize, fx: f32, y: f32) -> Rgb {
         let j = (y as usize).min(self.height as usize - 2);
         let fy = y - j as f32;
-        let top = self.texel(i, j) * (1.0 - fx) + self.texel(i + 1, j) * fx;
-        let bottom = self.texel(i, j + 1) * (1.0 - fx) + self.texel(i + 1, j + 1) * fx;
+        let w = self.width as usize;
+        // Column i + 1 wraps to 0 (i < w: no division needed).
+        let k = if i + 1 == w { 0 } else { i + 1 };
+        let (above, below) = (&self.texels[j * w..], &self.texels[(j + 1) * w..]);
+        let top = above[i] * (1.0 - fx) + above[k] * fx;
+        let bottom = below[i] * (1.0 - fx) + below[k] * fx;
         top * (1.0 - fy) + bottom * fy
     }
 
@@ -197,6 +207,17 @@ impl EnvironmentMap {
     /// drawn (no trigonometry back from the direction): the same as
     /// [`radiance`](Self::radiance) of the direction up to rounding.
     pub fn sample(&self, u: Vec2) -> EnvironmentSample {
+        let drawn = self.draw(u);
+        EnvironmentSample {
+            direction: drawn.direction,
+            radiance: self.radiance_drawn(&drawn),
+            pdf: self.pdf_drawn(&drawn),
+        }
+    }
+
+    /// The direction `u` maps to, without its radiance and density: [`Self::sample`] in
+    /// parts, for callers that need those only for some directions.
+    pub(crate) fn draw(&self, u: Vec2) -> Drawn {
         let ((i, j), f) = self.cells.sample(u);
         let w = self.width as f32;
         let phi = 2.0 * PI * ((i as f32 + 0.5 + f.x) / w);
@@ -204,13 +225,23 @@ impl EnvironmentMap {
         let cos_theta = (c0 + (c1 - c0) * f.y).clamp(-1.0, 1.0);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
         let direction = Vec3::new(phi.sin() * sin_theta, cos_theta, -phi.cos() * sin_theta);
-        // Texel columns sit at u = (i + ½)/W: the cell spans columns i and i + 1.
-        let radiance = self.bilinear(i, f.x, self.row_position(cos_theta));
-        EnvironmentSample {
+        Drawn {
             direction,
-            radiance,
-            pdf: self.cell_pdf(i, j),
+            cell: (i, j),
+            fx: f.x,
         }
+    }
+
+    /// The radiance of a drawn direction. Texel columns sit at u = (i + ½)/W: the cell spans
+    /// columns i and i + 1.
+    pub(crate) fn radiance_drawn(&self, drawn: &Drawn) -> Rgb {
+        let y = self.row_position(drawn.direction.y);
+        self.bilinear(drawn.cell.0, drawn.fx, y)
+    }
+
+    /// The density over solid angle of a drawn direction.
+    pub(crate) fn pdf_drawn(&self, drawn: &Drawn) -> f32 {
+        self.cell_pdf(drawn.cell.0, drawn.cell.1)
     }
 
     /// Density over solid angle of the directions in cell `(i, j)`.

@@ -75,8 +75,11 @@ impl EnvironmentLight {
 
     /// Appends the N² samples of one shading point in stratum order (stratum `(k, l)` at
     /// index `k·N + l`), each a world direction with its scaled radiance divided by its
-    /// density, drawing two numbers per stratum from `rng`.
-    pub fn sample_directions(&self, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
+    /// density, drawing two numbers per stratum from `rng`. A direction clearly below the
+    /// plane of `normal` (cosine under −10⁻³) brings no light to it, so it is given zero
+    /// radiance without looking the map up; shading finds the same (a cosine ≤ 0 lights
+    /// nothing) whatever the radiance.
+    pub fn sample_directions(&self, normal: Vec3, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
         let n = self.n as f32;
         let rotation = self.sin_cos();
         for k in 0..self.n {
@@ -84,11 +87,16 @@ impl EnvironmentLight {
                 let xi = rng.uniform2();
                 let u = Vec2::new((k as f32 + xi.x) / n, (l as f32 + xi.y) / n);
                 let u = u.min(Vec2::splat(ONE_BELOW));
-                let s = self.map.sample(u);
-                out.push((
-                    rotate_y(rotation, s.direction),
-                    s.radiance * (self.intensity / s.pdf),
-                ));
+                let drawn = self.map.draw(u);
+                let direction = rotate_y(rotation, drawn.direction);
+                let radiance = match direction.dot(normal) < -1e-3 {
+                    true => Rgb::ZERO,
+                    false => {
+                        let pdf = self.map.pdf_drawn(&drawn);
+                        self.map.radiance_drawn(&drawn) * (self.intensity / pdf)
+                    }
+                };
+                out.push((direction, radiance));
             }
         }
     }
