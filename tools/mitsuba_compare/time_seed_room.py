@@ -8,7 +8,13 @@ Both report render time only (Mitsuba: `mi.render` plus evaluation, after one un
 that compiles its kernels; penumbra: `render_seconds` of its `--json` summary). Needs `mitsuba`
 from PyPI, so CI does not run it.
 
+With `--environment FILE`, the room's area light is replaced by an environment light of that
+map (penumbra `type = "environment"`, `samples` N; Mitsuba `envmap`), hidden from the camera in
+both, and the room's open front lets it in.
+
     python3 tools/mitsuba_compare/time_seed_room.py --penumbra target/release/penumbra
+    python3 tools/mitsuba_compare/time_seed_room.py --penumbra target/release/penumbra \
+        --environment ../shared/assets/hdri/studio_small_03_1k.hdr --light-samples 8
 """
 
 import argparse
@@ -54,6 +60,7 @@ def main():
     ap.add_argument("--light-samples", type=int, default=5, help="N: N×N light samples")
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--environment", help="light the room with this map instead")
     args = ap.parse_args()
 
     import drjit as dr
@@ -64,14 +71,22 @@ def main():
     d = compare.mitsuba_scene(mi, sc, args.spp)
     d["integrator"] = {"type": "direct", "hide_emitters": True,
                        "emitter_samples": args.light_samples ** 2, "bsdf_samples": 0}
+    toml = compare.penumbra_toml(sc, args.spp).replace('sampler = "grid"', 'sampler = "rgss"')
+    if args.environment:
+        env = os.path.abspath(args.environment)
+        del d["light"]
+        d["env"] = {"type": "envmap", "filename": env}
+        area = toml.index("[[lights]]")
+        toml = (toml[:area] + f'[[lights]]\ntype = "environment"\nfile = {json.dumps(env)}\n'
+                f"samples = {args.light_samples}\nvisible = false\n\n"
+                + toml[toml.index("[[objects]]", area):])
     scene = mi.load_dict(d)
     dr.eval(mi.render(scene, spp=args.spp, seed=0))  # compiles the kernels
 
     with tempfile.TemporaryDirectory() as tmp:
         toml_path = os.path.join(tmp, "seed_room.toml")
         with open(toml_path, "w") as f:
-            f.write(compare.penumbra_toml(sc, args.spp).replace('sampler = "grid"',
-                                                                'sampler = "rgss"'))
+            f.write(toml)
         out = os.path.join(tmp, "p.pfm")
         mitsuba_s, penumbra_s = [], []
         for run in range(args.runs):
@@ -83,7 +98,7 @@ def main():
             penumbra_s.append(json.loads(summary.stdout)["render_seconds"])
     print(json.dumps({
         "size": args.size, "spp": args.spp, "light_samples": args.light_samples ** 2,
-        "mitsuba_variant": args.variant,
+        "mitsuba_variant": args.variant, "light": args.environment or "area",
         "mitsuba_render_s_median": round(statistics.median(mitsuba_s), 4),
         "penumbra_render_s_median": round(statistics.median(penumbra_s), 4),
         "ratio_penumbra_over_mitsuba": round(statistics.median(penumbra_s)
