@@ -130,6 +130,10 @@ pub struct RenderArgs {
     /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
     #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
     pub aov: Option<Passes>,
+    /// Show the image in tev as it renders (pbrt's flag): tev's IPC at HOST, port 14158
+    /// unless given. Without a viewer there the render goes on as usual.
+    #[arg(long, value_name = "HOST[:PORT]")]
+    pub display_server: Option<String>,
     /// Print the summary as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,

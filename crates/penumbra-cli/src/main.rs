@@ -16,6 +16,7 @@ mod check;
 mod check_gltf;
 mod check_obj;
 mod completions;
+mod display;
 mod failure;
 mod input;
 mod output;

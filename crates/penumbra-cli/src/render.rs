@@ -7,13 +7,14 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Scene, SceneFile,
+    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Rgb, Scene, SceneFile,
     SettingsError, View, World, MAX_THREADS,
 };
 
 use crate::aov;
 use crate::args::RenderArgs;
 use crate::cameras;
+use crate::display::Preview;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
 use crate::output::{self, expand, names_camera, scene_stem, Fields, Output, Target};
@@ -50,14 +51,31 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let jobs = plan(args, &file, &scene)?;
     let load_time = load_start.elapsed();
     interrupt.check()?;
+    let mut preview = args
+        .display_server
+        .as_deref()
+        .and_then(|server| Preview::connect(server, note));
 
     for job in &jobs {
         job.output.make_folder()?;
+        if let Some(p) = preview.as_mut() {
+            p.begin(
+                &job.output.display(),
+                job.settings.width,
+                job.settings.height,
+            );
+        }
+        let show = |tile: &PixelBounds, pixels: &[Rgb]| {
+            if let Some(p) = preview.as_ref() {
+                p.tile(tile, pixels);
+            }
+        };
         let options = RenderOptions {
             threads: args.threads,
             region: job.region,
             cancel: Some(interrupt.flag()),
             progress: None,
+            tiles: preview.is_some().then_some(&show as _),
         };
         interrupt.defer();
         let (film, aovs, stats) = with_progress(args.quiet, |progress| {

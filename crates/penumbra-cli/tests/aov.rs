@@ -8,7 +8,7 @@ mod support;
 use std::path::Path;
 
 use exr::prelude::{read_first_flat_layer_from_file, FlatSamples};
-use harness::{error_line, ok, run_in};
+use harness::{error_line, ok, read_pfm, run_in};
 use support::TempDir;
 
 /// A 5×5 film looking down -z from (0, 0, 5) at a 2×2 quad in the plane z = 0 (object 1,
@@ -49,33 +49,6 @@ const MISS_ID: u32 = u32::MAX;
 /// Whether pixel (x, y) of the 5×5 film sees the quad.
 fn on_quad(x: usize, y: usize) -> bool {
     (1..4).contains(&x) && (1..4).contains(&y)
-}
-
-/// A PFM's width, height, channels and values, rows top to bottom.
-fn read_pfm(path: &Path) -> (usize, usize, usize, Vec<f32>) {
-    let bytes = std::fs::read(path).unwrap();
-    let mut fields = Vec::new();
-    let mut start = 0;
-    while fields.len() < 4 {
-        let end = start
-            + bytes[start..]
-                .iter()
-                .position(|b| b.is_ascii_whitespace())
-                .unwrap();
-        fields.push(String::from_utf8(bytes[start..end].to_vec()).unwrap());
-        start = end + 1;
-    }
-    let channels = if fields[0] == "Pf" { 1 } else { 3 };
-    assert!(["Pf", "PF"].contains(&fields[0].as_str()), "{fields:?}");
-    assert_eq!(fields[3], "-1.0", "little-endian");
-    let (w, h): (usize, usize) = (fields[1].parse().unwrap(), fields[2].parse().unwrap());
-    let floats: Vec<f32> = bytes[start..]
-        .chunks(4)
-        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    assert_eq!(floats.len(), w * h * channels);
-    let rows: Vec<&[f32]> = floats.chunks(w * channels).rev().collect();
-    (w, h, channels, rows.concat())
 }
 
 /// The channels of an EXR, by name.

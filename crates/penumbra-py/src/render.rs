@@ -164,6 +164,7 @@ pub fn render_scene<'py>(
         region: r.region,
         cancel: Some(&cancel),
         progress: Some(&report),
+        tiles: None,
     };
     let with_aovs = !r.aovs.is_empty();
 

@@ -106,7 +106,7 @@ pub use raycast::{
 };
 pub use render::{
     render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, PixelBounds, RenderError,
-    RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch, View,
+    RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch, TileSink, View,
     MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP, NO_ID,
 };
 pub use sampling::{Rng, Sampler};

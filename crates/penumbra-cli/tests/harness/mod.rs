@@ -87,3 +87,30 @@ pub fn image(path: &Path) -> image::RgbImage {
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .to_rgb8()
 }
+
+/// A PFM's width, height, channels and values, rows top to bottom.
+pub fn read_pfm(path: &Path) -> (usize, usize, usize, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut fields = Vec::new();
+    let mut start = 0;
+    while fields.len() < 4 {
+        let end = start
+            + bytes[start..]
+                .iter()
+                .position(|b| b.is_ascii_whitespace())
+                .unwrap();
+        fields.push(String::from_utf8(bytes[start..end].to_vec()).unwrap());
+        start = end + 1;
+    }
+    let channels = if fields[0] == "Pf" { 1 } else { 3 };
+    assert!(["Pf", "PF"].contains(&fields[0].as_str()), "{fields:?}");
+    assert_eq!(fields[3], "-1.0", "little-endian");
+    let (w, h): (usize, usize) = (fields[1].parse().unwrap(), fields[2].parse().unwrap());
+    let floats: Vec<f32> = bytes[start..]
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(floats.len(), w * h * channels);
+    let rows: Vec<&[f32]> = floats.chunks(w * channels).rev().collect();
+    (w, h, channels, rows.concat())
+}

@@ -45,6 +45,10 @@ pub struct PixelBounds {
     pub y1: u32,
 }
 
+/// What receives finished tiles: their bounds and linear RGB pixels (see
+/// [`RenderOptions::tiles`]).
+pub type TileSink<'a> = dyn Fn(&PixelBounds, &[Rgb]) + Sync + 'a;
+
 /// How to run a render: threads, region, cancellation and progress (what it shows is in the
 /// [`RenderSettings`]).
 #[derive(Clone, Copy, Default)]
@@ -58,6 +62,10 @@ pub struct RenderOptions<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Called from worker threads after each tile with (pixels done, pixels in all).
     pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
+    /// Called from worker threads as each tile is finished, with its bounds (in film pixels)
+    /// and its linear RGB pixels row by row: what a live preview shows. Tiles finish in any
+    /// order; the film gets the same values.
+    pub tiles: Option<&'a TileSink<'a>>,
 }
 
 /// Counts and timings of a render.
@@ -320,6 +328,9 @@ fn render_impl(
                 }
                 shadow_rays.fetch_add(shadow, Ordering::Relaxed);
                 store(&film, region, &tile, values, aovs);
+                if let Some(show) = options.tiles {
+                    show(&tile, values);
+                }
                 let n = values.len() as u64;
                 let d = done.fetch_add(n, Ordering::Relaxed) + n;
                 if let Some(progress) = options.progress {

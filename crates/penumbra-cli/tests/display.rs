@@ -1,0 +1,229 @@
+//! `--display-server`: a fake tev that parses every packet byte by byte (the layout of tev's
+//! `Ipc.h`: a little-endian `u32` length counting itself, a type byte, then the fields) and
+//! assembles the image from the tiles; the image it sees must be the file's, bit for bit. A
+//! viewer that is absent, or that accepts and then never reads, changes nothing but a line on
+//! stderr.
+
+mod harness;
+
+use std::io::Read;
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use harness::{ok, read_pfm, run_in};
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A cursor over one packet's bytes, reading tev's field encodings.
+struct Fields<'a>(&'a [u8]);
+
+impl Fields<'_> {
+    fn take(&mut self, n: usize) -> &[u8] {
+        assert!(self.0.len() >= n, "packet too short");
+        let (head, rest) = self.0.split_at(n);
+        self.0 = rest;
+        head
+    }
+    fn u8(&mut self) -> u8 {
+        self.take(1)[0]
+    }
+    fn bool(&mut self) -> bool {
+        match self.u8() {
+            0 => false,
+            1 => true,
+            b => panic!("bool byte {b}"),
+        }
+    }
+    fn i32(&mut self) -> i32 {
+        i32::from_le_bytes(self.take(4).try_into().unwrap())
+    }
+    fn i64(&mut self) -> i64 {
+        i64::from_le_bytes(self.take(8).try_into().unwrap())
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_le_bytes(self.take(4).try_into().unwrap())
+    }
+    fn string(&mut self) -> String {
+        let end = self.0.iter().position(|&b| b == 0).expect("NUL-terminated");
+        let s = String::from_utf8(self.take(end).to_vec()).unwrap();
+        self.take(1);
+        s
+    }
+}
+
+/// What the fake viewer saw: the image created, and its pixels (RGB, rows top to bottom) with
+/// how many times each was sent.
+#[derive(Debug, Default)]
+struct Seen {
+    name: String,
+    size: (usize, usize),
+    pixels: Vec<f32>,
+    sent: Vec<u32>,
+}
+
+/// Reads packets from `stream` until it closes.
+fn serve(mut stream: TcpStream) -> Seen {
+    let mut bytes = Vec::new();
+    stream.read_to_end(&mut bytes).unwrap();
+    let mut seen = Seen::default();
+    let mut rest = &bytes[..];
+    while !rest.is_empty() {
+        let len = u32::from_le_bytes(rest[..4].try_into().unwrap()) as usize;
+        let mut p = Fields(&rest[4..len]);
+        rest = &rest[len..];
+        match p.u8() {
+            4 => {
+                assert!(p.bool(), "CreateImage grabs focus");
+                seen.name = p.string();
+                let (w, h) = (p.i32() as usize, p.i32() as usize);
+                assert_eq!(p.i32(), 3);
+                let names: Vec<String> = (0..3).map(|_| p.string()).collect();
+                assert_eq!(names, ["R", "G", "B"]);
+                seen.size = (w, h);
+                seen.pixels = vec![f32::NAN; w * h * 3];
+                seen.sent = vec![0; w * h];
+            }
+            6 => {
+                p.bool();
+                assert_eq!(p.string(), seen.name);
+                let n = p.i32() as usize;
+                let names: Vec<String> = (0..n).map(|_| p.string()).collect();
+                assert_eq!(names, ["R", "G", "B"]);
+                let [x, y, w, h] = [0; 4].map(|_| p.i32() as usize);
+                let offsets: Vec<i64> = (0..n).map(|_| p.i64()).collect();
+                let strides: Vec<i64> = (0..n).map(|_| p.i64()).collect();
+                let data: Vec<f32> =
+                    std::iter::from_fn(|| (!p.0.is_empty()).then(|| p.f32())).collect();
+                for k in 0..w * h {
+                    let at = (y + k / w) * seen.size.0 + x + k % w;
+                    seen.sent[at] += 1;
+                    for c in 0..n {
+                        let i = (offsets[c] + k as i64 * strides[c]) as usize;
+                        seen.pixels[at * 3 + c] = data[i];
+                    }
+                }
+            }
+            t => panic!("unexpected packet type {t}"),
+        }
+    }
+    seen
+}
+
+#[test]
+fn the_viewer_sees_every_tile_of_the_image_written() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let viewer = thread::spawn(move || serve(listener.accept().unwrap().0));
+    let dir = std::env::temp_dir().join(format!("penumbra-display-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("preview.pfm");
+    let r = ok(run_in(
+        &repository(),
+        [
+            "render",
+            "scenes/cornell.toml",
+            "--width",
+            "100",
+            "--height",
+            "70",
+            "--display-server",
+            &address,
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ));
+    assert!(
+        r.stderr.contains(&format!("connected to tev at {address}")),
+        "{}",
+        r.stderr
+    );
+    let seen = viewer.join().unwrap();
+    assert_eq!(seen.name, out.display().to_string());
+    assert_eq!(seen.size, (100, 70));
+    assert!(seen.sent.iter().all(|&n| n == 1), "every pixel sent once");
+    let (w, h, channels, file) = read_pfm(&out);
+    assert_eq!((w, h, channels), (100, 70, 3));
+    let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+    assert!(
+        same(&seen.pixels, &file),
+        "the viewer's image is the file's"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn without_a_viewer_the_render_goes_on() {
+    // A port nobody listens on: bound, then closed.
+    let address = {
+        let l = TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().to_string()
+    };
+    let dir = std::env::temp_dir().join(format!("penumbra-noview-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("x.png");
+    let r = ok(run_in(
+        &repository(),
+        [
+            "render",
+            "scenes/cornell.toml",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--display-server",
+            &address,
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ));
+    let line = format!("no viewer at {address}: continuing without preview");
+    assert!(r.stderr.contains(&line), "{}", r.stderr);
+    assert!(out.is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_viewer_that_stops_reading_is_dropped() {
+    // Accepts, then never reads: 1024² of RGB floats (12 MiB) overflows the socket buffers,
+    // so the writer blocks; the render must still finish and write its file promptly.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let holder = thread::spawn(move || {
+        let (stream, _) = listener.accept().unwrap();
+        thread::sleep(Duration::from_secs(30));
+        drop(stream);
+    });
+    let dir = std::env::temp_dir().join(format!("penumbra-stall-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("big.png");
+    let start = Instant::now();
+    let r = ok(run_in(
+        &repository(),
+        [
+            "render",
+            "scenes/cornell.toml",
+            "--width",
+            "1024",
+            "--height",
+            "1024",
+            "--sampler",
+            "center",
+            "--light-samples",
+            "1",
+            "--display-server",
+            &address,
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ));
+    let took = start.elapsed();
+    assert!(r.stderr.contains("connected to tev"), "{}", r.stderr);
+    assert!(out.is_file());
+    assert!(took < Duration::from_secs(25), "took {took:?}");
+    drop(holder);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
