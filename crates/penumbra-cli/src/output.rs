@@ -3,6 +3,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 
 use penumbra::{
     commit_all, encode_image, file_name_part, stage_image, Film, ImageError, OutputFormat,
@@ -151,6 +152,19 @@ impl Output {
     /// Writes the image with `extra` files (its AOVs): files appear complete and together or
     /// not at all (a signal or a failed write leaves the old files, or none); standard output
     /// gets the encoded bytes at once.
+    /// Writes `film` although a signal was received: the last pass of an interrupted
+    /// `--progressive` render (staged and renamed into place like any image).
+    pub fn write_anyway(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
+        let never = AtomicBool::new(false);
+        match &self.target {
+            Target::File(path) => {
+                let image = stage_image(film, path, gamma, &never).map_err(runtime)?;
+                commit_all(vec![image]).map_err(runtime)
+            }
+            Target::Stdout => self.write_stdout(film, gamma),
+        }
+    }
+
     pub fn write(
         &self,
         film: &Film,
@@ -171,14 +185,16 @@ impl Output {
                 files.push(image);
                 commit(files, interrupt)
             }
-            Target::Stdout => {
-                let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
-                let mut out = std::io::stdout().lock();
-                out.write_all(&bytes)
-                    .and_then(|()| out.flush())
-                    .map_err(|e| runtime(format!("cannot write to standard output: {e}")))
-            }
+            Target::Stdout => self.write_stdout(film, gamma),
         }
+    }
+
+    fn write_stdout(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
+        let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
+        let mut out = std::io::stdout().lock();
+        out.write_all(&bytes)
+            .and_then(|()| out.flush())
+            .map_err(|e| runtime(format!("cannot write to standard output: {e}")))
     }
 }
 

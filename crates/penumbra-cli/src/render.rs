@@ -3,12 +3,13 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    OutputFormat, PixelBounds, RenderError, RenderOptions, RenderSettings, Rgb, Scene, SceneFile,
-    SettingsError, View, World, MAX_THREADS,
+    Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderSettings, Rgb, Scene,
+    SceneFile, SettingsError, View, World, MAX_THREADS,
 };
 
 use crate::aov;
@@ -65,6 +66,12 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
                 job.settings.height,
             );
         }
+        // With --progressive, the image of the last finished pass: what Ctrl-C writes.
+        let last_pass: Mutex<Option<(u32, Film)>> = Mutex::new(None);
+        let keep = |pass: &Pass| {
+            let mut last = last_pass.lock().unwrap_or_else(|e| e.into_inner());
+            *last = Some((pass.samples, pass.film.clone()));
+        };
         let show = |tile: &PixelBounds, pixels: &[Rgb]| {
             if let Some(p) = preview.as_ref() {
                 p.tile(tile, pixels);
@@ -76,6 +83,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             cancel: Some(interrupt.flag()),
             progress: None,
             tiles: preview.is_some().then_some(&show as _),
+            passes: args.progressive.then_some(&keep as _),
         };
         interrupt.defer();
         let (film, aovs, stats) = with_progress(args.quiet, |progress| {
@@ -92,7 +100,15 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             }
         })
         .map_err(|e| match e {
-            RenderError::Cancelled => interrupt.failure(),
+            RenderError::Cancelled => {
+                let last = last_pass.lock().unwrap_or_else(|e| e.into_inner()).take();
+                match last {
+                    Some((samples, film)) => {
+                        write_last_pass(job, &film, samples, &scene, &interrupt)
+                    }
+                    None => interrupt.failure(),
+                }
+            }
             e @ RenderError::BadRegion { .. } => invalid(format!("{}: {e}", region_flag(args))),
             RenderError::Settings(e) => invalid(format!("{}: {e}", flag_of(&e))),
             e => runtime(e),
@@ -254,6 +270,26 @@ fn scene_name(scene: &Path) -> PathBuf {
     } else {
         scene.to_owned()
     }
+}
+
+/// The failure of a `--progressive` render that a signal stopped, after writing the image of
+/// its last finished pass (`samples` per pixel) where the final image would have gone.
+fn write_last_pass(
+    job: &Job,
+    film: &Film,
+    samples: u32,
+    scene: &Scene,
+    interrupt: &Interrupt,
+) -> Failure {
+    match job.output.write_anyway(film, scene.gamma) {
+        Ok(()) => note(&format!(
+            "interrupted: wrote the last finished pass ({samples} of {} samples per pixel) to {}",
+            job.settings.spp,
+            job.output.display()
+        )),
+        Err(e) => note(&format!("error: {}", e.message)),
+    }
+    interrupt.failure()
 }
 
 /// Runs `work` with a progress bar on stderr (none with `quiet` or when stderr is not a

@@ -156,6 +156,43 @@ fn the_viewer_sees_every_tile_of_the_image_written() {
 }
 
 #[test]
+fn progressive_passes_reach_the_viewer_and_end_in_the_same_file() {
+    let dir = std::env::temp_dir().join(format!("penumbra-passes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (once, passes) = (dir.join("once.pfm"), dir.join("passes.pfm"));
+    let args = |out: &Path| {
+        let out = out.to_str().unwrap().to_owned();
+        let size = ["--width", "48", "--height", "40", "--spp", "16", "-o"];
+        let mut a: Vec<String> = ["render", "scenes/cornell.toml"].map(String::from).to_vec();
+        a.extend(size.map(String::from));
+        a.push(out);
+        a
+    };
+    ok(run_in(&repository(), args(&once)));
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let viewer = thread::spawn(move || serve(listener.accept().unwrap().0));
+    let mut progressive = args(&passes);
+    progressive.extend(["--progressive", "--display-server", &address].map(String::from));
+    ok(run_in(&repository(), progressive));
+    let seen = viewer.join().unwrap();
+    // Bit for bit the image of one pass; the viewer got every pixel once per pass (1, 2, 4,
+    // 8 and 16 samples), the last pass being the image.
+    assert_eq!(
+        std::fs::read(&once).unwrap(),
+        std::fs::read(&passes).unwrap()
+    );
+    assert!(seen.sent.iter().all(|&n| n == 5), "five passes");
+    let (_, _, _, file) = read_pfm(&passes);
+    assert!(seen
+        .pixels
+        .iter()
+        .zip(&file)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn without_a_viewer_the_render_goes_on() {
     // A port nobody listens on: bound, then closed.
     let address = {

@@ -183,3 +183,40 @@ fn a_signal_while_the_image_is_written_keeps_the_old_image_and_no_temporary_file
         temporary_files(sb.path())
     );
 }
+
+#[test]
+fn ctrl_c_during_progressive_writes_the_last_finished_pass() {
+    let sb = TempDir::new("signal-progressive");
+    let scene = sb.write("s.toml", ONE_HEAVY_PIXEL);
+    let out = sb.join("out.pfm");
+    // Passes of 1, 2, 4, ... samples of 256 × 256 shadow rays each: after a second some
+    // passes are done, and the last ones take far longer than the test.
+    let child = spawn_render(
+        &scene,
+        &out,
+        &[
+            "--spp",
+            "65536",
+            "--light-samples",
+            "256",
+            "-t",
+            "1",
+            "--progressive",
+        ],
+    );
+    std::thread::sleep(Duration::from_secs(1));
+    send(&child, "INT");
+    let (got, stderr, _) = wait_at_most(child, Duration::from_secs(5), "SIGINT");
+    assert_eq!(got, Some(130), "exit code; stderr: {stderr}");
+    assert_interrupted("SIGINT", &stderr);
+    assert!(
+        stderr.contains("interrupted: wrote the last finished pass ("),
+        "{stderr}"
+    );
+    // The pass's image is whole: a PFM of one lit pixel.
+    let bytes = std::fs::read(&out).expect("the last pass was written");
+    assert!(bytes.starts_with(b"PF\n1 1\n-1.0\n"));
+    let red = f32::from_le_bytes(bytes[bytes.len() - 12..bytes.len() - 8].try_into().unwrap());
+    assert!(red > 0.0, "a lit floor: {red}");
+    assert!(temporary_files(sb.path()).is_empty());
+}

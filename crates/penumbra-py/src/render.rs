@@ -165,6 +165,7 @@ pub fn render_scene<'py>(
         cancel: Some(&cancel),
         progress: Some(&report),
         tiles: None,
+        passes: None,
     };
     let with_aovs = !r.aovs.is_empty();
 

@@ -105,9 +105,9 @@ pub use raycast::{
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
 };
 pub use render::{
-    render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, PixelBounds, RenderError,
-    RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch, TileSink, View,
-    MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP, NO_ID,
+    render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, Pass, PassSink, PixelBounds,
+    RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch,
+    TileSink, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP, NO_ID,
 };
 pub use sampling::{Rng, Sampler};
 pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};

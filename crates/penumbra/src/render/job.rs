@@ -77,42 +77,47 @@ impl Job<'_> {
             .fold(first.radiance(d), |sum, e| sum + e.radiance(d))
     }
 
-    /// Appends to `out` the values of the pixels `xs` of row `y` of the full film (and their
+    /// Adds to `sums` (one per pixel of `xs`, in order) the samples `samples` of the pixels
+    /// `xs` of row `y` of the full film, each pixel's in sample order (and appends their
     /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took;
-    /// `None` once the render is cancelled.
+    /// `None` once the render is cancelled. A pixel's value is its sum over all its samples
+    /// divided by their number; summing the samples in passes gives the same sums.
     pub(super) fn row(
         &self,
         y: u32,
         xs: Range<u32>,
+        samples: Range<u32>,
         buffers: &mut Buffers,
-        out: &mut Vec<Rgb>,
+        sums: &mut [Rgb],
         aovs: &mut Vec<AovPixel>,
     ) -> Option<u64> {
-        let spp = self.settings.samples_per_axis().pow(2);
-        let per_batch = (BATCH_RAYS / spp).max(1);
+        let spp = samples.len() as u32;
+        let per_batch = (BATCH_RAYS / spp.max(1)).max(1);
         let mut shadow = 0;
         let mut x0 = xs.start;
         while x0 < xs.end {
             let x1 = (x0 + per_batch).min(xs.end);
-            shadow += self.pixels(y, x0..x1, buffers, out, aovs)?;
+            let at = (x0 - xs.start) as usize..(x1 - xs.start) as usize;
+            shadow += self.pixels(y, x0..x1, samples.clone(), buffers, &mut sums[at], aovs)?;
             x0 = x1;
         }
         Some(shadow)
     }
 
     /// [`Job::row`] for a few pixels: every sample's camera ray first, traced in one call,
-    /// then each pixel's mean in sample order.
+    /// then each pixel's sum in sample order.
     fn pixels(
         &self,
         y: u32,
         xs: Range<u32>,
+        samples: Range<u32>,
         buffers: &mut Buffers,
-        out: &mut Vec<Rgb>,
+        sums: &mut [Rgb],
         aovs: &mut Vec<AovPixel>,
     ) -> Option<u64> {
         let settings = self.settings;
         let n = settings.samples_per_axis();
-        let spp = (n * n) as usize;
+        let spp = samples.len();
         let Buffers {
             scratch,
             dirs,
@@ -127,7 +132,7 @@ impl Job<'_> {
         rngs.clear();
         for x in xs.clone() {
             let pixel_index = y as u64 * settings.width as u64 + x as u64;
-            for s in 0..n * n {
+            for s in samples.clone() {
                 let mut rng = Rng::new(settings.seed, &[pixel_index, s as u64]);
                 let offset = match &self.offsets {
                     Some(o) => o[s as usize],
@@ -177,7 +182,7 @@ impl Job<'_> {
         let mut shadow = 0;
         let mut next = 0;
         for (pixel, x) in xs.enumerate() {
-            let mut sum = Rgb::ZERO;
+            let mut sum = sums[pixel];
             let mut albedo = Rgb::ZERO;
             for (i, hit) in hits.iter().enumerate().skip(pixel * spp).take(spp) {
                 if hit.is_some() {
@@ -192,7 +197,7 @@ impl Job<'_> {
                     sum += self.miss(dirs[i]);
                 }
             }
-            out.push(sum / spp as f32);
+            sums[pixel] = sum;
             if let Some(ctx) = &self.aovs {
                 let mut px = ctx.center(self.world, &self.camera, x, y);
                 px.albedo = albedo / spp as f32;

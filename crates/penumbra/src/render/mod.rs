@@ -6,6 +6,7 @@
 
 mod aov;
 mod job;
+mod passes;
 mod patch;
 mod settings;
 
@@ -25,8 +26,10 @@ use crate::sampling::fixed_offsets;
 use crate::world::World;
 use aov::AovContext;
 use job::{Buffers, Job};
+use passes::{load, pass_samples};
 
 pub use aov::{Aov, AovFilm, AovPixel, AovValues, NO_ID};
+pub use passes::{Pass, PassSink};
 pub(crate) use patch::implied_spp;
 pub use patch::SettingsPatch;
 pub use settings::{RenderSettings, SettingsError, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
@@ -66,6 +69,11 @@ pub struct RenderOptions<'a> {
     /// and its linear RGB pixels row by row: what a live preview shows. Tiles finish in any
     /// order; the film gets the same values.
     pub tiles: Option<&'a TileSink<'a>>,
+    /// Progressive rendering: the samples of every pixel are taken in passes over the whole
+    /// film (1, 2, 4, … samples in all, see [`Pass`]) and this is called on the calling
+    /// thread after each pass but the last with the image so far. The final film is the same,
+    /// bit for bit, as without passes. Ignored by [`render_with_aovs`] (one pass).
+    pub passes: Option<&'a PassSink<'a>>,
 }
 
 /// Counts and timings of a render.
@@ -295,55 +303,86 @@ fn render_impl(
             y1: (y0 + TILE).min(region.y1),
         }
     };
-    let total = rw as u64 * rh as u64;
+    let spp = settings.samples_per_axis().pow(2);
+    let total = rw as u64 * rh as u64 * spp as u64;
     let done = AtomicU64::new(0);
     let shadow_rays = AtomicU64::new(0);
     let start = Instant::now();
     let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    // The film holds each pixel's sum over the samples so far; it is divided at the end.
     let film = Mutex::new((pixels, aov_pixels));
+    let passes = match (options.passes, with_aovs) {
+        (Some(_), false) => pass_samples(spp),
+        _ => std::iter::once(0..spp).collect(),
+    };
 
-    pool.install(|| {
-        // Scratch buffers are made once per rayon job, not per tile: a tile's worth of
-        // work is small, and filling fresh buffers cost allocations and page faults.
-        (0..tile_count)
-            .into_par_iter()
-            .for_each_init(Worker::default, |worker, i| {
-                if cancelled() {
-                    return;
-                }
-                let tile = tile(i);
-                let Worker {
-                    buffers,
-                    values,
-                    aovs,
-                } = worker;
-                values.clear();
-                aovs.clear();
-                let mut shadow = 0;
-                for y in tile.y0..tile.y1 {
-                    match job.row(y, tile.x0..tile.x1, buffers, values, aovs) {
-                        Some(s) => shadow += s,
-                        None => return,
+    for (index, samples) in passes.iter().enumerate() {
+        let count = samples.end as f32;
+        pool.install(|| {
+            // Scratch buffers are made once per rayon job, not per tile: a tile's worth of
+            // work is small, and filling fresh buffers cost allocations and page faults.
+            (0..tile_count)
+                .into_par_iter()
+                .for_each_init(Worker::default, |worker, i| {
+                    if cancelled() {
+                        return;
                     }
-                }
-                shadow_rays.fetch_add(shadow, Ordering::Relaxed);
-                store(&film, region, &tile, values, aovs);
-                if let Some(show) = options.tiles {
-                    show(&tile, values);
-                }
-                let n = values.len() as u64;
-                let d = done.fetch_add(n, Ordering::Relaxed) + n;
-                if let Some(progress) = options.progress {
-                    progress(d, total);
-                }
-            })
-    });
-    if cancelled() || done.load(Ordering::Relaxed) != total {
+                    let tile = tile(i);
+                    let Worker {
+                        buffers,
+                        values,
+                        aovs,
+                    } = worker;
+                    load(&film, region, &tile, samples.start > 0, values);
+                    aovs.clear();
+                    let (tw, mut shadow) = ((tile.x1 - tile.x0) as usize, 0);
+                    for (y, sums) in (tile.y0..tile.y1).zip(values.chunks_mut(tw)) {
+                        let xs = tile.x0..tile.x1;
+                        match job.row(y, xs, samples.clone(), buffers, sums, aovs) {
+                            Some(s) => shadow += s,
+                            None => return,
+                        }
+                    }
+                    shadow_rays.fetch_add(shadow, Ordering::Relaxed);
+                    store(&film, region, &tile, values, aovs);
+                    if let Some(show) = options.tiles {
+                        let shown: Vec<Rgb> = values.iter().map(|&v| v / count).collect();
+                        show(&tile, &shown);
+                    }
+                    let n = values.len() as u64 * samples.len() as u64;
+                    let d = done.fetch_add(n, Ordering::Relaxed) + n;
+                    if let Some(progress) = options.progress {
+                        progress(d, total);
+                    }
+                })
+        });
+        if cancelled() {
+            return Err(RenderError::Cancelled);
+        }
+        if let (Some(show), true) = (options.passes, index + 1 < passes.len()) {
+            let sums = &film.lock().unwrap_or_else(|e| e.into_inner()).0;
+            let pixels = sums.iter().map(|&v| v / count).collect();
+            let image = Film {
+                width: rw,
+                height: rh,
+                pixels,
+            };
+            show(&Pass {
+                index,
+                samples: samples.end,
+                film: &image,
+            });
+        }
+    }
+    if done.load(Ordering::Relaxed) != total {
         return Err(RenderError::Cancelled);
     }
-    let (pixels, aov_pixels) = film.into_inner().unwrap_or_else(|e| e.into_inner());
+    let (mut pixels, aov_pixels) = film.into_inner().unwrap_or_else(|e| e.into_inner());
+    for v in &mut pixels {
+        *v /= spp as f32;
+    }
     let stats = RenderStats {
-        camera_rays: total * settings.spp as u64,
+        camera_rays: rw as u64 * rh as u64 * spp as u64,
         shadow_rays: shadow_rays.into_inner(),
         time: start.elapsed(),
         threads,

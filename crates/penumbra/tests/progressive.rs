@@ -1,0 +1,70 @@
+//! Progressive rendering through the library: the final film of a render in passes is the
+//! same, bit for bit, as the film of one pass, for every sampler and any thread count; each
+//! intermediate pass is the same for any thread count too, and refines toward the final
+//! image.
+
+use std::path::Path;
+use std::sync::Mutex;
+
+use penumbra::{render, Film, Pass, RenderOptions, Sampler, SceneFile};
+
+fn bits(film: &Film) -> Vec<u32> {
+    film.pixels
+        .iter()
+        .flat_map(|c| [c.x, c.y, c.z].map(f32::to_bits))
+        .collect()
+}
+
+fn mean_error(a: &Film, b: &Film) -> f32 {
+    let n = a.pixels.len() as f32;
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(x, y)| (*x - *y).abs().element_sum())
+        .sum::<f32>()
+        / n
+}
+
+#[test]
+fn passes_end_in_the_film_of_one_pass() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
+    let scene = SceneFile::load(&path).unwrap().build(0).unwrap();
+    for (sampler, spp) in [
+        (Sampler::Rgss, 4),
+        (Sampler::Grid, 16),
+        (Sampler::Jittered, 9),
+    ] {
+        let mut settings = scene.settings.clone();
+        (settings.width, settings.height) = (40, 30);
+        (settings.sampler, settings.spp) = (sampler, spp);
+        let (once, _) = render(&scene.world, &settings, &RenderOptions::default()).unwrap();
+        let mut by_threads = Vec::new();
+        for threads in [1, 2] {
+            let seen: Mutex<Vec<(u32, Film)>> = Mutex::new(Vec::new());
+            let keep = |p: &Pass| seen.lock().unwrap().push((p.samples, p.film.clone()));
+            let options = RenderOptions {
+                threads,
+                passes: Some(&keep),
+                ..RenderOptions::default()
+            };
+            let (last, _) = render(&scene.world, &settings, &options).unwrap();
+            assert_eq!(bits(&last), bits(&once), "{sampler:?}, {threads} threads");
+            let seen = seen.into_inner().unwrap();
+            let counts: Vec<u32> = seen.iter().map(|(s, _)| *s).collect();
+            let expected: Vec<u32> = [1, 2, 4, 8].into_iter().filter(|&s| s < spp).collect();
+            assert_eq!(counts, expected, "{sampler:?}");
+            by_threads.push(seen);
+        }
+        // Each pass is the same for any thread count.
+        for ((_, a), (_, b)) in by_threads[0].iter().zip(&by_threads[1]) {
+            assert_eq!(bits(a), bits(b), "{sampler:?}");
+        }
+        // The first pass is a whole image, nearer the final one than black is.
+        let first = &by_threads[0][0].1;
+        let black = Film {
+            pixels: vec![Default::default(); first.pixels.len()],
+            ..first.clone()
+        };
+        assert!(mean_error(first, &once) < 0.5 * mean_error(&black, &once));
+    }
+}
