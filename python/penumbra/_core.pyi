@@ -50,6 +50,7 @@ class CoreScene:
         region: Optional[Tuple[int, int, int, int]] = None,
         threads: int = 0,
         progress: Optional[Callable[[int, int], Any]] = None,
+        passes: Optional[Callable[[int, np.ndarray], Any]] = None,
         aovs: List[str] = ...,
         stats: Optional[Dict[str, Any]] = None,
     ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]: ...

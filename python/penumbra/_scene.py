@@ -157,6 +157,7 @@ class Scene:
         progress: Progress = None,
         aovs: Union[str, Iterable[str]] = (),
         stats: Optional[Dict[str, Any]] = None,
+        passes: Optional[Callable[[int, np.ndarray], Any]] = None,
     ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
         """Render the scene and return a C-contiguous float32 array of shape
         (height, width, 3): linear RGB, row 0 at the top, the values the command line writes
@@ -183,6 +184,11 @@ class Scene:
           each AOV holds and how it is filtered.
         - ``stats``: a dict the render fills with its counts and time: ``camera_rays``,
           ``shadow_rays``, ``seconds``, ``rays_per_second`` and ``threads``.
+        - ``passes``: render progressively (the command line's ``--progressive``): every
+          pixel's samples are taken in passes over the whole image, 1, 2, 4, ... samples, and
+          after each pass but the last ``passes(samples, image)`` is called from this thread
+          with the image so far (each pixel's mean over its first ``samples`` samples). The
+          result is bit for bit the image of a render without ``passes``. Not with ``aovs``.
 
         The GIL is released while rendering. Ctrl-C stops the render within about 0.1 s and
         raises ``KeyboardInterrupt``. Bad settings raise ``ValueError``.
@@ -224,6 +230,10 @@ class Scene:
             callback = progress
         elif progress not in (None, False):
             raise TypeError("progress must be True, False, None or a callable (done, total)")
+        if passes is not None and not callable(passes):
+            raise TypeError(f"{call}: passes must be a callable (samples, image)")
+        if passes is not None and names:
+            raise ValueError(f"{call}: passes (a progressive render) does not give aovs")
         try:
             return self._core.render(
                 camera=view,
@@ -236,6 +246,7 @@ class Scene:
                 region=region,
                 threads=threads,
                 progress=callback,
+                passes=passes,
                 aovs=names,
                 stats=stats,
             )

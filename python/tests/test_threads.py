@@ -10,6 +10,7 @@ import threading
 import time
 import _thread
 
+import numpy as np
 import pytest
 
 import penumbra
@@ -121,3 +122,26 @@ def test_progress_true_without_tqdm_warns_how_to_install_it(cornell, monkeypatch
     assert image.shape == (16, 16, 3)
     # The warning points at the line that asked for the bar.
     assert caught[0].filename == __file__
+
+
+def test_passes_show_the_image_so_far_and_end_in_the_image_of_one_pass(cornell):
+    once = cornell.render(width=48, height=40, spp=16, threads=2)
+    me = threading.get_ident()
+    seen = []
+
+    def passes(samples, image):
+        seen.append((samples, image.copy(), threading.get_ident()))
+
+    final = cornell.render(width=48, height=40, spp=16, threads=2, passes=passes)
+    assert np.array_equal(final.view(np.uint32), once.view(np.uint32)), "bit for bit"
+    assert [s for s, _, _ in seen] == [1, 2, 4, 8]
+    assert all(ident == me for _, _, ident in seen)
+    assert all(img.shape == (40, 48, 3) and img.dtype == np.float32 for _, img, _ in seen)
+    # Each pass is nearer the final image than the first one is.
+    errors = [float(np.abs(img - once).mean()) for _, img, _ in seen]
+    assert errors[-1] < errors[0]
+
+
+def test_passes_and_aovs_are_refused_together(cornell):
+    with pytest.raises(ValueError, match="passes"):
+        cornell.render(width=8, height=8, passes=lambda s, img: None, aovs="depth")

@@ -9,7 +9,7 @@ use std::time::Duration;
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use penumbra::{
-    render, render_with_aovs, Aov, AovFilm, AovValues, Film, PixelBounds, RenderError,
+    render, render_with_aovs, Aov, AovFilm, AovValues, Film, Pass, PixelBounds, RenderError,
     RenderOptions, RenderSettings, Sampler, SettingsPatch, View, World,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -28,7 +28,7 @@ pub type CameraArgs = ([f32; 3], [f32; 3], [f32; 3], f32);
 
 /// The keyword arguments of a render call. Python has checked their types; `None` is the
 /// same as absent.
-const KEYWORDS: [&str; 12] = [
+const KEYWORDS: [&str; 13] = [
     "camera",
     "spp",
     "sampler",
@@ -39,6 +39,7 @@ const KEYWORDS: [&str; 12] = [
     "region",
     "threads",
     "progress",
+    "passes",
     "aovs",
     "stats",
 ];
@@ -50,6 +51,9 @@ pub struct Request<'py> {
     pub region: Option<PixelBounds>,
     pub threads: usize,
     pub progress: Option<Bound<'py, PyAny>>,
+    /// Called with (samples per pixel so far, image) after each pass but the last of a
+    /// progressive render; `None` renders in one pass.
+    pub passes: Option<Bound<'py, PyAny>>,
     /// The AOVs asked for, in the order asked (repeats are one key of the result).
     pub aovs: Vec<Aov>,
     /// A dict to fill with the render's counts and time, when given.
@@ -127,6 +131,7 @@ impl<'py> Request<'py> {
                 .transpose()?
                 .unwrap_or(0),
             progress: item("progress")?,
+            passes: item("passes")?,
             aovs,
             stats: item("stats")?
                 .map(|v| v.cast_into::<PyDict>())
@@ -159,13 +164,19 @@ pub fn render_scene<'py>(
         done.fetch_max(d, Ordering::Relaxed);
         total.store(t, Ordering::Relaxed);
     };
+    // Finished passes wait here for the calling thread, which holds the GIL, to show them.
+    let finished: std::sync::Mutex<Vec<(u32, Film)>> = std::sync::Mutex::new(Vec::new());
+    let keep = |pass: &Pass| {
+        let mut list = finished.lock().unwrap_or_else(|e| e.into_inner());
+        list.push((pass.samples, pass.film.clone()));
+    };
     let options = RenderOptions {
         threads: r.threads,
         region: r.region,
         cancel: Some(&cancel),
         progress: Some(&report),
         tiles: None,
-        passes: None,
+        passes: r.passes.is_some().then_some(&keep as _),
     };
     let with_aovs = !r.aovs.is_empty();
 
@@ -196,6 +207,13 @@ pub fn render_scene<'py>(
                     if d != reported && t > 0 {
                         reported = d;
                         callback.call1((d, t))?;
+                    }
+                }
+                if let Some(callback) = &r.passes {
+                    let ready =
+                        std::mem::take(&mut *finished.lock().unwrap_or_else(|e| e.into_inner()));
+                    for (samples, film) in ready {
+                        callback.call1((samples, image_array(py, film)?))?;
                     }
                 }
                 Ok(())

@@ -304,7 +304,9 @@ fn render_impl(
         }
     };
     let spp = settings.samples_per_axis().pow(2);
-    let total = rw as u64 * rh as u64 * spp as u64;
+    // Progress counts pixel samples and reports them as pixels (whole ones when one pass).
+    let (pixels_in_all, spp64) = (rw as u64 * rh as u64, spp as u64);
+    let total = pixels_in_all * spp64;
     let done = AtomicU64::new(0);
     let shadow_rays = AtomicU64::new(0);
     let start = Instant::now();
@@ -352,7 +354,7 @@ fn render_impl(
                     let n = values.len() as u64 * samples.len() as u64;
                     let d = done.fetch_add(n, Ordering::Relaxed) + n;
                     if let Some(progress) = options.progress {
-                        progress(d, total);
+                        progress(d / spp64, pixels_in_all);
                     }
                 })
         });
