@@ -29,13 +29,17 @@ fn mean_error(a: &Film, b: &Film) -> f32 {
 fn passes_end_in_the_film_of_one_pass() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell.toml");
     let scene = SceneFile::load(&path).unwrap().build(0).unwrap();
-    for (sampler, spp) in [
-        (Sampler::Rgss, 4),
-        (Sampler::Grid, 16),
-        (Sampler::Jittered, 9),
+    // 128 × 96 with 16 samples puts a camera ray exactly through the edge the floor shares
+    // with the red wall (pixel (31, 80)): both triangles at one `t`, where packets of
+    // different sizes once took different triangles.
+    for (sampler, spp, size) in [
+        (Sampler::Rgss, 4, (40, 30)),
+        (Sampler::Rgss, 16, (128, 96)),
+        (Sampler::Grid, 16, (40, 30)),
+        (Sampler::Jittered, 9, (40, 30)),
     ] {
         let mut settings = scene.settings.clone();
-        (settings.width, settings.height) = (40, 30);
+        (settings.width, settings.height) = size;
         (settings.sampler, settings.spp) = (sampler, spp);
         let (once, _) = render(&scene.world, &settings, &RenderOptions::default()).unwrap();
         let mut by_threads = Vec::new();

@@ -6,6 +6,7 @@
 //! instructions when they are inlined into a kernel that `crate::simd` compiles per
 //! instruction set.
 
+use super::wide::tie_bound;
 use crate::simd::{max, min, Isa};
 
 /// Lane `i` of `v` by axis.
@@ -19,6 +20,13 @@ pub(crate) fn lane<const N: usize>(v: &[[f32; N]; 3], i: usize) -> [f32; 3] {
 /// largest coordinates along axis `a` less lane `i`'s origin, `inv` the rays' reciprocal
 /// directions; the exit distance is scaled by `exit_scale` (ray casting's `1 + 2γ₃`, Ize
 /// 2013; the renderer passes 1, a multiply the compiler removes).
+///
+/// The bound `t_max[i]` is widened by [`tie_bound`], as ray casting widens it: a box whose
+/// computed entry is a few ulps past a lane's closest hit may still hold a triangle at
+/// exactly that `t` (a ray through the edge two triangles share), and the closest-hit rule
+/// takes the smaller index among equal `t`s. Pruning such a box would make the answer depend
+/// on the order of the visit, which differs between packets of different sizes. Widening
+/// only adds visits: every triangle test keeps its own exact bound.
 ///
 /// On padded boxes (see `build`) `bound − origin` is zero only for rays outside the true box,
 /// so a NaN from `0·∞` only turns a miss into a miss: `min`/`max` need no NaN care, and the
@@ -44,7 +52,7 @@ pub(crate) fn slab<const N: usize, I: Isa>(
         let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
         let far = min(
             min(min(max(x0, x1), max(y0, y1)), max(z0, z1)) * exit_scale,
-            t_max[i],
+            tie_bound(t_max[i]),
         );
         inside[i] = -((near <= far) as i32);
         entry[i] = near;

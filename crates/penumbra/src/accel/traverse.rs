@@ -9,6 +9,7 @@ use std::ops::Range;
 
 use glam::Vec3A;
 
+use super::wide::tie_bound;
 use super::{Bvh, BvhNode, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::math::Ray;
@@ -248,6 +249,8 @@ pub(super) fn slab(
     let near = t0.min(t1).max_element();
     let far = t0.max(t1).min_element();
     let near = if near > t_min { near } else { t_min };
+    // Widened as `lanes::slab` widens it, so that a box holding a tie is visited in any order.
+    let t_max = tie_bound(t_max);
     let far = if far < t_max { far } else { t_max };
     (near <= far).then_some(near)
 }

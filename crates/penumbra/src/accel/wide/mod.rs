@@ -16,4 +16,4 @@ pub(crate) mod node;
 pub(crate) mod packets;
 mod tree;
 
-pub(crate) use tree::WideBvh;
+pub(crate) use tree::{tie_bound, WideBvh};
