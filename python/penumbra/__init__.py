@@ -34,6 +34,7 @@ import warnings as _warnings
 
 from ._camera import Camera
 from ._core import MAX_THREADS, NO_ID, SIMD_ENV_PROBLEM, SceneError, __version__
+from ._display import LiveImage, Picture, display, picture
 from ._image import to_srgb8, write_image
 from ._pack import PackedScene
 from ._raycast import INVALID_ID, RaycastingScene
@@ -44,17 +45,21 @@ __all__ = [
     "AOV_NAMES",
     "Camera",
     "INVALID_ID",
+    "LiveImage",
     "MAX_THREADS",
     "NO_ID",
     "PackedScene",
+    "Picture",
     "RaycastingScene",
     "Scene",
     "SceneError",
     "Tensor",
+    "display",
     "load",
     "load_dict",
     "load_pack",
     "loads",
+    "picture",
     "to_srgb8",
     "write_image",
 ]

@@ -19,7 +19,7 @@ from typing import (
 
 import numpy as np
 
-from . import _args, _core
+from . import _args, _core, _display
 from ._camera import Camera
 from ._pack import PackedScene
 from ._raycast import RaycastingScene
@@ -130,6 +130,16 @@ class Scene:
         # A scene pickles as its pack and is built again when unpickled.
         return (load_pack, (self.pack(),))
 
+    @property
+    def bounds(self) -> Tuple[Tuple[float, float, float], Tuple[float, float, float]]:
+        """The world's bounding box, ``((min x, y, z), (max x, y, z))``."""
+        lo, hi = self._core.bounds
+        return tuple(lo), tuple(hi)
+
+    def _repr_html_(self) -> str:
+        # Jupyter's view of a scene: its counts, bounds and a small preview render.
+        return _display.summary_html(self)
+
     def __repr__(self) -> str:
         s = self.stats
         return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
@@ -178,7 +188,9 @@ class Scene:
           The image does not depend on it.
         - ``progress``: ``True`` for a tqdm bar on stderr (tqdm is an optional dependency:
           ``pip install tqdm``; without it, a ``RuntimeWarning`` says so and no bar shows),
-          or a callable receiving (pixels done, pixels in all), called from this thread.
+          or a callable receiving (pixels done, pixels in all), called from this thread, or
+          ``"notebook"``: in Jupyter or IPython, render progressively (as with ``passes``)
+          and show one image that each pass replaces in place, the final image last.
         - ``aovs``: names from :data:`AOV_NAMES`. When given, the result is a tuple
           ``(image, {name: array})`` instead of the image alone; see the Python docs for what
           each AOV holds and how it is filtered.
@@ -223,19 +235,33 @@ class Scene:
         threads = _args.threads(call, threads)
         bar = None
         callback = None
-        if progress is True:
+        live = None
+        if isinstance(progress, str) and progress == "notebook":
+            if names:
+                raise ValueError(f'{call}: progress="notebook" (progressive) does not give aovs')
+            live = _display.LiveImage()
+            user_passes = passes
+
+            def passes(samples: int, image: np.ndarray) -> None:
+                live.show(image)
+                if user_passes is not None:
+                    user_passes(samples, image)
+
+        elif progress is True:
             bar = _Bar()
             callback = bar
         elif callable(progress):
             callback = progress
         elif progress not in (None, False):
-            raise TypeError("progress must be True, False, None or a callable (done, total)")
+            raise TypeError(
+                'progress must be True, False, None, "notebook" or a callable (done, total)'
+            )
         if passes is not None and not callable(passes):
             raise TypeError(f"{call}: passes must be a callable (samples, image)")
         if passes is not None and names:
             raise ValueError(f"{call}: passes (a progressive render) does not give aovs")
         try:
-            return self._core.render(
+            result = self._core.render(
                 camera=view,
                 spp=spp,
                 sampler=sampler,
@@ -250,6 +276,9 @@ class Scene:
                 aovs=names,
                 stats=stats,
             )
+            if live is not None:
+                live.show(result)
+            return result
         finally:
             if bar is not None:
                 bar.close()

@@ -5,9 +5,10 @@ use std::path::PathBuf;
 
 use numpy::ndarray::Array3;
 use numpy::{IntoPyArray, PyArray3, PyReadonlyArray3};
-use penumbra::{encode_8bit, Film, ImageError, Rgb};
+use penumbra::{encode_8bit, encode_image, Film, ImageError, OutputFormat, Rgb};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 
 use crate::errors::{buffer, image_error};
 
@@ -71,4 +72,21 @@ pub fn to_srgb8<'py>(
     let out =
         Array3::from_shape_vec(dim, bytes).map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(out.into_pyarray(py))
+}
+
+/// The PNG file (bytes) of an (H, W, 3) float32 linear RGB array, encoded as `to_srgb8`
+/// encodes it: what `penumbra.display` shows in a notebook.
+#[pyfunction]
+#[pyo3(signature = (array, gamma = None))]
+pub fn encode_png<'py>(
+    py: Python<'py>,
+    array: PyReadonlyArray3<'py, f32>,
+    gamma: Option<f32>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    ImageError::check_gamma(gamma).map_err(|e| image_error("encode_png", e))?;
+    let film = film(&array)?;
+    let bytes = py
+        .detach(|| encode_image(&film, OutputFormat::Png, gamma))
+        .map_err(|e| image_error("encode_png", e))?;
+    Ok(PyBytes::new(py, &bytes))
 }

@@ -37,6 +37,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(camera::check_camera, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
+    m.add_function(wrap_pyfunction!(image::encode_png, m)?)?;
     m.add(
         "AOV_NAMES",
         penumbra::Aov::ALL.map(penumbra::Aov::name).to_vec(),

@@ -129,6 +129,13 @@ impl CoreScene {
         crate::pack::to_dict(py, &pack)
     }
 
+    /// The world's bounding box as ((min x, y, z), (max x, y, z)).
+    #[getter]
+    fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let b = self.world.bounds();
+        (b.min.to_array(), b.max.to_array())
+    }
+
     /// The names of the scene's cameras, in file order (the first is the default).
     #[getter]
     fn cameras(&self) -> Vec<String> {
