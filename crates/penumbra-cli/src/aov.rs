@@ -23,7 +23,9 @@ use std::path::{Path, PathBuf};
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage,
 };
-use penumbra::{check_finite, Aov, AovFilm, AovValues, Film, OutputFormat, StagedFile};
+use penumbra::{
+    check_finite, Aov, AovFilm, AovPixel, AovValues, Film, OutputFormat, StagedFile, NO_ID,
+};
 
 use crate::failure::{invalid, runtime, Failure};
 use crate::signals::Interrupt;
@@ -36,6 +38,35 @@ fn channels(p: Aov) -> &'static [&'static str] {
         Aov::Normal | Aov::Position => &["X", "Y", "Z"],
         Aov::Albedo => &["R", "G", "B"],
         Aov::ObjectId | Aov::PrimitiveId => &[],
+    }
+}
+
+/// The channel names of `passes` as an EXR output names them (`depth.Z`, `normal.X`, …,
+/// `object_id`), in order: what `--display-server` sends beside R, G and B.
+pub fn channel_names(passes: &Passes) -> Vec<String> {
+    let mut names = Vec::new();
+    for &p in &passes.0 {
+        match channels(p) {
+            [] => names.push(p.name().to_owned()),
+            chs => names.extend(chs.iter().map(|ch| format!("{}.{ch}", p.name()))),
+        }
+    }
+    names
+}
+
+/// Appends the values of `passes` for one pixel, in [`channel_names`]' order, as floats (an
+/// id as its number, −1 for none).
+pub fn push_values(passes: &Passes, px: &AovPixel, out: &mut Vec<f32>) {
+    let id = |v: u32| if v == NO_ID { -1.0 } else { v as f32 };
+    for &p in &passes.0 {
+        match p {
+            Aov::Depth => out.push(px.depth),
+            Aov::Normal => out.extend(px.normal.to_array()),
+            Aov::Albedo => out.extend(px.albedo.to_array()),
+            Aov::Position => out.extend(px.position.to_array()),
+            Aov::ObjectId => out.push(id(px.object_id)),
+            Aov::PrimitiveId => out.push(id(px.primitive_id)),
+        }
     }
 }
 

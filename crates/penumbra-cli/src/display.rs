@@ -12,6 +12,10 @@
 //!   width, height (`i32`), per channel an offset then (after all offsets) a stride (`i64`, in
 //!   floats), then the `f32` data: channel c of pixel p at `offset[c] + p·stride[c]`.
 //!
+//! The channels are R, G, B (the film's linear RGB) and, with `--aov`, the passes named as an
+//! EXR output names them (`depth.Z`, `normal.X`, …; ids as numbers, −1 for none),
+//! interleaved pixel by pixel.
+//!
 //! # Never in the render's way
 //!
 //! Workers hand each finished tile to a channel and go on; one thread of the preview's own
@@ -25,7 +29,9 @@ use std::sync::mpsc::{channel, Sender};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use penumbra::{PixelBounds, Rgb};
+use penumbra::{AovPixel, PixelBounds, Rgb};
+
+use crate::aov::{self, Passes};
 
 /// tev's default port, as pbrt's `--display-server` uses it.
 pub const DEFAULT_PORT: u16 = 14158;
@@ -42,8 +48,8 @@ const BATCH: usize = 1 << 20;
 const CREATE_IMAGE: u8 = 4;
 const UPDATE_IMAGE_V3: u8 = 6;
 
-/// The channels penumbra sends: the film's linear RGB.
-const CHANNELS: [&str; 3] = ["R", "G", "B"];
+/// The film's channels, sent first.
+const RGB: [&str; 3] = ["R", "G", "B"];
 
 /// `HOST` or `HOST:PORT` with the default port filled in.
 pub fn address(server: &str) -> String {
@@ -103,28 +109,28 @@ impl Packet {
     }
 }
 
-/// CreateImage for an image of `width × height` with the RGB channels.
-fn create_image(name: &str, width: u32, height: u32) -> Vec<u8> {
+/// CreateImage for an image of `width × height` with `channels`.
+fn create_image(name: &str, width: u32, height: u32, channels: &[String]) -> Vec<u8> {
     let p = Packet::new(CREATE_IMAGE).bool(true).string(name);
     let p = p
         .i32(width as i32)
         .i32(height as i32)
-        .i32(CHANNELS.len() as i32);
-    CHANNELS.iter().fold(p, |p, c| p.string(c)).bytes()
+        .i32(channels.len() as i32);
+    channels.iter().fold(p, |p, c| p.string(c)).bytes()
 }
 
-/// UpdateImageV3 for the tile `bounds`, its pixels interleaved RGB (offsets 0, 1, 2; stride 3).
-fn update_image(name: &str, bounds: &PixelBounds, pixels: &[Rgb]) -> Vec<u8> {
+/// UpdateImageV3 for the tile `bounds`: `values` holds each pixel's `channels` in turn
+/// (channel c at offset c, stride the channel count).
+fn update_image(name: &str, channels: &[String], bounds: &PixelBounds, values: &[f32]) -> Vec<u8> {
+    let n = channels.len();
     let p = Packet::new(UPDATE_IMAGE_V3).bool(false).string(name);
-    let p = CHANNELS
-        .iter()
-        .fold(p.i32(CHANNELS.len() as i32), |p, c| p.string(c));
+    let p = channels.iter().fold(p.i32(n as i32), |p, c| p.string(c));
     let (w, h) = (bounds.x1 - bounds.x0, bounds.y1 - bounds.y0);
     let p = p.i32(bounds.x0 as i32).i32(bounds.y0 as i32);
     let p = p.i32(w as i32).i32(h as i32);
-    let p = (0..3).fold(p, |p, c| p.i64(c));
-    let p = (0..3).fold(p, |p, _| p.i64(3));
-    p.f32s(pixels.iter().flat_map(|c| [c.x, c.y, c.z])).bytes()
+    let p = (0..n as i64).fold(p, |p, c| p.i64(c));
+    let p = (0..n).fold(p, |p, _| p.i64(n as i64));
+    p.f32s(values.iter().copied()).bytes()
 }
 
 /// A connection to a viewer, fed tiles from the render's workers.
@@ -133,6 +139,9 @@ pub struct Preview {
     packets: Option<Sender<Vec<u8>>>,
     writer: Option<JoinHandle<()>>,
     name: String,
+    /// R, G, B, then the passes' channels.
+    channels: Vec<String>,
+    passes: Passes,
 }
 
 impl Preview {
@@ -175,18 +184,37 @@ impl Preview {
             packets: Some(tx),
             writer: Some(writer),
             name: String::new(),
+            channels: Vec::new(),
+            passes: Passes(Vec::new()),
         })
     }
 
-    /// Starts a new image in the viewer, named `name` (the output's name), of the film's size.
-    pub fn begin(&mut self, name: &str, width: u32, height: u32) {
+    /// Starts a new image in the viewer, named `name` (the output's name), of the film's size,
+    /// with the channels of `passes` beside R, G and B.
+    pub fn begin(&mut self, name: &str, width: u32, height: u32, passes: &Passes) {
         self.name = name.to_owned();
-        self.send(create_image(name, width, height));
+        self.channels = RGB.iter().map(|c| c.to_string()).collect();
+        self.channels.extend(aov::channel_names(passes));
+        self.passes = passes.clone();
+        self.send(create_image(name, width, height, &self.channels));
     }
 
-    /// Shows one finished tile (called from the render's workers).
-    pub fn tile(&self, bounds: &PixelBounds, pixels: &[Rgb]) {
-        self.send(update_image(&self.name, bounds, pixels));
+    /// Shows one finished tile (called from the render's workers); `aovs` is empty or holds
+    /// the pixels' AOVs.
+    pub fn tile(&self, bounds: &PixelBounds, pixels: &[Rgb], aovs: &[AovPixel]) {
+        let mut values = Vec::with_capacity(pixels.len() * self.channels.len());
+        for (i, c) in pixels.iter().enumerate() {
+            values.extend(c.to_array());
+            if let Some(px) = aovs.get(i) {
+                aov::push_values(&self.passes, px, &mut values);
+            }
+        }
+        // Without AOVs (a progressive pass) only the colour channels are sent.
+        let channels = match aovs.is_empty() {
+            true => &self.channels[..RGB.len()],
+            false => &self.channels[..],
+        };
+        self.send(update_image(&self.name, channels, bounds, &values));
     }
 
     fn send(&self, packet: Vec<u8>) {
@@ -219,7 +247,8 @@ mod tests {
 
     #[test]
     fn packets_carry_their_length_and_fields() {
-        let p = create_image("a", 2, 1);
+        let rgb: Vec<String> = RGB.iter().map(|c| c.to_string()).collect();
+        let p = create_image("a", 2, 1, &rgb);
         assert_eq!(
             u32::from_le_bytes(p[..4].try_into().unwrap()) as usize,
             p.len()
@@ -233,7 +262,7 @@ mod tests {
             y0: 0,
             y1: 1,
         };
-        let u = update_image("a", &b, &[Rgb::new(0.5, 1.0, 2.0)]);
+        let u = update_image("a", &rgb, &b, &[0.5, 1.0, 2.0]);
         assert_eq!(
             u32::from_le_bytes(u[..4].try_into().unwrap()) as usize,
             u.len()

@@ -8,11 +8,11 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderSettings, Rgb, Scene,
-    SceneFile, SettingsError, View, World, MAX_THREADS,
+    AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderSettings,
+    Rgb, Scene, SceneFile, SettingsError, View, World, MAX_THREADS,
 };
 
-use crate::aov;
+use crate::aov::{self, Passes};
 use crate::args::RenderArgs;
 use crate::cameras;
 use crate::display::Preview;
@@ -60,10 +60,12 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     for job in &jobs {
         job.output.make_folder()?;
         if let Some(p) = preview.as_mut() {
+            let passes = args.aov.clone().unwrap_or(Passes(Vec::new()));
             p.begin(
                 &job.output.display(),
                 job.settings.width,
                 job.settings.height,
+                &passes,
             );
         }
         // With --progressive, the image of the last finished pass: what Ctrl-C writes.
@@ -72,9 +74,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             let mut last = last_pass.lock().unwrap_or_else(|e| e.into_inner());
             *last = Some((pass.samples, pass.film.clone()));
         };
-        let show = |tile: &PixelBounds, pixels: &[Rgb]| {
+        let show = |tile: &PixelBounds, pixels: &[Rgb], aovs: &[AovPixel]| {
             if let Some(p) = preview.as_ref() {
-                p.tile(tile, pixels);
+                p.tile(tile, pixels, aovs);
             }
         };
         let options = RenderOptions {

@@ -55,14 +55,30 @@ impl Fields<'_> {
     }
 }
 
-/// What the fake viewer saw: the image created, and its pixels (RGB, rows top to bottom) with
-/// how many times each was sent.
+/// What the fake viewer saw: the image created, its channels, and its pixels (every channel,
+/// rows top to bottom) with how many times each was sent.
 #[derive(Debug, Default)]
 struct Seen {
     name: String,
     size: (usize, usize),
+    channels: Vec<String>,
     pixels: Vec<f32>,
     sent: Vec<u32>,
+}
+
+impl Seen {
+    /// Channel `name` of every pixel.
+    fn channel(&self, name: &str) -> Vec<f32> {
+        let n = self.channels.len();
+        let c = self.channels.iter().position(|x| x == name).unwrap();
+        self.pixels.iter().skip(c).step_by(n).copied().collect()
+    }
+
+    /// R, G and B of every pixel, interleaved.
+    fn rgb(&self) -> Vec<f32> {
+        let [r, g, b] = ["R", "G", "B"].map(|c| self.channel(c));
+        (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect()
+    }
 }
 
 /// Reads packets from `stream` until it closes.
@@ -80,11 +96,11 @@ fn serve(mut stream: TcpStream) -> Seen {
                 assert!(p.bool(), "CreateImage grabs focus");
                 seen.name = p.string();
                 let (w, h) = (p.i32() as usize, p.i32() as usize);
-                assert_eq!(p.i32(), 3);
-                let names: Vec<String> = (0..3).map(|_| p.string()).collect();
-                assert_eq!(names, ["R", "G", "B"]);
+                let n = p.i32() as usize;
+                seen.channels = (0..n).map(|_| p.string()).collect();
+                assert_eq!(seen.channels[..3], ["R", "G", "B"]);
                 seen.size = (w, h);
-                seen.pixels = vec![f32::NAN; w * h * 3];
+                seen.pixels = vec![f32::NAN; w * h * n];
                 seen.sent = vec![0; w * h];
             }
             6 => {
@@ -92,18 +108,19 @@ fn serve(mut stream: TcpStream) -> Seen {
                 assert_eq!(p.string(), seen.name);
                 let n = p.i32() as usize;
                 let names: Vec<String> = (0..n).map(|_| p.string()).collect();
-                assert_eq!(names, ["R", "G", "B"]);
+                assert_eq!(names, seen.channels[..n], "known channels, in order");
                 let [x, y, w, h] = [0; 4].map(|_| p.i32() as usize);
                 let offsets: Vec<i64> = (0..n).map(|_| p.i64()).collect();
                 let strides: Vec<i64> = (0..n).map(|_| p.i64()).collect();
                 let data: Vec<f32> =
                     std::iter::from_fn(|| (!p.0.is_empty()).then(|| p.f32())).collect();
+                let all = seen.channels.len();
                 for k in 0..w * h {
                     let at = (y + k / w) * seen.size.0 + x + k % w;
                     seen.sent[at] += 1;
                     for c in 0..n {
                         let i = (offsets[c] + k as i64 * strides[c]) as usize;
-                        seen.pixels[at * 3 + c] = data[i];
+                        seen.pixels[at * all + c] = data[i];
                     }
                 }
             }
@@ -148,10 +165,7 @@ fn the_viewer_sees_every_tile_of_the_image_written() {
     let (w, h, channels, file) = read_pfm(&out);
     assert_eq!((w, h, channels), (100, 70, 3));
     let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
-    assert!(
-        same(&seen.pixels, &file),
-        "the viewer's image is the file's"
-    );
+    assert!(same(&seen.rgb(), &file), "the viewer's image is the file's");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -185,10 +199,57 @@ fn progressive_passes_reach_the_viewer_and_end_in_the_same_file() {
     assert!(seen.sent.iter().all(|&n| n == 5), "five passes");
     let (_, _, _, file) = read_pfm(&passes);
     assert!(seen
-        .pixels
+        .rgb()
         .iter()
         .zip(&file)
         .all(|(a, b)| a.to_bits() == b.to_bits()));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn passes_asked_for_are_channels_of_the_viewers_image() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let viewer = thread::spawn(move || serve(listener.accept().unwrap().0));
+    let dir = std::env::temp_dir().join(format!("penumbra-aovview-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("a.pfm");
+    let size = [
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--aov",
+        "depth,normal,object_id",
+    ];
+    let mut args: Vec<&str> = vec!["render", "scenes/cornell.toml"];
+    args.extend(size);
+    args.extend(["--display-server", &address, "-o", out.to_str().unwrap()]);
+    ok(run_in(&repository(), args));
+    let seen = viewer.join().unwrap();
+    let names = [
+        "R",
+        "G",
+        "B",
+        "depth.Z",
+        "normal.X",
+        "normal.Y",
+        "normal.Z",
+        "object_id",
+    ];
+    assert_eq!(seen.channels, names);
+    // As the files beside the image hold them.
+    let (_, _, _, depth) = read_pfm(&dir.join("a.depth.pfm"));
+    let (_, _, _, normal) = read_pfm(&dir.join("a.normal.pfm"));
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&seen.channel("depth.Z")), bits(&depth));
+    let nx: Vec<f32> = normal.iter().step_by(3).copied().collect();
+    assert_eq!(bits(&seen.channel("normal.X")), bits(&nx));
+    let ids = seen.channel("object_id");
+    assert!(ids
+        .iter()
+        .all(|&v| v == -1.0 || (v >= 0.0 && v.fract() == 0.0)));
+    assert!(ids.iter().any(|&v| v >= 0.0));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -48,9 +48,9 @@ pub struct PixelBounds {
     pub y1: u32,
 }
 
-/// What receives finished tiles: their bounds and linear RGB pixels (see
+/// What receives finished tiles: their bounds, linear RGB pixels and AOVs (see
 /// [`RenderOptions::tiles`]).
-pub type TileSink<'a> = dyn Fn(&PixelBounds, &[Rgb]) + Sync + 'a;
+pub type TileSink<'a> = dyn Fn(&PixelBounds, &[Rgb], &[AovPixel]) + Sync + 'a;
 
 /// How to run a render: threads, region, cancellation and progress (what it shows is in the
 /// [`RenderSettings`]).
@@ -65,9 +65,10 @@ pub struct RenderOptions<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Called from worker threads after each tile with (pixels done, pixels in all).
     pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
-    /// Called from worker threads as each tile is finished, with its bounds (in film pixels)
-    /// and its linear RGB pixels row by row: what a live preview shows. Tiles finish in any
-    /// order; the film gets the same values.
+    /// Called from worker threads as each tile is finished, with its bounds (in film pixels),
+    /// its linear RGB pixels row by row and their AOVs (empty unless the render computes
+    /// them): what a live preview shows. Tiles finish in any order; the film gets the same
+    /// values.
     pub tiles: Option<&'a TileSink<'a>>,
     /// Progressive rendering: the samples of every pixel are taken in passes over the whole
     /// film (1, 2, 4, … samples in all, see [`Pass`]) and this is called on the calling
@@ -349,7 +350,7 @@ fn render_impl(
                     store(&film, region, &tile, values, aovs);
                     if let Some(show) = options.tiles {
                         let shown: Vec<Rgb> = values.iter().map(|&v| v / count).collect();
-                        show(&tile, &shown);
+                        show(&tile, &shown, aovs);
                     }
                     let n = values.len() as u64 * samples.len() as u64;
                     let d = done.fetch_add(n, Ordering::Relaxed) + n;
