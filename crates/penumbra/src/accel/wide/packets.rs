@@ -19,7 +19,7 @@
 
 use super::kernels::Control;
 use super::node::WIDTH;
-use super::tree::{tie_bound, SlotHit, Stack, WideBvh, EXIT_SCALE};
+use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, PreparedRay, T_LIMIT};
@@ -152,7 +152,6 @@ fn trace<const N: usize, I: Isa>(
     while let Some((index, count, mask)) = stack.pop() {
         if count == 0 {
             let node = &accel.wide()[index as usize];
-            let bound = best.t.map(tie_bound);
             // Children the packet enters, the one its first lane enters first on top.
             let mut kids = [(0u32, 0u32, 0u32, 0.0f32); WIDTH];
             let mut n = 0;
@@ -161,7 +160,7 @@ fn trace<const N: usize, I: Isa>(
                 if !node.used(c) {
                     break;
                 }
-                let (m, near) = slab::<N, I>(node.bounds(c), lanes, &bound);
+                let (m, near) = slab::<N, I>(node.bounds(c), lanes, &best.t);
                 let m = m & mask;
                 if m != 0 {
                     kids[n] = (child, child_count, m, near[mask.trailing_zeros() as usize]);
@@ -207,8 +206,9 @@ fn trace<const N: usize, I: Isa>(
 }
 
 /// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
-/// `[0, t_max[i]]` (the tie bound of the lane's closest hit), and each lane's entry distance:
-/// the conservative test of `node`, per lane ([`crate::accel::lanes::slab`]).
+/// `[0, tie_bound(t_max[i])]` (`t_max[i]` the lane's closest hit; `lanes::slab` widens it),
+/// and each lane's entry distance: the conservative test of `node`, per lane
+/// ([`crate::accel::lanes::slab`]).
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     (lo, hi): ([f32; 3], [f32; 3]),
