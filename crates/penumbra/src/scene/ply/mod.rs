@@ -39,6 +39,8 @@ mod roles;
 mod rows;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_errors;
 mod texcoords;
 
 use std::fmt;
