@@ -258,18 +258,7 @@ impl Instances {
     /// queries of `instance_batches` do, so a shadow ray gets the same answer whichever way it
     /// was grouped.
     pub(super) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
-        if self.top.nodes.is_empty() {
-            return false;
-        }
-        let world = Vec3A::from(end - origin);
-        let (o, inv_dir) = (Vec3A::from(origin), world.recip());
-        traverse::walk_any(&self.top.nodes, o, inv_dir, 0.0, t_max, |slots| {
-            self.top.prim_ids[slots].iter().any(|&index| {
-                let (map, mesh) = self.placement(index);
-                let (a, b) = (map.transform_point3(origin), map.transform_point3(end));
-                traverse::occluded(mesh, &Ray::new(a, b - a), 0.0, t_max)
-            })
-        })
+        self.occludes_segment_kept(origin, end, t_max, |_, _, _, _| true)
     }
 
     /// [`Instances::occludes_segment`] counting only the hits `keep(placement, triangle, b1,

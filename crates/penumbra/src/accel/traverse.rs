@@ -183,17 +183,11 @@ pub(super) fn intersect_kept(
     })
 }
 
-/// True when any triangle meets the ray with `t` in `(t_min, t_max)`; stops at the first.
+/// True when any triangle meets the ray with `t` in `(t_min, t_max)`; stops at the first:
+/// [`occluded_kept`] keeping every hit.
+#[inline(always)]
 pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-    if bvh.nodes.is_empty() {
-        return false;
-    }
-    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
-        bvh.tris[slots]
-            .iter()
-            .any(|tri| tri.hit(ray, t_min, t_max).is_some())
-    })
+    occluded_kept(bvh, ray, t_min, t_max, |_, _, _| true)
 }
 
 /// True when a triangle meets the ray with `t` in `(t_min, t_max)` at a hit that
@@ -210,10 +204,10 @@ pub(super) fn occluded_kept(
     }
     let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
     walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
-        slots.into_iter().any(|i| {
-            bvh.tris[i]
-                .hit(ray, t_min, t_max)
-                .is_some_and(|h| keep(bvh.prim_ids[i], h.b1, h.b2))
+        let (tris, ids) = (&bvh.tris[slots.clone()], &bvh.prim_ids[slots]);
+        tris.iter().zip(ids).any(|(tri, &id)| {
+            tri.hit(ray, t_min, t_max)
+                .is_some_and(|h| keep(id, h.b1, h.b2))
         })
     })
 }
