@@ -108,6 +108,12 @@ impl Instances {
         self.placements.is_empty()
     }
 
+    /// The tree of each mesh, by mesh index (all of a world's meshes when it has instances,
+    /// whichever set places them).
+    pub(crate) fn mesh_trees(&self) -> &[Bvh] {
+        &self.meshes
+    }
+
     /// Number of instances.
     pub fn len(&self) -> usize {
         self.placements.len()
@@ -309,7 +315,7 @@ pub(super) fn closer(a: &Hit, b: &Hit) -> bool {
 /// The world-space box of `mesh` placed by `transform`: its root box placed, grown by a
 /// relative 2⁻¹⁶ of its size and position for the rounding of the map, so that it holds every
 /// point a ray can hit on the placed mesh.
-fn world_box(mesh: &Bvh, transform: &Transform) -> Aabb {
+pub(super) fn world_box(mesh: &Bvh, transform: &Transform) -> Aabb {
     let Some(root) = mesh.nodes.first() else {
         return Aabb::EMPTY;
     };
@@ -322,7 +328,7 @@ fn world_box(mesh: &Bvh, transform: &Transform) -> Aabb {
 }
 
 /// The world-to-object map of `transform`, inverted in double precision.
-fn inverse(transform: &Transform) -> Affine3A {
+pub(super) fn inverse(transform: &Transform) -> Affine3A {
     let m = transform.world_from_object.as_dmat4().inverse();
     Affine3A::from_mat4(DMat4::as_mat4(&m))
 }

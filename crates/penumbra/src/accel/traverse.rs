@@ -235,13 +235,26 @@ pub(super) fn slab(
     t_min: f32,
     t_max: f32,
 ) -> Option<f32> {
+    slab_scaled(node, origin, inv_dir, (t_min, t_max), 1.0)
+}
+
+/// [`slab`] with the box's exit distance scaled by `exit_scale`: ray casting's top level
+/// passes `wide::EXIT_SCALE` (Ize's conservative test, as its wide nodes do), the renderer 1.
+#[inline(always)]
+pub(super) fn slab_scaled(
+    node: &BvhNode,
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    (t_min, t_max): (f32, f32),
+    exit_scale: f32,
+) -> Option<f32> {
     // With padded boxes (see `build::node`), `bound − origin` is zero only for rays outside the
     // true box, so a NaN from 0·∞ can only turn a miss into a miss: SIMD min/max need no NaN
     // care.
     let t0 = (Vec3A::from(node.min) - origin) * inv_dir;
     let t1 = (Vec3A::from(node.max) - origin) * inv_dir;
     let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element();
+    let far = t0.max(t1).min_element() * exit_scale;
     let near = if near > t_min { near } else { t_min };
     // Widened as `lanes::slab` widens it, so that a box holding a tie is visited in any order.
     let t_max = tie_bound(t_max);

@@ -1,112 +1,114 @@
 //! Geometries placed by a transform: a world's objects and instances
-//! ([`RaycastingScene::from_world`]), and copies of a geometry
+//! ([`RaycastingScene::from_world`]), and placed copies of a geometry
 //! ([`RaycastingScene::add_instance`]).
 //!
-//! Ray casting copies an instance's triangles into its scene, placed by
-//! [`Geometry::append`], exactly where the renderer's world puts them; rendering shares one
-//! mesh among its instances, ray casting's own hierarchy does not (yet).
+//! A placed geometry is not copied: its mesh is built once into a tree of its own and each
+//! placement enters it through its inverse (`accel::wide::levels`), as the renderer's
+//! instances do. A world's trees are not built again either: its own tree and its meshes'
+//! trees are viewed eight children at a time as they are.
 //!
 //! A world's cut-out materials come along: every ray query (closest hit, occlusion, counting
 //! and listing, and through them occupancy and the sign of the signed distance) skips a
 //! crossing where the triangle's alpha test cuts it away, after the watertight test found it
 //! (so a ray through the shared edge of a kept and a cut triangle hits, or not, as the
 //! triangle the edge rule picks says). The closest-point queries (and distances) ignore
-//! alpha: they are not rays. A copy made by [`RaycastingScene::add_instance`] keeps its
+//! alpha: they are not rays. A placement made by [`RaycastingScene::add_instance`] keeps its
 //! geometry's alpha tests; triangles added by [`RaycastingScene::add_triangles`] are opaque.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::lazy::{Span, Triangles};
-use super::run::budget;
-use super::{fits, RaycastError, RaycastingScene};
+use super::lazy::{LazyAccel, Span, Triangles};
+use super::{RaycastError, RaycastingScene, INVALID_ID};
+use crate::accel::wide::levels::{Placement, WideLevels};
+use crate::accel::wide::WideBvh;
 use crate::accel::AlphaTests;
 use crate::geometry::{material_of, Geometry, Mesh, Triangle};
 use crate::math::Transform;
 use crate::scale::MAX_COORDINATE;
 use crate::world::World;
 
-/// Bytes a scene keeps per vertex (its position) and per triangle (the triangle and its
-/// primitive id).
-const VERTEX_BYTES: usize = 12;
-const TRIANGLE_BYTES: usize = std::mem::size_of::<Triangle>() + 4;
-
 impl RaycastingScene {
     /// The triangles of `world`, one geometry per object of the world, instances included
     /// (geometry id = object id; primitive ids count the object's triangles in the order it
-    /// added them, or an instance's mesh's). An instance's triangles are copied, placed
-    /// where the renderer places them. Cut-out materials come along: a ray passes through
-    /// a triangle where its material's alpha test cuts it away, in every ray query (the
-    /// closest-point queries ignore alpha; see the module doc).
-    ///
-    /// `Err(TooManyTriangles)` when the copies would hold more than
-    /// [`MAX_TRIANGLES`](crate::MAX_TRIANGLES) triangles (or 2³² vertices), and
-    /// `Err(OutOfMemory)` when they need more memory than the process may take.
+    /// added them, or an instance's mesh's). An instance places its mesh's tree, as in the
+    /// renderer; the world's trees are used as they are, not built again (with cut-out
+    /// materials, the world's own tree holds its opaque triangles only, and ray casting builds
+    /// one over all of them on the first query). Cut-out materials come along: a ray passes
+    /// through a triangle where its material's alpha test cuts it away, in every ray query
+    /// (the closest-point queries ignore alpha; see the module doc).
     pub fn from_world(world: &World) -> Result<RaycastingScene, RaycastError> {
         let own = world.geometry();
-        let placed = world.placed();
-        let meshes = world.meshes();
         let objects = own
             .triangles
             .iter()
             .map(|t| t.object)
-            .chain(placed.iter().map(|p| p.object))
+            .chain(world.placed().iter().map(|p| p.object))
             .map(|o| o + 1)
             .max()
             .unwrap_or(0);
-        let (vertices, triangles) = placed
-            .iter()
-            .map(|p| &meshes[p.mesh as usize])
-            .fold((own.positions.len(), own.len()), |(v, t), m| {
-                (v + m.positions.len(), t + m.len())
-            });
-        fits(vertices, triangles)?;
-        budget(
-            &[(vertices, VERTEX_BYTES), (triangles, TRIANGLE_BYTES)],
-            "the triangles",
-        )?;
+        let local_ids = local_ids(own, objects);
         let mut all = Triangles {
             geometry: Geometry {
                 positions: own.positions.clone(),
                 triangles: own.triangles.clone(),
                 ..Geometry::default()
             },
-            local_ids: local_ids(own, objects),
             spans: spans(own, objects),
-            alpha: None,
+            alpha: own_alpha(world).map(Arc::new),
+            meshes: mesh_trees(world),
+            mesh_of: HashMap::new(),
+            placed: HashMap::new(),
+            placements: Vec::new(),
+            local_ids,
         };
-        for p in placed {
-            let copy = place(&meshes[p.mesh as usize], &p.transform, p.object);
-            all.push(
-                copy.positions,
-                copy.triangles.iter().map(|t| t.vertices),
-                p.object,
-            );
+        let mut alphas = HashMap::new();
+        for p in world.placed() {
+            let materials = world.instance_materials(p);
+            let alpha = alphas
+                .entry((p.mesh, materials.to_vec()))
+                .or_insert_with(|| placed_alpha(world, p.mesh, materials).map(Arc::new))
+                .clone();
+            all.placed.insert(p.object, all.placements.len() as u32);
+            all.placements.push(Placement {
+                mesh: p.mesh,
+                geometry: p.object,
+                transform: p.transform,
+                alpha,
+            });
         }
-        all.alpha = alpha_tests(world).map(Arc::new);
+        let accel = LazyAccel::default();
+        if !world.accel().has_cutouts() {
+            let t = &all;
+            let ids = |i: usize| [t.geometry.triangles[i].object, t.local_ids[i]];
+            let tree = WideBvh::from_bvh(world.accel().flat().clone(), |i| own.corners(i), ids);
+            let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
+            let levels = WideLevels::new(tree, t.alpha.clone(), meshes, t.placements.clone(), None);
+            accel.set(Arc::new(levels));
+        }
         Ok(RaycastingScene {
             triangles: Arc::new(all),
             geometries: objects,
+            accel,
             ..RaycastingScene::default()
         })
     }
 
-    /// Adds a copy of geometry `geometry_id` placed by `transform`, a row-major object-to-world
-    /// matrix whose last row is `[0, 0, 0, 1]` (mirrors and non-uniform scales included);
-    /// returns the copy's geometry id. Its primitive ids are those of `geometry_id`'s
-    /// triangles. This extends Open3D's API, which has no instances. The triangles are
-    /// copied (ray casting does not share them as rendering does), so a copy costs the
-    /// memory of its geometry.
+    /// Adds geometry `geometry_id` placed by `transform`, a row-major object-to-world matrix
+    /// whose last row is `[0, 0, 0, 1]` (mirrors and non-uniform scales included); returns
+    /// the placement's geometry id. Its primitive ids are those of `geometry_id`'s triangles.
+    /// This extends Open3D's API, which has no instances. The triangles are not copied: the
+    /// geometry is built once into a tree of its own (on its first placement) that every
+    /// placement of it shares, so a placement costs about 150 bytes.
     ///
     /// Nothing is added, and the error says why, when `geometry_id` is not a geometry
     /// ([`RaycastError::UnknownGeometry`]), an entry of `transform` is not finite
     /// ([`RaycastError::TransformNotFinite`]), its last row is not `[0, 0, 0, 1]`
     /// ([`RaycastError::TransformNotAffine`]), it cannot be inverted
-    /// ([`RaycastError::SingularTransform`]), a placed vertex lands beyond
-    /// ±[`MAX_COORDINATE`] ([`RaycastError::Beyond`], `what` = `"placed vertex"`), or the
-    /// scene would hold more than [`MAX_TRIANGLES`](crate::MAX_TRIANGLES) triangles
-    /// ([`RaycastError::TooManyTriangles`]).
+    /// ([`RaycastError::SingularTransform`]), or a placed vertex lands beyond
+    /// ±[`MAX_COORDINATE`] ([`RaycastError::Beyond`], `what` = `"placed vertex"`).
     pub fn add_instance(
         &mut self,
         geometry_id: u32,
@@ -119,34 +121,61 @@ impl RaycastingScene {
             });
         }
         let transform = checked_transform(transform)?;
-        let mesh = self.triangles.mesh(geometry_id);
-        let all = &self.triangles.geometry;
-        fits(
-            all.positions.len() + mesh.positions.len(),
-            all.len() + mesh.len(),
-        )?;
+        if self.geometries == INVALID_ID - 1 {
+            return Err(RaycastError::TooManyTriangles);
+        }
         let id = self.geometries;
-        let copy = place(&mesh, &transform, id);
-        if let Some(index) = copy.positions.iter().position(|&p| !within_range(p)) {
-            return Err(RaycastError::Beyond {
-                what: "placed vertex",
-                index,
-            });
+        let scene = &self.triangles;
+        // A placement of a placement places the same mesh, the two maps composed; an own
+        // geometry is built into a mesh tree on its first placement.
+        let (mesh, transform, alpha) = match scene.placed.get(&geometry_id) {
+            Some(&p) => {
+                let p = &scene.placements[p as usize];
+                let both = transform.world_from_object * p.transform.world_from_object;
+                (Ok(p.mesh), Transform::from_matrix(both), p.alpha.clone())
+            }
+            None => match scene.mesh_of.get(&geometry_id) {
+                Some((m, alpha)) => (Ok(*m), transform, alpha.clone()),
+                None => {
+                    let alpha = scene.own_alpha_of(geometry_id).map(Arc::new);
+                    (Err(scene.mesh_tree(geometry_id)), transform, alpha)
+                }
+            },
+        };
+        let positions = match &mesh {
+            Ok(m) => &scene.meshes[*m as usize].1,
+            Err((_, positions)) => positions,
+        };
+        if let Some(index) = positions
+            .iter()
+            .position(|&p| !within_range(transform.point(p)))
+        {
+            let what = "placed vertex";
+            return Err(RaycastError::Beyond { what, index });
         }
         // As in `add_triangles`: forget the structure before the triangles are changed.
         self.accel.reset();
-        let triangles = Arc::make_mut(&mut self.triangles);
-        let first = triangles.geometry.len();
-        triangles.push(
-            copy.positions,
-            copy.triangles.iter().map(|t| t.vertices),
-            id,
-        );
-        triangles.copy_alpha(geometry_id, first);
+        let scene = Arc::make_mut(&mut self.triangles);
+        let mesh = mesh.unwrap_or_else(|tree| {
+            scene.meshes.push(tree);
+            let m = scene.meshes.len() as u32 - 1;
+            scene.mesh_of.insert(geometry_id, (m, alpha.clone()));
+            m
+        });
+        scene.placed.insert(id, scene.placements.len() as u32);
+        scene.placements.push(Placement {
+            mesh,
+            geometry: id,
+            transform,
+            alpha,
+        });
         self.geometries += 1;
         Ok(id)
     }
 }
+
+/// A mesh's tree and its vertices (to check where a placement puts them).
+pub(super) type MeshTree = (Arc<WideBvh>, Arc<[Vec3]>);
 
 impl Triangles {
     /// Appends geometry `id`: `positions`, and `triangles` indexing them (the primitive ids
@@ -185,69 +214,42 @@ impl Triangles {
         };
     }
 
-    /// Gives the triangles from `first` on (a copy of geometry `id` just pushed) the alpha
-    /// tests of `id`'s triangles, in primitive-id order.
-    fn copy_alpha(&mut self, id: u32, first: usize) {
-        let Some(alpha) = &mut self.alpha else {
-            return;
-        };
-        let alpha = Arc::make_mut(alpha);
+    /// The triangle indices of own geometry `id`, in primitive-id order.
+    fn own_triangles(&self, id: u32) -> impl Iterator<Item = usize> + '_ {
         let span = self.spans[id as usize].triangles.clone();
-        let own = (span.start as usize..span.end as usize)
-            .filter(|&i| self.geometry.triangles[i].object == id);
-        for (k, i) in own.enumerate() {
-            alpha.set_copy(first + k, i);
-        }
+        (span.start as usize..span.end as usize)
+            .filter(move |&i| self.geometry.triangles[i].object == id)
     }
 
-    /// Geometry `id` as a mesh of its own: its vertices, and its triangles in primitive-id
-    /// order.
-    fn mesh(&self, id: u32) -> Mesh {
-        let Span {
-            vertices,
-            triangles,
-        } = self.spans[id as usize].clone();
-        let range = |r: std::ops::Range<u32>| r.start as usize..r.end as usize;
-        Mesh {
-            positions: self.geometry.positions[range(vertices.clone())].to_vec(),
-            indices: self.geometry.triangles[range(triangles)]
-                .iter()
-                .filter(|t| t.object == id)
-                .map(|t| t.vertices.map(|v| v - vertices.start))
+    /// The alpha tests of own geometry `id`'s triangles in primitive-id order, when some may
+    /// cut.
+    fn own_alpha_of(&self, id: u32) -> Option<AlphaTests> {
+        let alpha = self.alpha.as_ref()?.subset(self.own_triangles(id));
+        alpha.any_triangle_cuts().then_some(alpha)
+    }
+
+    /// The tree of own geometry `id` as a mesh of its own.
+    fn mesh_tree(&self, id: u32) -> MeshTree {
+        let vertices = self.spans[id as usize].vertices.clone();
+        let positions: Arc<[Vec3]> =
+            self.geometry.positions[vertices.start as usize..vertices.end as usize].into();
+        let mesh = Mesh {
+            positions: positions.to_vec(),
+            indices: self
+                .own_triangles(id)
+                .map(|i| {
+                    self.geometry.triangles[i]
+                        .vertices
+                        .map(|v| v - vertices.start)
+                })
                 .collect(),
             ..Mesh::default()
-        }
+        };
+        let mut geometry = Geometry::default();
+        geometry.append(&mesh, &Transform::IDENTITY, &[], 0);
+        let ids: Vec<u32> = (0..mesh.len() as u32).collect();
+        (Arc::new(WideBvh::build(&geometry, &ids, None)), positions)
     }
-}
-
-/// The alpha tests of `world`'s triangles in the order `from_world` copies them (its own,
-/// then each instance's mesh), or `None` when none may be cut out.
-fn alpha_tests(world: &World) -> Option<AlphaTests> {
-    let mut alpha = AlphaTests::of(world.materials(), world.textures())?;
-    let own = world.geometry();
-    for i in 0..own.len() {
-        alpha.push_flat(own, i);
-    }
-    for p in world.placed() {
-        let mesh = &world.meshes()[p.mesh as usize];
-        let materials = world.instance_materials(p);
-        for (i, t) in mesh.indices.iter().enumerate() {
-            let uv = match mesh.has_uvs() {
-                true => t.map(|v| mesh.uvs[v as usize]),
-                false => Default::default(),
-            };
-            alpha.push_triangle(uv, material_of(mesh.slot(i), materials));
-        }
-    }
-    alpha.any_triangle_cuts().then_some(alpha)
-}
-
-/// `mesh` placed by `transform` as object `id`, by [`Geometry::append`]: where the renderer's
-/// world puts an instance's triangles.
-fn place(mesh: &Mesh, transform: &Transform, id: u32) -> Geometry {
-    let mut placed = Geometry::default();
-    placed.append(mesh, transform, &[], id);
-    placed
 }
 
 /// The transform of a row-major 4×4 object-to-world matrix: finite, affine (last row
@@ -272,6 +274,54 @@ pub(super) fn checked_transform(rows: &[[f32; 4]; 4]) -> Result<Transform, Rayca
 /// True when every coordinate of `p` is finite and within ±[`MAX_COORDINATE`].
 fn within_range(p: Vec3) -> bool {
     p.is_finite() && p.abs().max_element() <= MAX_COORDINATE
+}
+
+/// The alpha tests of `world`'s own triangles, or `None` when none may be cut out.
+fn own_alpha(world: &World) -> Option<AlphaTests> {
+    let mut alpha = AlphaTests::of(world.materials(), world.textures())?;
+    let own = world.geometry();
+    for i in 0..own.len() {
+        alpha.push_flat(own, i);
+    }
+    alpha.any_triangle_cuts().then_some(alpha)
+}
+
+/// The alpha tests of mesh `mesh`'s triangles placed with `materials`, or `None` when none
+/// may be cut out.
+fn placed_alpha(world: &World, mesh: u32, materials: &[u32]) -> Option<AlphaTests> {
+    let mut alpha = AlphaTests::of(world.materials(), world.textures())?;
+    let mesh = &world.meshes()[mesh as usize];
+    for (i, t) in mesh.indices.iter().enumerate() {
+        let uv = match mesh.has_uvs() {
+            true => t.map(|v| mesh.uvs[v as usize]),
+            false => Default::default(),
+        };
+        alpha.push_triangle(uv, material_of(mesh.slot(i), materials));
+    }
+    alpha.any_triangle_cuts().then_some(alpha)
+}
+
+/// The trees of `world`'s meshes: the world's own, viewed eight children at a time.
+fn mesh_trees(world: &World) -> Vec<MeshTree> {
+    let trees = world.accel().instances().mesh_trees();
+    world
+        .meshes()
+        .iter()
+        .enumerate()
+        .map(|(m, mesh)| {
+            let corners = |i: usize| mesh.indices[i].map(|v| mesh.positions[v as usize]);
+            let tree = match trees.get(m) {
+                Some(bvh) => WideBvh::from_bvh(bvh.clone(), corners, |i| [0, i as u32]),
+                None => {
+                    let mut geometry = Geometry::default();
+                    geometry.append(mesh, &Transform::IDENTITY, &[], 0);
+                    let ids: Vec<u32> = (0..mesh.len() as u32).collect();
+                    WideBvh::build(&geometry, &ids, None)
+                }
+            };
+            (Arc::new(tree), mesh.positions.as_slice().into())
+        })
+        .collect()
 }
 
 /// For each triangle of a world's `geometry`, its index within its object.

@@ -9,9 +9,12 @@ use std::ops::Range;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
+use std::collections::HashMap;
+
+use super::instances::MeshTree;
 use super::run::QueryOptions;
 use super::RaycastError;
-use crate::accel::prim::boundary::Boundary;
+use crate::accel::wide::levels::{Borders, Placement, WideLevels};
 use crate::accel::wide::WideBvh;
 use crate::accel::AlphaTests;
 use crate::geometry::Geometry;
@@ -22,11 +25,11 @@ const ON_THREAD: usize = 1 << 15;
 /// How often a waiting query looks at its cancel flag.
 const POLL: Duration = Duration::from_millis(5);
 
-/// The triangles of a scene and each one's index within its own geometry, shared with a
-/// build that outlives a cancelled query.
+/// The triangles of a scene and each one's index within its own geometry, and the meshes
+/// placed, shared with a build that outlives a cancelled query.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Triangles {
-    /// Every triangle; `Triangle::object` is its geometry id.
+    /// Every triangle of the own geometries; `Triangle::object` is its geometry id.
     pub geometry: Geometry,
     /// For each triangle of `geometry`, its index within its own geometry.
     pub local_ids: Vec<u32>,
@@ -35,6 +38,25 @@ pub(crate) struct Triangles {
     /// The alpha test of each triangle of `geometry` (by index), when some may be cut out
     /// (a scene made from a world with cut-out materials); `None` otherwise.
     pub alpha: Option<Arc<AlphaTests>>,
+    /// The trees of the meshes placements place, each built once.
+    pub meshes: Vec<MeshTree>,
+    /// For each own geometry placed, its mesh tree and that mesh's alpha tests.
+    pub mesh_of: HashMap<u32, (u32, Option<Arc<AlphaTests>>)>,
+    /// For each placement's geometry id, its index in `placements`.
+    pub placed: HashMap<u32, u32>,
+    /// Every placement, in the order added.
+    pub placements: Vec<Placement>,
+}
+
+impl Triangles {
+    /// Triangles that rays see: the own ones, and each placement's mesh's.
+    pub fn seen(&self) -> usize {
+        let placed = self.placements.iter();
+        self.geometry.len()
+            + placed
+                .map(|p| self.meshes[p.mesh as usize].0.tris().len())
+                .sum::<usize>()
+    }
 }
 
 /// Where one geometry lies in [`Triangles::geometry`]: its vertices are `vertices` (each
@@ -52,7 +74,7 @@ pub(crate) struct Span {
 #[derive(Debug)]
 enum State {
     Building,
-    Built(Arc<WideBvh>),
+    Built(Arc<WideLevels>),
     /// The build's thread ended without a result (it panicked).
     Lost,
 }
@@ -75,7 +97,7 @@ impl Build {
     }
 
     /// The built structure, waiting for it while `options` is not cancelled.
-    fn wait(&self, options: &QueryOptions) -> Result<Arc<WideBvh>, RaycastError> {
+    fn wait(&self, options: &QueryOptions) -> Result<Arc<WideLevels>, RaycastError> {
         let mut state = self.state();
         loop {
             match &*state {
@@ -117,6 +139,15 @@ pub(crate) struct LazyAccel {
 }
 
 impl LazyAccel {
+    /// Takes `levels` as the structure built.
+    pub fn set(&self, levels: Arc<WideLevels>) {
+        let build = Build {
+            state: Mutex::new(State::Built(levels)),
+            done: Condvar::new(),
+        };
+        *self.build.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::new(build));
+    }
+
     /// Forgets the structure: the triangles changed. A build still running finishes for
     /// nobody.
     pub fn reset(&mut self) {
@@ -130,7 +161,7 @@ impl LazyAccel {
         triangles: &Arc<Triangles>,
         pool: &Arc<rayon::ThreadPool>,
         options: &QueryOptions,
-    ) -> Result<Arc<WideBvh>, RaycastError> {
+    ) -> Result<Arc<WideLevels>, RaycastError> {
         let build = {
             let mut slot = self.build.lock().unwrap_or_else(|e| e.into_inner());
             match &*slot {
@@ -158,8 +189,11 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
         move || {
             let finish = Finish(build);
             let t = &triangles;
-            let accel = WideBvh::build(&t.geometry, &t.local_ids, t.alpha.clone(), Some(&pool));
-            finish.0.finish(State::Built(Arc::new(accel)));
+            let own = WideBvh::build(&t.geometry, &t.local_ids, Some(&pool));
+            let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
+            let placements = t.placements.clone();
+            let levels = WideLevels::new(own, t.alpha.clone(), meshes, placements, Some(&pool));
+            finish.0.finish(State::Built(Arc::new(levels)));
         }
     };
     if triangles.geometry.len() < ON_THREAD {
@@ -174,34 +208,34 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
     }
 }
 
-/// [`WideBvh::border`] for a counting query: made on a thread of its own for a large scene
-/// (a sort of every edge: a few tenths of a second for a million triangles) while the query
-/// waits watching its cancel flag; a cancelled query returns at once, and the work, left to
-/// finish, serves the next one.
-pub(crate) fn border<'a>(
-    accel: &'a Arc<WideBvh>,
+/// [`WideLevels::borders`] for a counting query: made on a thread of its own for a large
+/// scene (a sort of every edge: a few tenths of a second for a million triangles) while the
+/// query waits watching its cancel flag; a cancelled query returns at once, and the work, left
+/// to finish, serves the next one.
+pub(crate) fn borders<'a>(
+    accel: &'a Arc<WideLevels>,
     pool: &Arc<rayon::ThreadPool>,
     options: &QueryOptions,
-) -> Result<&'a [Boundary], RaycastError> {
-    if let Some(border) = accel.made_border() {
-        return Ok(border);
+) -> Result<Borders<'a>, RaycastError> {
+    if let Some(borders) = accel.made_borders() {
+        return Ok(borders);
     }
-    if accel.tris().len() < ON_THREAD {
-        return Ok(accel.border(pool));
+    if accel.unique_triangles() < ON_THREAD {
+        return Ok(accel.borders(pool));
     }
     // Several waiting queries may start a thread each: one makes it, the others wait for it.
     let (a, p) = (accel.clone(), pool.clone());
     let spawned = std::thread::Builder::new()
         .name("penumbra-raycast-border".into())
         .spawn(move || {
-            a.border(&p);
+            a.borders(&p);
         });
     if spawned.is_err() {
-        return Ok(accel.border(pool));
+        return Ok(accel.borders(pool));
     }
     loop {
-        if let Some(border) = accel.made_border() {
-            return Ok(border);
+        if let Some(borders) = accel.made_borders() {
+            return Ok(borders);
         }
         if options.cancelled() {
             return Err(RaycastError::Cancelled);

@@ -74,7 +74,7 @@ pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
 pub use queries::{CastRays, ClosestPoints, Intersections};
 pub use run::QueryOptions;
 
-use crate::accel::wide::WideBvh;
+use crate::accel::wide::levels::WideLevels;
 use lazy::{LazyAccel, Triangles};
 use run::Pools;
 
@@ -258,9 +258,10 @@ impl RaycastingScene {
         self.geometries
     }
 
-    /// Number of triangles of all geometries.
+    /// Number of triangles of all geometries (a placed geometry's counted for each
+    /// placement: the triangles rays see).
     pub fn triangle_count(&self) -> usize {
-        self.triangles.geometry.len()
+        self.triangles.seen()
     }
 
     /// Builds the acceleration structure now (with `threads` workers, 0 for one per core)
@@ -276,7 +277,7 @@ impl RaycastingScene {
     fn prepare(
         &self,
         options: &QueryOptions,
-    ) -> Result<(Arc<WideBvh>, Arc<rayon::ThreadPool>), RaycastError> {
+    ) -> Result<(Arc<WideLevels>, Arc<rayon::ThreadPool>), RaycastError> {
         let pool = self.pools.get(options.threads)?;
         let accel = self.accel.get(&self.triangles, &pool, options)?;
         Ok((accel, pool))

@@ -1,6 +1,8 @@
 //! The batch queries of [`RaycastingScene`]: closest hits, occlusion, counting and listing
 //! intersections, closest points, distances, occupancy.
 
+use std::borrow::Cow;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -164,9 +166,15 @@ impl RaycastingScene {
             let index = |j: usize| order.as_ref().map_or(j, |o| o[j]);
             let prepared: Vec<Option<PreparedRay>> =
                 (0..rays.len()).map(|j| prepare(&rays[index(j)])).collect();
+            // The rays as given, in the packets' order, for the placed meshes.
+            let raw: Cow<[[f32; 6]]> = match &order {
+                Some(o) if accel.has_placements() => o.iter().map(|&i| rays[i]).collect(),
+                _ => rays.into(),
+            };
             let mut hits = vec![None; rays.len()];
             let kernel = CastPackets {
                 accel,
+                raw: &raw,
                 options,
                 rays: &prepared,
                 hits: &mut hits,
@@ -179,7 +187,7 @@ impl RaycastingScene {
                 t[i] = c.t;
                 (g[i], p[i]) = (hit.geometry, hit.primitive);
                 uv[i] = [c.b1, c.b2];
-                normal[i] = accel.normal(hit.slot);
+                normal[i] = accel.normal(hit.level, hit.slot);
             }
         })?;
         far.result()?;
@@ -227,7 +235,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Vec<i32>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
-        let border = lazy::border(&accel, &pool, options)?;
+        let border = &lazy::borders(&accel, &pool, options)?;
         let accel = &*accel;
         let mut out = filled(&pool, options, rays.len(), 0i32)?;
         let items = rays.par_chunks(CHUNK).zip(out.par_chunks_mut(CHUNK));
@@ -259,7 +267,7 @@ impl RaycastingScene {
         options: &QueryOptions,
     ) -> Result<Intersections, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
-        let border = lazy::border(&accel, &pool, options)?;
+        let border = &lazy::borders(&accel, &pool, options)?;
         let accel = &*accel;
         let far = FarOrigins::new();
         // The first error (memory, cancel) stops the other chunks, and what they hold is
@@ -360,7 +368,7 @@ impl RaycastingScene {
                 pts[i] = near.point.to_array();
                 (g[i], p[i]) = (near.geometry, near.primitive);
                 uv[i] = [near.b1, near.b2];
-                normal[i] = accel.normal(near.slot);
+                normal[i] = accel.normal(near.level, near.slot);
             }
         })?;
         Ok(out)

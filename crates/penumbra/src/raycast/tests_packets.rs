@@ -46,6 +46,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
                 SimdPath::Portable,
                 CastPackets {
                     accel,
+                    raw: &[],
                     options: &QueryOptions::default(),
                     rays,
                     hits: &mut hit,
@@ -58,6 +59,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
         let mut hits = vec![None; rays.len()];
         let kernel = CastPackets {
             accel,
+            raw: rays,
             options: &QueryOptions::default(),
             rays: &prepared,
             hits: &mut hits,

@@ -77,9 +77,15 @@ impl AlphaTests {
         self.flat.push((uv, test.unwrap_or(OPAQUE)));
     }
 
-    /// Gives triangle `to` the test of triangle `from`.
-    pub(crate) fn set_copy(&mut self, to: usize, from: usize) {
-        self.flat[to] = self.flat[from];
+    /// The tests of triangles `triangles` (by index), numbered from 0 in that order: a
+    /// geometry's own tests for a tree of its own.
+    pub(crate) fn subset(&self, triangles: impl Iterator<Item = usize>) -> AlphaTests {
+        AlphaTests {
+            tests: self.tests.clone(),
+            by_material: self.by_material.clone(),
+            flat: triangles.map(|i| self.flat[i]).collect(),
+            ..AlphaTests::default()
+        }
     }
 
     /// True when some triangle added may be cut.

@@ -11,8 +11,8 @@
 
 use glam::Vec3;
 
-use super::tree::{SlotHit, Stack, WideBvh};
-use crate::accel::prim::boundary::Boundary;
+use super::levels::{Borders, WideLevels};
+use super::tree::{SlotHit, Stack};
 use crate::accel::prim::watertight::PreparedRay;
 use crate::simd::{Isa, Kernel};
 
@@ -47,9 +47,9 @@ pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
     )
 }
 
-/// [`WideBvh::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
+/// [`WideLevels::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
 pub(crate) struct Occlusions<'a, C> {
-    pub accel: &'a WideBvh,
+    pub accel: &'a WideLevels,
     /// Checked every [`CHECK`] rays: a cancelled query stops there.
     pub options: &'a C,
     pub rays: &'a [[f32; 6]],
@@ -62,7 +62,6 @@ impl<C: Control> Kernel for Occlusions<'_, C> {
 
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
-        let (tnear, tfar) = self.range;
         let mut stack = Stack::default();
         for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
             if self.options.cancelled() {
@@ -70,18 +69,18 @@ impl<C: Control> Kernel for Occlusions<'_, C> {
             }
             for (ray, o) in rays.iter().zip(out) {
                 *o = prepare(ray)
-                    .is_some_and(|r| self.accel.occluded::<I>(&r, tnear, tfar, &mut stack));
+                    .is_some_and(|r| self.accel.occluded::<I>(ray, &r, self.range, &mut stack));
             }
         }
     }
 }
 
-/// The number of hits of [`WideBvh::each_hit`] from `t = 0` on for each ray of `rays`, written
-/// to `out` (left alone for a ray that hits nothing).
+/// The number of hits of [`WideLevels::each_hit`] from `t = 0` on for each ray of `rays`,
+/// written to `out` (left alone for a ray that hits nothing).
 pub(crate) struct Counts<'a, C> {
-    pub accel: &'a WideBvh,
-    /// [`WideBvh::border`].
-    pub border: &'a [Boundary],
+    pub accel: &'a WideLevels,
+    /// [`WideLevels::borders`].
+    pub border: &'a Borders<'a>,
     /// Checked every [`CHECK`] rays.
     pub options: &'a C,
     pub rays: &'a [[f32; 6]],
@@ -103,7 +102,7 @@ impl<C: Control> Kernel for Counts<'_, C> {
                     let mut n = 0i32;
                     let tally = &mut |_| n = n.saturating_add(1);
                     self.accel
-                        .each_hit::<I>(&r, 0.0, self.border, &mut stack, tally);
+                        .each_hit::<I>(ray, &r, self.border, &mut stack, tally);
                     *count = n;
                 }
             }
@@ -115,9 +114,9 @@ impl<C: Control> Kernel for Counts<'_, C> {
 /// the number of each ray's hits, and all the hits one ray after the other; `Err` when the
 /// query is cancelled (checked before each ray) or the hits do not fit in memory.
 pub(crate) struct Listing<'a, C> {
-    pub accel: &'a WideBvh,
-    /// [`WideBvh::border`].
-    pub border: &'a [Boundary],
+    pub accel: &'a WideLevels,
+    /// [`WideLevels::borders`].
+    pub border: &'a Borders<'a>,
     pub rays: &'a [[f32; 6]],
     pub options: &'a C,
 }
@@ -143,7 +142,7 @@ impl<C: Control> Kernel for Listing<'_, C> {
             let mut full = Ok(());
             if let Some(r) = prepare(ray) {
                 self.accel
-                    .each_hit::<I>(&r, 0.0, self.border, &mut stack, &mut |h| {
+                    .each_hit::<I>(ray, &r, self.border, &mut stack, &mut |h| {
                         // A ray may cross millions of triangles: grown fallibly.
                         if full.is_ok() {
                             full = options.grow(&mut one, 1, what);

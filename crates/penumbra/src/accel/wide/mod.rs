@@ -7,10 +7,13 @@
 //!   its one single-ray walk, which the closest-, any- and every-hit queries share;
 //! - `packets`: closest-hit packets of neighbouring rays (`cast_rays` on pinhole images);
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
-//! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk.
+//! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
+//! - `levels`: the scene's own tree and placed meshes' trees under a top-level tree, which
+//!   every query of the ray-casting API asks.
 
 mod group;
 pub(crate) mod kernels;
+pub(crate) mod levels;
 pub(crate) mod nearest;
 pub(crate) mod node;
 pub(crate) mod packets;

@@ -7,11 +7,13 @@
 //! dot products), which overflow `f32` from coordinates of about 1e9 on, where every point
 //! fell in a corner's region. In `f64` any finite `f32` point and triangle are fine.
 
-use glam::{DVec3, Vec3};
+use glam::{DAffine3, DVec3, Vec3};
 
+use super::levels::OWN;
 use super::tree::WideBvh;
 use crate::accel::traverse::walk_nearest;
 use crate::accel::BvhNode;
+use crate::math::Transform;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
@@ -78,49 +80,70 @@ pub(crate) struct Nearest {
     pub geometry: u32,
     pub primitive: u32,
     pub slot: u32,
+    /// The placement of its triangle, `levels::OWN` for the scene's own triangles.
+    pub level: u32,
+}
+
+/// Where a placed mesh's tree is: its maps between world and object space, and a lower bound
+/// of the squared smallest stretch of the object-to-world map (a box at object distance `d`
+/// is at least `d·√shrink_sq` away in the world).
+pub(crate) struct Frame<'a> {
+    pub level: u32,
+    pub geometry: u32,
+    pub to_object: &'a DAffine3,
+    pub to_world: &'a Transform,
+    pub shrink_sq: f64,
 }
 
 impl WideBvh {
-    /// The closest point of any triangle to `p`, nearer boxes first; `None` for an empty
-    /// scene. Ties keep the first triangle found.
-    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
+    /// Lowers `best` to the closest point to `p` of this tree's triangles, placed by `frame`
+    /// when given, if one is nearer than `√best_d` (then `best_d` is its squared distance).
+    pub(crate) fn nearest_within(
+        &self,
+        p: DVec3,
+        frame: Option<&Frame>,
+        best_d: &mut f64,
+        best: &mut Option<Nearest>,
+    ) {
         let nodes = self.bvh().nodes();
         if nodes.is_empty() {
-            return None;
+            return;
         }
-        let mut best: Option<Nearest> = None;
-        let mut best_d = f64::INFINITY;
-        let pa = p.as_dvec3();
+        let (q, scale) = frame.map_or((p, 1.0), |f| (f.to_object.transform_point3(p), f.shrink_sq));
         // A box farther than the best point so far cannot hold a nearer one.
         let enter = |node: &BvhNode, bound: f64| {
-            let d = box_distance_sq(node, pa);
+            let d = box_distance_sq(node, q) * scale;
             (d <= bound).then_some(d)
         };
-        walk_nearest(nodes, &mut best_d, enter, |slots, best_d| {
+        walk_nearest(nodes, best_d, enter, |slots, best_d| {
             for i in slots {
-                let corners = self.slot(i).corners().map(|c| Vec3::from(c).as_dvec3());
-                let (q, b1, b2) = closest_f64(pa, corners);
-                let d = (q - pa).length_squared();
+                let corners = self.slot(i).corners().map(|c| {
+                    let c = Vec3::from(c);
+                    frame.map_or(c, |f| f.to_world.point(c)).as_dvec3()
+                });
+                let (point, b1, b2) = closest_f64(p, corners);
+                let d = (point - p).length_squared();
                 if d < *best_d {
                     *best_d = d;
-                    best = Some(Nearest {
-                        point: q.as_vec3(),
+                    let [geometry, primitive] = self.ids(i);
+                    *best = Some(Nearest {
+                        point: point.as_vec3(),
                         b1: b1 as f32,
                         b2: b2 as f32,
-                        geometry: self.ids(i)[0],
-                        primitive: self.ids(i)[1],
+                        geometry: frame.map_or(geometry, |f| f.geometry),
+                        primitive,
                         slot: i as u32,
+                        level: frame.map_or(OWN, |f| f.level),
                     });
                 }
             }
         });
-        best
     }
 }
 
 /// Squared distance from `p` to the node's box (0 inside).
 #[inline(always)]
-fn box_distance_sq(node: &BvhNode, p: DVec3) -> f64 {
+pub(super) fn box_distance_sq(node: &BvhNode, p: DVec3) -> f64 {
     let lo = Vec3::from(node.min_corner()).as_dvec3();
     let hi = Vec3::from(node.max_corner()).as_dvec3();
     let d = (lo - p).max(p - hi).max(DVec3::ZERO);

@@ -15,9 +15,11 @@
 //! visit.
 //!
 //! A scene with cut-out triangles (ray casting from a world with cut-out materials) traces
-//! every ray alone: the single-ray walk applies the alpha test.
+//! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
+//! the own tree, one ray at a time (`levels`).
 
 use super::kernels::Control;
+use super::levels::WideLevels;
 use super::node::WIDTH;
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
 use crate::accel::lanes::lane;
@@ -28,10 +30,13 @@ use crate::simd::{Isa, Kernel};
 /// The closest hit of a ray.
 pub(crate) type ClosestHit = Option<SlotHit>;
 
-/// [`WideBvh::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that hits
-/// nothing), written to `hits`, as a [`Kernel`].
+/// [`WideLevels::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that
+/// hits nothing), written to `hits`, as a [`Kernel`]: the own tree by packets, then the
+/// placements one ray at a time.
 pub(crate) struct CastPackets<'a, C> {
-    pub accel: &'a WideBvh,
+    pub accel: &'a WideLevels,
+    /// The rays as given, in the order of `rays`; read only when there are placements.
+    pub raw: &'a [[f32; 6]],
     /// Checked before each packet: a cancelled query stops there.
     pub options: &'a C,
     pub rays: &'a [Option<PreparedRay>],
@@ -44,26 +49,37 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let CastPackets {
-            accel,
+            accel: levels,
+            raw,
             options,
             rays,
             hits,
         } = self;
+        let (accel, alpha) = (levels.own(), levels.own_alpha());
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         let mut stack = Stack::default();
         let mut packet_stack = Vec::new();
-        for (rays, hits) in rays.chunks(N).zip(hits.chunks_mut(N)) {
+        for (k, (rays, hits)) in rays.chunks(N).zip(hits.chunks_mut(N)).enumerate() {
             if options.cancelled() {
                 return;
             }
             // Cut-out triangles are tested one ray at a time, by the filtered single-ray walk.
-            match lanes::<N>(rays).filter(|_| !accel.has_cutouts()) {
+            let all = (0.0, f32::INFINITY);
+            match lanes::<N>(rays).filter(|_| alpha.is_none()) {
                 Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
                 None => {
-                    for (ray, hit) in rays.iter().zip(hits) {
-                        *hit = ray
-                            .and_then(|r| accel.closest::<I>(&r, 0.0, f32::INFINITY, &mut stack));
+                    for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+                        *hit = ray.and_then(|r| accel.closest::<I>(&r, all, alpha, &mut stack));
                     }
+                }
+            }
+            if !levels.has_placements() {
+                continue;
+            }
+            let raw = &raw[k * N..];
+            for ((ray, raw), hit) in rays.iter().zip(raw).zip(hits.iter_mut()) {
+                if ray.is_some() {
+                    *hit = levels.closest_placed::<I>(raw, all, *hit, &mut stack);
                 }
             }
         }

@@ -14,11 +14,12 @@
 //! skipped by a ray that meets it. The build pads boxes so that `bound − origin` is never zero
 //! for a ray touching the true box, hence no `0·∞` NaN there.
 
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 
 use super::group::{TriangleGroup, GROUP};
+use super::levels::OWN;
 use super::node::{collapse, WideNode, WIDTH};
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
@@ -78,9 +79,6 @@ pub(crate) struct WideBvh {
     /// Each leaf slot's part of the surface's border, for the counting rule: made by the
     /// first counting query ([`WideBvh::border`]), which the others do not need.
     border: OnceLock<Vec<Boundary>>,
-    /// The alpha tests of the triangles (by triangle index) when some may be cut out: every
-    /// ray query skips a crossing the test refuses, after the watertight test found it.
-    alpha: Option<Arc<AlphaTests>>,
 }
 
 /// A hit of the closest-hit or every-hit traversal: where, and which triangle.
@@ -93,35 +91,44 @@ pub(crate) struct SlotHit {
     pub primitive: u32,
     /// Leaf slot, for [`WideBvh::normal`].
     pub slot: u32,
+    /// The placement of the triangle hit (`levels::OWN`: the scene's own).
+    pub level: u32,
 }
 
 impl WideBvh {
     /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
-    /// is its `object`, its primitive id `local_ids[triangle]`; `alpha`, when given, has the
-    /// alpha test of each triangle.
+    /// is its `object`, its primitive id `local_ids[triangle]`.
     pub fn build(
         geometry: &Geometry,
         local_ids: &[u32],
-        alpha: Option<Arc<AlphaTests>>,
         pool: Option<&rayon::ThreadPool>,
     ) -> WideBvh {
         let bvh = match pool {
             Some(pool) => Bvh::build_parallel(geometry, pool),
             None => Bvh::build(geometry),
         };
+        let ids = |i: usize| [geometry.triangles[i].object, local_ids[i]];
+        WideBvh::from_bvh(bvh, |i| geometry.corners(i), ids)
+    }
+
+    /// The wide view of `bvh`, a tree already built over triangles whose corners are
+    /// `corners(triangle)` and whose geometry and primitive ids are `ids(triangle)`: a world's
+    /// own tree or a mesh's, so that ray casting never builds a world's trees again.
+    pub fn from_bvh(
+        bvh: Bvh,
+        corners: impl Fn(usize) -> [Vec3; 3],
+        ids: impl Fn(usize) -> [u32; 2],
+    ) -> WideBvh {
         let slots = bvh.prim_ids();
         let tris: Vec<SoaTriangle> = slots
             .iter()
-            .map(|&i| SoaTriangle::new(&geometry.corners(i as usize).map(Vec3A::from)))
+            .map(|&i| SoaTriangle::new(&corners(i as usize).map(Vec3A::from)))
             .collect();
         let normals = tris
             .iter()
             .map(|t| unit_normal(&t.corners()).to_array())
             .collect();
-        let ids: Vec<[u32; 2]> = slots
-            .iter()
-            .map(|&i| [geometry.triangles[i as usize].object, local_ids[i as usize]])
-            .collect();
+        let ids: Vec<[u32; 2]> = slots.iter().map(|&i| ids(i as usize)).collect();
         // Each leaf's triangles as groups (one, at most eight triangles), the leaf child's
         // index its first group.
         let mut groups = Vec::new();
@@ -141,19 +148,14 @@ impl WideBvh {
             ids,
             normals,
             border: OnceLock::new(),
-            alpha,
         }
     }
 
-    /// True when some triangle may be cut out.
-    pub(crate) fn has_cutouts(&self) -> bool {
-        self.alpha.is_some()
-    }
-
-    /// True unless the triangle in leaf slot `slot` is cut out where `crossing` meets it.
+    /// True unless the triangle in leaf slot `slot` is cut out where `crossing` meets it by
+    /// `alpha`, the alpha tests of the tree's triangles (by triangle index), if any.
     #[inline(always)]
-    fn keeps(&self, slot: usize, crossing: &Crossing) -> bool {
-        match &self.alpha {
+    fn keeps(&self, alpha: Option<&AlphaTests>, slot: usize, crossing: &Crossing) -> bool {
+        match alpha {
             None => true,
             Some(alpha) => {
                 let triangle = self.bvh.prim_ids()[slot];
@@ -170,6 +172,7 @@ impl WideBvh {
             geometry,
             primitive,
             slot: slot as u32,
+            level: OWN,
         }
     }
 
@@ -227,11 +230,11 @@ impl WideBvh {
     pub fn closest<I: Isa>(
         &self,
         ray: &PreparedRay,
-        t_min: f32,
-        t_max: f32,
+        (t_min, t_max): (f32, f32),
+        alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> Option<SlotHit> {
-        self.first_hit::<false, I>(ray, t_min, t_max, stack)
+        self.first_hit::<false, I>(ray, t_min, t_max, alpha, stack)
             .map(|(group, lane, crossing)| {
                 let [geometry, primitive] = group.ids(lane);
                 SlotHit {
@@ -239,6 +242,7 @@ impl WideBvh {
                     geometry,
                     primitive,
                     slot: group.first + lane as u32,
+                    level: OWN,
                 }
             })
     }
@@ -249,11 +253,11 @@ impl WideBvh {
     pub fn occluded<I: Isa>(
         &self,
         ray: &PreparedRay,
-        t_min: f32,
-        t_max: f32,
+        (t_min, t_max): (f32, f32),
+        alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> bool {
-        self.first_hit::<true, I>(ray, t_min, t_max, stack)
+        self.first_hit::<true, I>(ray, t_min, t_max, alpha, stack)
             .is_some()
     }
 
@@ -266,6 +270,7 @@ impl WideBvh {
         ray: &PreparedRay,
         t_min: f32,
         t_max: f32,
+        alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> Option<(&TriangleGroup, usize, Crossing)> {
         let mut best: Option<(&TriangleGroup, usize, Crossing)> = None;
@@ -283,7 +288,7 @@ impl WideBvh {
             stack,
             |group, lane, c, t_max| {
                 if ANY {
-                    if !self.keeps(group.first as usize + lane, &c) {
+                    if !self.keeps(alpha, group.first as usize + lane, &c) {
                         return true;
                     }
                     best = Some((group, lane, c));
@@ -298,7 +303,7 @@ impl WideBvh {
                         c.t < *t_max || (c.t == *t_max && self.key(i) < self.key(b))
                     }
                 };
-                if closer && self.keeps(group.first as usize + lane, &c) {
+                if closer && self.keeps(alpha, group.first as usize + lane, &c) {
                     *t_max = c.t;
                     best = Some((group, lane, c));
                 }
@@ -404,7 +409,7 @@ impl WideBvh {
         &self,
         ray: &PreparedRay,
         t_min: f32,
-        border: &[Boundary],
+        (border, alpha): (&[Boundary], Option<&AlphaTests>),
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
@@ -420,7 +425,7 @@ impl WideBvh {
             stack,
             |g, lane, c, _| {
                 let slot = g.first as usize + lane;
-                if self.keeps(slot, &c) {
+                if self.keeps(alpha, slot, &c) {
                     f(self.slot_hit(slot, c));
                 }
                 true

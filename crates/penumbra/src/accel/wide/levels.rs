@@ -1,0 +1,321 @@
+//! Ray casting's two levels, as the renderer's `accel::levels` has them: a scene's own
+//! triangles in one [`WideBvh`], and meshes built once into a [`WideBvh`] each (in object
+//! space) and placed any number of times, under a top-level tree over the placements' world
+//! boxes, the same binary [`BvhNode`]s the renderer's instances use (`accel::instances`).
+//!
+//! A ray enters a placement through its inverse, as in the renderer: the direction is mapped
+//! but not renormalized, so `t` means the same in both spaces. The top-level boxes are tested
+//! with Ize's conservative exit distance, as the wide nodes are, so a placement is never
+//! skipped by a ray that meets it; inside, the watertight test runs on the mapped ray, so a
+//! placed mesh is as watertight as the mesh (two placements that only meet along a seam share
+//! no edge: each is exact alone).
+//!
+//! Every query asks the own level, then the placements the ray enters, with the same rule for
+//! the closest hit: the smallest `t`, then the smallest geometry id, then primitive id. Hits
+//! in a placement carry its geometry id and its index (`level`), from which its normal and
+//! closest points are made with the placement's corners mapped to world space exactly as
+//! `Geometry::append` maps a copy's: they are the copy's, bit for bit.
+//!
+//! Closest points: a placement's mesh tree is walked in object space with a box's distance
+//! scaled by a lower bound of the map's smallest stretch (`1 / ‖M⁻¹‖_F`), so that no box
+//! holding a nearer point is skipped, and each triangle is tested in world space.
+
+use std::sync::Arc;
+
+use glam::{Affine3A, DAffine3, DMat4, Vec3, Vec3A};
+
+use super::nearest::{Frame, Nearest};
+use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
+use crate::accel::instances::world_box;
+use crate::accel::prim::boundary::Boundary;
+use crate::accel::prim::watertight::{unit_normal, PreparedRay};
+use crate::accel::traverse::{slab_scaled, walk_nearest};
+use crate::accel::{build, AlphaTests, BvhNode};
+use crate::math::Transform;
+use crate::simd::Isa;
+
+/// The `level` of a hit on the scene's own triangles.
+pub(crate) const OWN: u32 = u32::MAX;
+
+/// One placement of a mesh, as given to [`WideLevels::new`].
+#[derive(Clone, Debug)]
+pub(crate) struct Placement {
+    /// Index of its mesh tree.
+    pub mesh: u32,
+    /// The geometry id its hits report.
+    pub geometry: u32,
+    /// Object to world; invertible.
+    pub transform: Transform,
+    /// The alpha tests of the mesh's triangles under this placement's materials, if any may
+    /// cut.
+    pub alpha: Option<Arc<AlphaTests>>,
+}
+
+/// A placement ready for queries.
+#[derive(Debug)]
+struct Placed {
+    placement: Placement,
+    object_from_world: Affine3A,
+    /// The same map in `f64`, for closest points.
+    object_from_world_f64: DAffine3,
+    /// A lower bound of the squared smallest stretch of the object-to-world map.
+    shrink_sq: f64,
+}
+
+/// The two levels of a ray-casting scene.
+#[derive(Debug, Default)]
+pub(crate) struct WideLevels {
+    own: WideBvh,
+    own_alpha: Option<Arc<AlphaTests>>,
+    meshes: Vec<Arc<WideBvh>>,
+    placed: Vec<Placed>,
+    /// The top-level tree over the placements' world boxes, and the placement in each leaf
+    /// slot.
+    top: Vec<BvhNode>,
+    top_ids: Vec<u32>,
+}
+
+/// Each tree's part of the surface's border ([`WideBvh::border`]): the own tree's, and each
+/// mesh's by index.
+pub(crate) struct Borders<'a> {
+    pub own: &'a [Boundary],
+    pub meshes: Vec<&'a [Boundary]>,
+}
+
+impl WideLevels {
+    /// The levels of `own` (its triangles' alpha tests `own_alpha`) and `placements` of
+    /// `meshes`; the top-level tree is built on `pool` when given.
+    pub fn new(
+        own: WideBvh,
+        own_alpha: Option<Arc<AlphaTests>>,
+        meshes: Vec<Arc<WideBvh>>,
+        placements: Vec<Placement>,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> WideLevels {
+        let boxes: Vec<_> = placements
+            .iter()
+            .map(|p| world_box(meshes[p.mesh as usize].bvh(), &p.transform))
+            .collect();
+        let (top, top_ids) = build::build_tree(boxes.len(), |i| boxes[i], pool);
+        let placed = placements
+            .into_iter()
+            .map(|placement| {
+                let inverse = placement.transform.world_from_object.as_dmat4().inverse();
+                let linear = glam::DMat3::from_mat4(inverse);
+                let frobenius_sq = [linear.x_axis, linear.y_axis, linear.z_axis]
+                    .iter()
+                    .map(|c| c.length_squared())
+                    .sum::<f64>();
+                Placed {
+                    object_from_world: Affine3A::from_mat4(DMat4::as_mat4(&inverse)),
+                    object_from_world_f64: DAffine3::from_mat4(inverse),
+                    shrink_sq: (1.0 - 1e-6) / frobenius_sq,
+                    placement,
+                }
+            })
+            .collect();
+        WideLevels {
+            own,
+            own_alpha,
+            meshes,
+            placed,
+            top,
+            top_ids,
+        }
+    }
+
+    /// The tree of the scene's own triangles.
+    pub fn own(&self) -> &WideBvh {
+        &self.own
+    }
+
+    /// The alpha tests of the own tree's triangles, when some may be cut out.
+    pub fn own_alpha(&self) -> Option<&AlphaTests> {
+        self.own_alpha.as_deref()
+    }
+
+    /// True when there are placements.
+    pub fn has_placements(&self) -> bool {
+        !self.placed.is_empty()
+    }
+
+    /// Triangles of the own tree and of each mesh tree, each counted once.
+    pub fn unique_triangles(&self) -> usize {
+        self.own.tris().len() + self.meshes.iter().map(|m| m.tris().len()).sum::<usize>()
+    }
+
+    /// Each tree's border, made on `pool` where it is not yet ([`WideBvh::border`]).
+    pub fn borders(&self, pool: &rayon::ThreadPool) -> Borders<'_> {
+        Borders {
+            own: self.own.border(pool),
+            meshes: self.meshes.iter().map(|m| m.border(pool)).collect(),
+        }
+    }
+
+    /// The borders when every tree's is made.
+    pub fn made_borders(&self) -> Option<Borders<'_>> {
+        Some(Borders {
+            own: self.own.made_border()?,
+            meshes: self
+                .meshes
+                .iter()
+                .map(|m| m.made_border())
+                .collect::<Option<_>>()?,
+        })
+    }
+
+    /// The closest of `best` (the own tree's closest hit) and the placements' hits of `ray`
+    /// with `t` in `range`.
+    #[inline(always)]
+    pub fn closest_placed<I: Isa>(
+        &self,
+        ray: &[f32; 6],
+        (t_min, t_max): (f32, f32),
+        mut best: Option<SlotHit>,
+        stack: &mut Stack,
+    ) -> Option<SlotHit> {
+        let mut t = best.map_or(t_max, |h| h.crossing.t);
+        self.walk_top(ray, t_min, &mut t, |index, p, mesh, r, t| {
+            let alpha = p.alpha.as_deref();
+            let Some(mut h) = mesh.closest::<I>(r, (t_min, *t), alpha, stack) else {
+                return;
+            };
+            (h.geometry, h.level) = (p.geometry, index);
+            let closer = best.is_none_or(|b| {
+                let c = (h.crossing.t, h.geometry, h.primitive);
+                c < (b.crossing.t, b.geometry, b.primitive)
+            });
+            if closer {
+                *t = h.crossing.t;
+                best = Some(h);
+            }
+        });
+        best
+    }
+
+    /// True when a triangle meets `ray` with `t` in `range`.
+    #[inline(always)]
+    pub fn occluded<I: Isa>(
+        &self,
+        ray: &[f32; 6],
+        prepared: &PreparedRay,
+        range: (f32, f32),
+        stack: &mut Stack,
+    ) -> bool {
+        let own = self.own_alpha.as_deref();
+        if self.own.occluded::<I>(prepared, range, own, stack) {
+            return true;
+        }
+        let mut hit = false;
+        let mut bound = range.1;
+        self.walk_top(ray, range.0, &mut bound, |_, p, mesh, r, bound| {
+            if !hit && mesh.occluded::<I>(r, range, p.alpha.as_deref(), stack) {
+                hit = true;
+                // No box is entered before −∞: the walk ends.
+                *bound = f32::NEG_INFINITY;
+            }
+        });
+        hit
+    }
+
+    /// Calls `f` with every crossing of `ray` from `t = 0` on, one per crossing of each
+    /// tree's surface (see [`WideBvh::each_hit`]).
+    #[inline(always)]
+    pub fn each_hit<I: Isa>(
+        &self,
+        ray: &[f32; 6],
+        prepared: &PreparedRay,
+        borders: &Borders,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        let own = (borders.own, self.own_alpha.as_deref());
+        self.own.each_hit::<I>(prepared, 0.0, own, stack, f);
+        let mut bound = f32::INFINITY;
+        self.walk_top(ray, 0.0, &mut bound, |index, p, mesh, r, _| {
+            let rule = (borders.meshes[p.mesh as usize], p.alpha.as_deref());
+            mesh.each_hit::<I>(r, 0.0, rule, stack, &mut |mut h| {
+                (h.geometry, h.level) = (p.geometry, index);
+                f(h)
+            });
+        });
+    }
+
+    /// Visits the placements whose boxes `ray` enters with `t` in `[t_min, bound]`, nearest
+    /// first: `visit(index, placement, mesh, object-space ray, bound)`, which may lower the
+    /// bound.
+    #[inline(always)]
+    fn walk_top(
+        &self,
+        ray: &[f32; 6],
+        t_min: f32,
+        bound: &mut f32,
+        mut visit: impl FnMut(u32, &Placement, &WideBvh, &PreparedRay, &mut f32),
+    ) {
+        if self.top.is_empty() {
+            return;
+        }
+        let (o, d) = (
+            Vec3::new(ray[0], ray[1], ray[2]),
+            Vec3::new(ray[3], ray[4], ray[5]),
+        );
+        let (origin, inv_dir) = (Vec3A::from(o), Vec3A::from(d).recip());
+        let enter =
+            |node: &BvhNode, t: f32| slab_scaled(node, origin, inv_dir, (t_min, t), EXIT_SCALE);
+        walk_nearest(&self.top, bound, enter, |slots, bound| {
+            for &index in &self.top_ids[slots] {
+                let p = &self.placed[index as usize];
+                let map = &p.object_from_world;
+                let object = PreparedRay::new(map.transform_point3(o), map.transform_vector3(d));
+                if let Some(r) = object {
+                    let mesh = &self.meshes[p.placement.mesh as usize];
+                    visit(index, &p.placement, mesh, &r, bound);
+                }
+            }
+        });
+    }
+
+    /// The unit normal of the triangle of a hit or closest point: leaf slot `slot` of the own
+    /// tree (`level` [`OWN`]) or of placement `level`'s mesh, mapped as a copy's corners are.
+    pub fn normal(&self, level: u32, slot: u32) -> [f32; 3] {
+        let Some(p) = self.placed.get(level as usize) else {
+            return self.own.normal(slot);
+        };
+        let mesh = &self.meshes[p.placement.mesh as usize];
+        let t = &p.placement.transform;
+        let corners = mesh
+            .slot(slot as usize)
+            .corners()
+            .map(|c| Vec3A::from(t.point(Vec3::from(c))));
+        unit_normal(&corners).to_array()
+    }
+
+    /// The closest point of any triangle to `p` (see `nearest`).
+    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
+        let pa = p.as_dvec3();
+        let (mut best, mut best_d) = (None, f64::INFINITY);
+        self.own.nearest_within(pa, None, &mut best_d, &mut best);
+        if self.top.is_empty() {
+            return best;
+        }
+        let enter = |node: &BvhNode, bound: f64| {
+            let d = super::nearest::box_distance_sq(node, pa);
+            (d <= bound).then_some(d)
+        };
+        walk_nearest(&self.top, &mut best_d, enter, |slots, best_d| {
+            for &index in &self.top_ids[slots] {
+                let p = &self.placed[index as usize];
+                let frame = Frame {
+                    level: index,
+                    geometry: p.placement.geometry,
+                    to_object: &p.object_from_world_f64,
+                    to_world: &p.placement.transform,
+                    shrink_sq: p.shrink_sq,
+                };
+                let mesh = &self.meshes[p.placement.mesh as usize];
+                mesh.nearest_within(pa, Some(&frame), best_d, &mut best);
+            }
+        });
+        best
+    }
+}
