@@ -195,8 +195,8 @@ impl CoreRaycastingScene {
             .map_err(|e| call_error("add_triangles", e))
     }
 
-    /// Adds a copy of geometry `geometry_id` placed by a row-major 4×4 object-to-world
-    /// matrix; returns the copy's id.
+    /// Places geometry `geometry_id` by a row-major 4×4 object-to-world matrix (its
+    /// triangles are not copied); returns the placement's id.
     fn add_instance(
         &self,
         py: Python<'_>,

@@ -60,6 +60,8 @@ mod tests_edges;
 #[cfg(test)]
 mod tests_instances;
 #[cfg(test)]
+mod tests_levels;
+#[cfg(test)]
 mod tests_packets;
 
 use std::sync::Arc;

@@ -10,7 +10,7 @@ use super::lazy;
 use super::run::{beyond, budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::accel::prim::watertight::PreparedRay;
-use crate::accel::wide::kernels::{prepare, Counts, Listing, Occlusions};
+use crate::accel::wide::kernels::{prepare, ClosestPlaced, Counts, Listing, Occlusions};
 use crate::accel::wide::packets::CastPackets;
 use crate::simd::{dispatch, simd_path};
 
@@ -34,15 +34,17 @@ const MAX_TILED_ROW: usize = 4096;
 
 /// The indices `0..len` of a band of at most [`TILE`] rows of `row_length` rays in tile
 /// order: [`TILE`] columns of every row of the band, then the next [`TILE`] columns.
-pub(super) fn tile_order(len: usize, row_length: usize) -> impl Iterator<Item = usize> {
+pub(super) fn tile_order(len: usize, row_length: usize) -> Vec<usize> {
     let rows = len.div_ceil(row_length);
-    (0..row_length).step_by(TILE).flat_map(move |x0| {
-        (0..rows).flat_map(move |y| {
-            (x0..(x0 + TILE).min(row_length))
-                .map(move |x| y * row_length + x)
-                .filter(move |&i| i < len)
-        })
-    })
+    let mut order = Vec::with_capacity(len);
+    for x0 in (0..row_length).step_by(TILE) {
+        for y in 0..rows {
+            let row = y * row_length;
+            let end = (row + (x0 + TILE).min(row_length)).min(len);
+            order.extend(row + x0..end);
+        }
+    }
+    order
 }
 
 /// The closest hit of each ray ([`RaycastingScene::cast_rays`]); entry `i` of every array
@@ -162,24 +164,36 @@ impl RaycastingScene {
         run(&pool, options, items, |(k, (rays, t, g, p, uv, normal))| {
             far.check(k * chunk, rays);
             // The rays in the order of the packets: tile by tile across a band, or as given.
-            let order: Option<Vec<usize>> = row_length.map(|w| tile_order(rays.len(), w).collect());
+            let order: Option<Vec<usize>> = row_length.map(|w| tile_order(rays.len(), w));
             let index = |j: usize| order.as_ref().map_or(j, |o| o[j]);
             let prepared: Vec<Option<PreparedRay>> =
                 (0..rays.len()).map(|j| prepare(&rays[index(j)])).collect();
-            // The rays as given, in the packets' order, for the placed meshes.
-            let raw: Cow<[[f32; 6]]> = match &order {
-                Some(o) if accel.has_placements() => o.iter().map(|&i| rays[i]).collect(),
-                _ => rays.into(),
-            };
             let mut hits = vec![None; rays.len()];
             let kernel = CastPackets {
                 accel,
-                raw: &raw,
                 options,
                 rays: &prepared,
                 hits: &mut hits,
             };
             dispatch(simd_path(), kernel);
+            if accel.has_placements() {
+                // The rays as given, in the packets' order.
+                let rays: Cow<[[f32; 6]]> = match &order {
+                    Some(o) => o.iter().map(|&i| rays[i]).collect(),
+                    None => rays.into(),
+                };
+                let hits = &mut hits;
+                let rays = &rays;
+                dispatch(
+                    simd_path(),
+                    ClosestPlaced {
+                        accel,
+                        options,
+                        rays,
+                        hits,
+                    },
+                );
+            }
             for (j, hit) in hits.into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let i = index(j);
@@ -211,9 +225,10 @@ impl RaycastingScene {
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
             let range = (tnear, tfar);
+            let out = &mut *out;
             dispatch(
                 simd_path(),
-                Occlusions {
+                Occlusions::<_, false> {
                     accel,
                     options,
                     rays,
@@ -221,6 +236,18 @@ impl RaycastingScene {
                     out,
                 },
             );
+            if accel.has_placements() {
+                dispatch(
+                    simd_path(),
+                    Occlusions::<_, true> {
+                        accel,
+                        options,
+                        rays,
+                        range,
+                        out,
+                    },
+                );
+            }
         })?;
         far.result()?;
         Ok(out)
@@ -242,9 +269,10 @@ impl RaycastingScene {
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
+            let out = &mut *out;
             dispatch(
                 simd_path(),
-                Counts {
+                Counts::<_, false> {
                     accel,
                     border,
                     options,
@@ -252,6 +280,18 @@ impl RaycastingScene {
                     out,
                 },
             );
+            if accel.has_placements() {
+                dispatch(
+                    simd_path(),
+                    Counts::<_, true> {
+                        accel,
+                        border,
+                        options,
+                        rays,
+                        out,
+                    },
+                );
+            }
         })?;
         far.result()?;
         Ok(out)

@@ -46,7 +46,6 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
                 SimdPath::Portable,
                 CastPackets {
                     accel,
-                    raw: &[],
                     options: &QueryOptions::default(),
                     rays,
                     hits: &mut hit,
@@ -59,7 +58,6 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
         let mut hits = vec![None; rays.len()];
         let kernel = CastPackets {
             accel,
-            raw: rays,
             options: &QueryOptions::default(),
             rays: &prepared,
             hits: &mut hits,
@@ -166,7 +164,7 @@ fn tile_order_visits_each_ray_of_a_band_once() {
         (9, 1),
         (6, 7),
     ] {
-        let mut seen: Vec<usize> = super::queries::tile_order(len, w).collect();
+        let mut seen: Vec<usize> = super::queries::tile_order(len, w);
         seen.sort_unstable();
         assert_eq!(
             seen,

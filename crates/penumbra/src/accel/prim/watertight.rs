@@ -98,6 +98,7 @@ pub(crate) struct Crossing {
 impl PreparedRay {
     /// Prepares `origin + t·direction`; `None` when a component is not finite or the
     /// direction is zero (such rays hit nothing).
+    #[inline(always)]
     pub fn new(origin: Vec3, direction: Vec3) -> Option<PreparedRay> {
         if !origin.is_finite() || !direction.is_finite() || direction == Vec3::ZERO {
             return None;

@@ -40,6 +40,7 @@ pub(crate) trait Control {
 }
 
 /// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
+#[inline(always)]
 pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
     PreparedRay::new(
         Vec3::new(ray[0], ray[1], ray[2]),
@@ -47,8 +48,11 @@ pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
     )
 }
 
-/// [`WideLevels::occluded`] with `t` in `range` for each ray of `rays`, written to `out`.
-pub(crate) struct Occlusions<'a, C> {
+/// Whether a triangle meets each ray of `rays` with `t` in `range`, written to `out`: the
+/// own tree's ([`WideLevels::occluded_own`]), or with `PLACED` the placements' for each ray
+/// not yet occluded ([`WideLevels::occluded_placed`]). The two are kernels of their own, so
+/// that the own tree's walk compiles as it does alone.
+pub(crate) struct Occlusions<'a, C, const PLACED: bool> {
     pub accel: &'a WideLevels,
     /// Checked every [`CHECK`] rays: a cancelled query stops there.
     pub options: &'a C,
@@ -57,27 +61,61 @@ pub(crate) struct Occlusions<'a, C> {
     pub out: &'a mut [bool],
 }
 
-impl<C: Control> Kernel for Occlusions<'_, C> {
+impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
     type Output = ();
 
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
+        let (accel, range) = (self.accel, self.range);
         let mut stack = Stack::default();
         for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
             if self.options.cancelled() {
                 return;
             }
             for (ray, o) in rays.iter().zip(out) {
-                *o = prepare(ray)
-                    .is_some_and(|r| self.accel.occluded::<I>(ray, &r, self.range, &mut stack));
+                *o = match PLACED {
+                    false => {
+                        prepare(ray).is_some_and(|r| accel.occluded_own::<I>(&r, range, &mut stack))
+                    }
+                    true => *o || accel.occluded_placed::<I>(ray, range, &mut stack),
+                };
             }
         }
     }
 }
 
-/// The number of hits of [`WideLevels::each_hit`] from `t = 0` on for each ray of `rays`,
-/// written to `out` (left alone for a ray that hits nothing).
-pub(crate) struct Counts<'a, C> {
+/// The closest of each hit of `hits` (the own tree's, from `packets::CastPackets`) and the
+/// placements' hits of its ray of `rays` ([`WideLevels::closest_placed`]), `t` in `[0, ∞]`.
+pub(crate) struct ClosestPlaced<'a, C> {
+    pub accel: &'a WideLevels,
+    /// Checked every [`CHECK`] rays.
+    pub options: &'a C,
+    pub rays: &'a [[f32; 6]],
+    pub hits: &'a mut [Option<SlotHit>],
+}
+
+impl<C: Control> Kernel for ClosestPlaced<'_, C> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let mut stack = Stack::default();
+        for (rays, hits) in self.rays.chunks(CHECK).zip(self.hits.chunks_mut(CHECK)) {
+            if self.options.cancelled() {
+                return;
+            }
+            for (ray, hit) in rays.iter().zip(hits) {
+                let all = (0.0, f32::INFINITY);
+                *hit = self.accel.closest_placed::<I>(ray, all, *hit, &mut stack);
+            }
+        }
+    }
+}
+
+/// The number of hits of [`WideLevels::each_hit`] from `t = 0` on for each ray of `rays`:
+/// the own tree's written to `out` (left alone for a ray that hits nothing), or with `PLACED`
+/// the placements' added to it (two kernels, as for [`Occlusions`]).
+pub(crate) struct Counts<'a, C, const PLACED: bool> {
     pub accel: &'a WideLevels,
     /// [`WideLevels::borders`].
     pub border: &'a Borders<'a>,
@@ -87,7 +125,7 @@ pub(crate) struct Counts<'a, C> {
     pub out: &'a mut [i32],
 }
 
-impl<C: Control> Kernel for Counts<'_, C> {
+impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
     type Output = ();
 
     #[inline(always)]
@@ -98,11 +136,14 @@ impl<C: Control> Kernel for Counts<'_, C> {
                 return;
             }
             for (ray, count) in rays.iter().zip(out) {
-                if let Some(r) = prepare(ray) {
-                    let mut n = 0i32;
-                    let tally = &mut |_| n = n.saturating_add(1);
-                    self.accel
-                        .each_hit::<I>(ray, &r, self.border, &mut stack, tally);
+                let mut n = 0i32;
+                let tally = &mut |_| n = n.saturating_add(1);
+                let (accel, border) = (self.accel, self.border);
+                if PLACED {
+                    accel.each_hit_placed::<I>(ray, border, &mut stack, tally);
+                    *count = count.saturating_add(n);
+                } else if let Some(r) = prepare(ray) {
+                    accel.each_hit_own::<I>(&r, border, &mut stack, tally);
                     *count = n;
                 }
             }

@@ -193,19 +193,26 @@ impl WideLevels {
         best
     }
 
-    /// True when a triangle meets `ray` with `t` in `range`.
+    /// True when a triangle of the own tree meets `prepared` with `t` in `range`.
     #[inline(always)]
-    pub fn occluded<I: Isa>(
+    pub fn occluded_own<I: Isa>(
         &self,
-        ray: &[f32; 6],
         prepared: &PreparedRay,
         range: (f32, f32),
         stack: &mut Stack,
     ) -> bool {
         let own = self.own_alpha.as_deref();
-        if self.own.occluded::<I>(prepared, range, own, stack) {
-            return true;
-        }
+        self.own.occluded::<I>(prepared, range, own, stack)
+    }
+
+    /// True when a triangle of a placement meets `ray` with `t` in `range`.
+    #[inline(always)]
+    pub fn occluded_placed<I: Isa>(
+        &self,
+        ray: &[f32; 6],
+        range: (f32, f32),
+        stack: &mut Stack,
+    ) -> bool {
         let mut hit = false;
         let mut bound = range.1;
         self.walk_top(ray, range.0, &mut bound, |_, p, mesh, r, bound| {
@@ -218,8 +225,9 @@ impl WideLevels {
         hit
     }
 
-    /// Calls `f` with every crossing of `ray` from `t = 0` on, one per crossing of each
-    /// tree's surface (see [`WideBvh::each_hit`]).
+    /// Calls `f` with every crossing of `ray` (prepared: `prepared`) from `t = 0` on, one per
+    /// crossing of each tree's surface (see [`WideBvh::each_hit`]): the own tree's, then the
+    /// placements'.
     #[inline(always)]
     pub fn each_hit<I: Isa>(
         &self,
@@ -229,8 +237,32 @@ impl WideLevels {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
+        self.each_hit_own::<I>(prepared, borders, stack, f);
+        self.each_hit_placed::<I>(ray, borders, stack, f);
+    }
+
+    /// [`WideLevels::each_hit`] of the own tree alone.
+    #[inline(always)]
+    pub fn each_hit_own<I: Isa>(
+        &self,
+        prepared: &PreparedRay,
+        borders: &Borders,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
         let own = (borders.own, self.own_alpha.as_deref());
         self.own.each_hit::<I>(prepared, 0.0, own, stack, f);
+    }
+
+    /// [`WideLevels::each_hit`] of the placements alone.
+    #[inline(always)]
+    pub fn each_hit_placed<I: Isa>(
+        &self,
+        ray: &[f32; 6],
+        borders: &Borders,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
         let mut bound = f32::INFINITY;
         self.walk_top(ray, 0.0, &mut bound, |index, p, mesh, r, _| {
             let rule = (borders.meshes[p.mesh as usize], p.alpha.as_deref());

@@ -16,7 +16,7 @@
 //!
 //! A scene with cut-out triangles (ray casting from a world with cut-out materials) traces
 //! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
-//! the own tree, one ray at a time (`levels`).
+//! the own tree, one ray at a time (`kernels::ClosestPlaced`).
 
 use super::kernels::Control;
 use super::levels::WideLevels;
@@ -30,13 +30,11 @@ use crate::simd::{Isa, Kernel};
 /// The closest hit of a ray.
 pub(crate) type ClosestHit = Option<SlotHit>;
 
-/// [`WideLevels::closest`] with `t` in `[0, ∞]` for every ray of `rays` (`None`: a ray that
-/// hits nothing), written to `hits`, as a [`Kernel`]: the own tree by packets, then the
-/// placements one ray at a time.
+/// The closest hit in the own tree of [`WideLevels`] with `t` in `[0, ∞]` for every ray of
+/// `rays` (`None`: a ray that hits nothing), written to `hits`, as a [`Kernel`] (the
+/// placements are asked after, by `kernels::ClosestPlaced`).
 pub(crate) struct CastPackets<'a, C> {
     pub accel: &'a WideLevels,
-    /// The rays as given, in the order of `rays`; read only when there are placements.
-    pub raw: &'a [[f32; 6]],
     /// Checked before each packet: a cancelled query stops there.
     pub options: &'a C,
     pub rays: &'a [Option<PreparedRay>],
@@ -50,7 +48,6 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
     fn run<const N: usize, I: Isa>(self) {
         let CastPackets {
             accel: levels,
-            raw,
             options,
             rays,
             hits,
@@ -59,7 +56,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         let mut stack = Stack::default();
         let mut packet_stack = Vec::new();
-        for (k, (rays, hits)) in rays.chunks(N).zip(hits.chunks_mut(N)).enumerate() {
+        for (rays, hits) in rays.chunks(N).zip(hits.chunks_mut(N)) {
             if options.cancelled() {
                 return;
             }
@@ -71,15 +68,6 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
                     for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
                         *hit = ray.and_then(|r| accel.closest::<I>(&r, all, alpha, &mut stack));
                     }
-                }
-            }
-            if !levels.has_placements() {
-                continue;
-            }
-            let raw = &raw[k * N..];
-            for ((ray, raw), hit) in rays.iter().zip(raw).zip(hits.iter_mut()) {
-                if ray.is_some() {
-                    *hit = levels.closest_placed::<I>(raw, all, *hit, &mut stack);
                 }
             }
         }

@@ -286,6 +286,7 @@ impl WideBvh {
             !ANY,
             rule,
             stack,
+            #[inline(always)]
             |group, lane, c, t_max| {
                 if ANY {
                     if !self.keeps(alpha, group.first as usize + lane, &c) {
@@ -423,6 +424,7 @@ impl WideBvh {
             false,
             rule,
             stack,
+            #[inline(always)]
             |g, lane, c, _| {
                 let slot = g.first as usize + lane;
                 if self.keeps(alpha, slot, &c) {

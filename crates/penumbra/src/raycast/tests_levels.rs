@@ -1,0 +1,189 @@
+//! Random scenes of placed meshes (rotated, scaled non-uniformly, mirrored, placements of
+//! placements) against the same triangles copied, for every ray query and on every SIMD path
+//! this machine has: the same triangles hit and counted, `t` within 1e-5 relative (of the
+//! segment's length when the hit is nearer).
+
+use glam::{Mat4, Vec3};
+
+use super::*;
+use crate::accel::prim::watertight::PreparedRay;
+use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
+use crate::accel::wide::kernels::{prepare, ClosestPlaced, Counts, Occlusions};
+use crate::accel::wide::packets::{CastPackets, ClosestHit};
+use crate::math::Transform;
+use crate::pool::test_pool;
+use crate::sampling::Rng;
+use crate::simd::{dispatch, supported_paths};
+
+/// A random placement: scales of 0.3 to 2 (each mirrored half the time), any rotation, within
+/// ±3 of the origin.
+fn random_transform(rng: &mut Rng) -> Transform {
+    let mut f = |lo: f32, hi: f32| lo + (hi - lo) * rng.uniform();
+    let mut scale = Vec3::new(f(0.3, 2.0), f(0.3, 2.0), f(0.3, 2.0));
+    if f(0.0, 1.0) < 0.5 {
+        scale.x = -scale.x;
+    }
+    let rotate = Vec3::new(f(0.0, 360.0), f(0.0, 360.0), f(0.0, 360.0));
+    let translate = Vec3::new(f(-3.0, 3.0), f(-3.0, 3.0), f(-3.0, 3.0));
+    Transform::from_srt(scale, rotate, translate)
+}
+
+/// `t`'s matrix by rows.
+fn rows(t: &Transform) -> [[f32; 4]; 4] {
+    t.world_from_object.transpose().to_cols_array_2d()
+}
+
+/// The scene of `seed` twice: with placements, and with the placed triangles copied.
+fn scenes(seed: u64) -> (RaycastingScene, RaycastingScene) {
+    let mut rng = Rng::new(seed, &[]);
+    let meshes: [MeshData; 2] = [icosphere(1), subdivided_cube(2, glam::Mat3::IDENTITY)];
+    let (mut placed, mut copied) = (RaycastingScene::new(), RaycastingScene::new());
+    for (vertices, triangles) in &meshes {
+        placed.add_triangles(vertices, triangles).unwrap();
+        copied.add_triangles(vertices, triangles).unwrap();
+    }
+    // Each geometry's object-to-world map and mesh.
+    let mut maps: Vec<(Mat4, usize)> = vec![(Mat4::IDENTITY, 0), (Mat4::IDENTITY, 1)];
+    for _ in 0..12 {
+        let of = (rng.uniform() * maps.len() as f32) as usize % maps.len();
+        let t = random_transform(&mut rng);
+        let id = placed.add_instance(of as u32, &rows(&t)).unwrap();
+        let (map, mesh) = maps[of];
+        let both = Transform::from_matrix(t.world_from_object * map);
+        let (vertices, triangles) = &meshes[mesh];
+        let moved: Vec<[f32; 3]> = vertices
+            .iter()
+            .map(|&v| both.point(Vec3::from(v)).to_array())
+            .collect();
+        assert_eq!(copied.add_triangles(&moved, triangles), Ok(id));
+        maps.push((both.world_from_object, mesh));
+    }
+    (placed, copied)
+}
+
+/// Random rays between points within ±4 (half of them segments, `t` in `[0, 1]`).
+fn random_rays(seed: u64, n: usize) -> Vec<[f32; 6]> {
+    let mut rng = Rng::new(seed, &[1]);
+    let mut p = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 8.0 - 4.0;
+    (0..n)
+        .map(|_| {
+            let (a, b) = (p(), p());
+            let d = b - a;
+            [a.x, a.y, a.z, d.x, d.y, d.z]
+        })
+        .collect()
+}
+
+/// Each query's answers for `rays` on every SIMD path (all paths must agree bit for bit):
+/// closest hits, occlusion of the segments, crossing counts.
+fn answers(scene: &RaycastingScene, rays: &[[f32; 6]]) -> (Vec<ClosestHit>, Vec<bool>, Vec<i32>) {
+    let options = QueryOptions::default();
+    let (accel, _) = scene.prepare(&options).unwrap();
+    let prepared: Vec<Option<PreparedRay>> = rays.iter().map(prepare).collect();
+    let border = accel.borders(test_pool());
+    let mut all = Vec::new();
+    for path in supported_paths() {
+        // The kernels as the queries run them: the own tree's, then the placements'.
+        let mut hits = vec![None; rays.len()];
+        let (accel, options) = (&*accel, &options);
+        let own = CastPackets {
+            accel,
+            options,
+            rays: &prepared,
+            hits: &mut hits,
+        };
+        dispatch(path, own);
+        dispatch(
+            path,
+            ClosestPlaced {
+                accel,
+                options,
+                rays,
+                hits: &mut hits,
+            },
+        );
+        let mut occluded = vec![false; rays.len()];
+        let (range, out) = ((0.0, 1.0), &mut occluded);
+        dispatch(
+            path,
+            Occlusions::<_, false> {
+                accel,
+                options,
+                rays,
+                range,
+                out,
+            },
+        );
+        dispatch(
+            path,
+            Occlusions::<_, true> {
+                accel,
+                options,
+                rays,
+                range,
+                out,
+            },
+        );
+        let mut counts = vec![0; rays.len()];
+        let (border, out) = (&border, &mut counts);
+        dispatch(
+            path,
+            Counts::<_, false> {
+                accel,
+                border,
+                options,
+                rays,
+                out,
+            },
+        );
+        dispatch(
+            path,
+            Counts::<_, true> {
+                accel,
+                border,
+                options,
+                rays,
+                out,
+            },
+        );
+        all.push((hits, occluded, counts));
+    }
+    for other in &all[1..] {
+        assert!(other == &all[0], "the SIMD paths disagree");
+    }
+    all.swap_remove(0)
+}
+
+#[test]
+fn placed_meshes_answer_as_their_copies_on_every_path() {
+    let (mut hits, mut checked) = (0, 0);
+    for seed in 0..6 {
+        let (placed, copied) = scenes(seed);
+        assert_eq!(placed.triangle_count(), copied.triangle_count());
+        let rays = random_rays(seed, 3000);
+        let (a, occluded_a, counts_a) = answers(&placed, &rays);
+        let (b, occluded_b, counts_b) = answers(&copied, &rays);
+        for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+            let key = |h: &ClosestHit| h.map(|h| (h.geometry, h.primitive));
+            assert_eq!(key(a), key(b), "seed {seed}, ray {i}");
+            if let (Some(a), Some(b)) = (a, b) {
+                let (ta, tb) = (a.crossing.t, b.crossing.t);
+                // Relative to the segment (`t` = 1), whose coordinates the maps round.
+                let close = (ta - tb).abs() <= 1e-5 * tb.max(1.0);
+                assert!(close, "seed {seed}, ray {i}: {ta} vs {tb}");
+                hits += 1;
+                // A segment ending within rounding of a surface may go either way.
+                if (tb - 1.0).abs() < 1e-4 {
+                    continue;
+                }
+            }
+            assert_eq!(occluded_a[i], occluded_b[i], "seed {seed}, ray {i}");
+            checked += 1;
+        }
+        assert_eq!(counts_a, counts_b, "seed {seed}");
+    }
+    assert!(
+        hits > 5000 && checked > 15000,
+        "{hits} hits, {checked} checked"
+    );
+}
