@@ -370,7 +370,7 @@ impl RaycastingScene {
     }
 
     /// The closest surface point to each query point, with its triangle, barycentrics and
-    /// normal. Among equally close triangles one is chosen (deterministically).
+    /// normal. Among equally close triangles, the smallest geometry id, then primitive id.
     pub fn compute_closest_points(
         &self,
         points: &[[f32; 3]],

@@ -123,14 +123,18 @@ impl WideBvh {
                 });
                 let (point, b1, b2) = closest_f64(p, corners);
                 let d = (point - p).length_squared();
-                if d < *best_d {
+                let [geometry, primitive] = self.ids(i);
+                let geometry = frame.map_or(geometry, |f| f.geometry);
+                // Among equally near triangles the smallest ids, whatever the order of the
+                // visit (boxes at exactly the best distance are still entered).
+                let tie = |b: &Nearest| (geometry, primitive) < (b.geometry, b.primitive);
+                if d < *best_d || (d == *best_d && best.as_ref().is_some_and(tie)) {
                     *best_d = d;
-                    let [geometry, primitive] = self.ids(i);
                     *best = Some(Nearest {
                         point: point.as_vec3(),
                         b1: b1 as f32,
                         b2: b2 as f32,
-                        geometry: frame.map_or(geometry, |f| f.geometry),
+                        geometry,
                         primitive,
                         slot: i as u32,
                         level: frame.map_or(OWN, |f| f.level),
