@@ -48,6 +48,7 @@
 mod instances;
 mod lazy;
 mod pinhole;
+mod points;
 mod queries;
 mod run;
 
@@ -73,7 +74,8 @@ use crate::scale::MAX_COORDINATE;
 use crate::world::MAX_TRIANGLES;
 
 pub use pinhole::{create_rays_pinhole, create_rays_pinhole_fov};
-pub use queries::{CastRays, ClosestPoints, Intersections};
+pub use points::ClosestPoints;
+pub use queries::{CastRays, Intersections};
 pub use run::QueryOptions;
 
 use crate::accel::wide::levels::WideLevels;

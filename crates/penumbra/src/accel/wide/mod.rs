@@ -17,6 +17,7 @@ pub(crate) mod levels;
 pub(crate) mod nearest;
 pub(crate) mod node;
 pub(crate) mod packets;
+mod stack;
 mod tree;
 
 pub(crate) use tree::{tie_bound, WideBvh};

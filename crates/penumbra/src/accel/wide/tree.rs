@@ -20,10 +20,11 @@ use std::sync::OnceLock;
 
 use super::group::{TriangleGroup, GROUP};
 use super::levels::OWN;
-use super::node::{collapse, WideNode, WIDTH};
+use super::node::{collapse, WideNode};
+pub(crate) use super::stack::Stack;
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
-use crate::accel::{AlphaTests, Bvh, STACK_SIZE};
+use crate::accel::{AlphaTests, Bvh};
 use crate::geometry::Geometry;
 use crate::simd::{prefetch, Isa};
 
@@ -40,11 +41,6 @@ const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 pub(crate) fn tie_bound(t_max: f32) -> f32 {
     t_max * TIE_SCALE
 }
-
-/// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
-/// [`WIDTH`] children, once per level of the binary tree at most (its depth limit keeps it
-/// within the binary walks' [`STACK_SIZE`]).
-const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
 
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
 /// With four, half of the bunny's four-wide nodes had only two children, both leaves: a
@@ -433,70 +429,5 @@ impl WideBvh {
                 true
             },
         );
-    }
-}
-
-/// A stack of the wide traversal, made once per batch and reused from ray to ray: children
-/// still to visit as `(index, count, entry distance)`, `count` 0 for the wide node at
-/// `index`, else the leaf slots `index .. index + count`.
-#[derive(Debug)]
-pub(crate) struct Stack {
-    entries: Box<[(u32, u32, f32); WIDE_STACK]>,
-    len: usize,
-}
-
-impl Default for Stack {
-    fn default() -> Stack {
-        Stack {
-            entries: Box::new([(0, 0, 0.0); WIDE_STACK]),
-            len: 0,
-        }
-    }
-}
-
-impl Stack {
-    /// Starts a traversal of `wide` at its root (nothing for an empty tree).
-    #[inline(always)]
-    fn start(&mut self, wide: &[WideNode]) {
-        self.entries[0] = (0, 0, f32::NEG_INFINITY);
-        self.len = usize::from(!wide.is_empty());
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u32, f32)> {
-        self.len = self.len.checked_sub(1)?;
-        Some(self.entries[self.len])
-    }
-
-    /// Pushes the children of `node` in `mask` with their entry distances `near`; when
-    /// `sorted`, the nearest comes off the stack first.
-    #[inline(always)]
-    fn push_children(
-        &mut self,
-        tree: &WideBvh,
-        node: &WideNode,
-        mask: u32,
-        near: &[f32; WIDTH],
-        sorted: bool,
-    ) {
-        let start = self.len;
-        let mut bits = mask;
-        while bits != 0 {
-            let lane = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let (index, count) = node.child(lane);
-            tree.prefetch_child(index, count);
-            let entry = (index, count, near[lane]);
-            let mut k = self.len;
-            if sorted {
-                // Insertion by decreasing distance among this node's children.
-                while k > start && self.entries[k - 1].2 < entry.2 {
-                    self.entries[k] = self.entries[k - 1];
-                    k -= 1;
-                }
-            }
-            self.entries[k] = entry;
-            self.len += 1;
-        }
     }
 }
