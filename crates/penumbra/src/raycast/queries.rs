@@ -9,8 +9,7 @@ use super::lazy;
 use super::run::{budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::accel::prim::watertight::PreparedRay;
-use crate::accel::wide::kernels::{prepare, ClosestPlaced, Counts, Listing, Occlusions};
-use crate::accel::wide::packets::CastPackets;
+use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Listing};
 use crate::simd::{dispatch, simd_path};
 
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets
@@ -145,31 +144,12 @@ impl RaycastingScene {
             let prepared: Vec<Option<PreparedRay>> =
                 (0..rays.len()).map(|j| prepare(&rays[index(j)])).collect();
             let mut hits = vec![None; rays.len()];
-            let kernel = CastPackets {
-                accel,
-                options,
-                rays: &prepared,
-                hits: &mut hits,
+            // The rays as given, in the packets' order, for the placements.
+            let given = || match &order {
+                Some(o) => o.iter().map(|&i| rays[i]).collect(),
+                None => Cow::from(rays),
             };
-            dispatch(simd_path(), kernel);
-            if accel.has_placements() {
-                // The rays as given, in the packets' order.
-                let rays: Cow<[[f32; 6]]> = match &order {
-                    Some(o) => o.iter().map(|&i| rays[i]).collect(),
-                    None => rays.into(),
-                };
-                let hits = &mut hits;
-                let rays = &rays;
-                dispatch(
-                    simd_path(),
-                    ClosestPlaced {
-                        accel,
-                        options,
-                        rays,
-                        hits,
-                    },
-                );
-            }
+            closest_hits(simd_path(), (accel, options), &prepared, given, &mut hits);
             for (j, hit) in hits.into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let i = index(j);
@@ -200,30 +180,7 @@ impl RaycastingScene {
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
-            let range = (tnear, tfar);
-            let out = &mut *out;
-            dispatch(
-                simd_path(),
-                Occlusions::<_, false> {
-                    accel,
-                    options,
-                    rays,
-                    range,
-                    out,
-                },
-            );
-            if accel.has_placements() {
-                dispatch(
-                    simd_path(),
-                    Occlusions::<_, true> {
-                        accel,
-                        options,
-                        rays,
-                        range,
-                        out,
-                    },
-                );
-            }
+            occlusions(simd_path(), (accel, options), rays, (tnear, tfar), out);
         })?;
         far.result()?;
         Ok(out)
@@ -245,29 +202,7 @@ impl RaycastingScene {
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
-            let out = &mut *out;
-            dispatch(
-                simd_path(),
-                Counts::<_, false> {
-                    accel,
-                    border,
-                    options,
-                    rays,
-                    out,
-                },
-            );
-            if accel.has_placements() {
-                dispatch(
-                    simd_path(),
-                    Counts::<_, true> {
-                        accel,
-                        border,
-                        options,
-                        rays,
-                        out,
-                    },
-                );
-            }
+            counts(simd_path(), (accel, options), border, rays, out);
         })?;
         far.result()?;
         Ok(out)

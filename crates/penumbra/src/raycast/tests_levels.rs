@@ -8,12 +8,12 @@ use glam::{Mat4, Vec3};
 use super::*;
 use crate::accel::prim::watertight::PreparedRay;
 use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
-use crate::accel::wide::kernels::{prepare, ClosestPlaced, Counts, Occlusions};
-use crate::accel::wide::packets::{CastPackets, ClosestHit};
+use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare};
+use crate::accel::wide::packets::ClosestHit;
 use crate::math::Transform;
 use crate::pool::test_pool;
 use crate::sampling::Rng;
-use crate::simd::{dispatch, supported_paths};
+use crate::simd::supported_paths;
 
 /// A random placement: scales of 0.3 to 2 (each mirrored half the time), any rotation, within
 /// ±3 of the origin.
@@ -84,69 +84,14 @@ fn answers(scene: &RaycastingScene, rays: &[[f32; 6]]) -> (Vec<ClosestHit>, Vec<
     let mut all = Vec::new();
     for path in supported_paths() {
         // The kernels as the queries run them: the own tree's, then the placements'.
+        let run = (&*accel, &options);
         let mut hits = vec![None; rays.len()];
-        let (accel, options) = (&*accel, &options);
-        let own = CastPackets {
-            accel,
-            options,
-            rays: &prepared,
-            hits: &mut hits,
-        };
-        dispatch(path, own);
-        dispatch(
-            path,
-            ClosestPlaced {
-                accel,
-                options,
-                rays,
-                hits: &mut hits,
-            },
-        );
+        closest_hits(path, run, &prepared, || rays.into(), &mut hits);
         let mut occluded = vec![false; rays.len()];
-        let (range, out) = ((0.0, 1.0), &mut occluded);
-        dispatch(
-            path,
-            Occlusions::<_, false> {
-                accel,
-                options,
-                rays,
-                range,
-                out,
-            },
-        );
-        dispatch(
-            path,
-            Occlusions::<_, true> {
-                accel,
-                options,
-                rays,
-                range,
-                out,
-            },
-        );
-        let mut counts = vec![0; rays.len()];
-        let (border, out) = (&border, &mut counts);
-        dispatch(
-            path,
-            Counts::<_, false> {
-                accel,
-                border,
-                options,
-                rays,
-                out,
-            },
-        );
-        dispatch(
-            path,
-            Counts::<_, true> {
-                accel,
-                border,
-                options,
-                rays,
-                out,
-            },
-        );
-        all.push((hits, occluded, counts));
+        occlusions(path, run, rays, (0.0, 1.0), &mut occluded);
+        let mut counted = vec![0; rays.len()];
+        counts(path, run, &border, rays, &mut counted);
+        all.push((hits, occluded, counted));
     }
     for other in &all[1..] {
         assert!(other == &all[0], "the SIMD paths disagree");

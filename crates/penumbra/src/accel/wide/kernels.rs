@@ -14,7 +14,10 @@ use glam::Vec3;
 use super::levels::{Borders, WideLevels};
 use super::tree::{SlotHit, Stack};
 use crate::accel::prim::watertight::PreparedRay;
-use crate::simd::{Isa, Kernel};
+use std::borrow::Cow;
+
+use super::packets::CastPackets;
+use crate::simd::{dispatch, Isa, Kernel, SimdPath};
 
 /// Rays between two looks at the cancel flag: a ray through a dense region can take
 /// milliseconds, so a chunk of 1024 could take seconds; a look at every ray cost 3 % of the
@@ -205,5 +208,100 @@ impl<C: Control> Kernel for Listing<'_, C> {
             all.extend_from_slice(&one);
         }
         Ok((counts, all))
+    }
+}
+
+/// The closest hits of `prepared` on `path`, written to `hits`: the own tree by packets, then
+/// the placements, which read the rays as given in the same order (`rays`, made only when
+/// there are placements).
+pub(crate) fn closest_hits<'r, C: Control>(
+    path: SimdPath,
+    (accel, options): (&WideLevels, &C),
+    prepared: &[Option<PreparedRay>],
+    rays: impl FnOnce() -> Cow<'r, [[f32; 6]]>,
+    hits: &mut [Option<SlotHit>],
+) {
+    let own = CastPackets {
+        accel,
+        options,
+        rays: prepared,
+        hits: &mut *hits,
+    };
+    dispatch(path, own);
+    if accel.has_placements() {
+        let rays = &rays();
+        dispatch(
+            path,
+            ClosestPlaced {
+                accel,
+                options,
+                rays,
+                hits,
+            },
+        );
+    }
+}
+
+/// [`Occlusions`] of `rays` on `path`: the own tree's kernel, then the placements'.
+pub(crate) fn occlusions<C: Control>(
+    path: SimdPath,
+    (accel, options): (&WideLevels, &C),
+    rays: &[[f32; 6]],
+    range: (f32, f32),
+    out: &mut [bool],
+) {
+    dispatch(
+        path,
+        Occlusions::<_, false> {
+            accel,
+            options,
+            rays,
+            range,
+            out: &mut *out,
+        },
+    );
+    if accel.has_placements() {
+        dispatch(
+            path,
+            Occlusions::<_, true> {
+                accel,
+                options,
+                rays,
+                range,
+                out,
+            },
+        );
+    }
+}
+
+/// [`Counts`] of `rays` on `path`: the own tree's kernel, then the placements'.
+pub(crate) fn counts<C: Control>(
+    path: SimdPath,
+    (accel, options): (&WideLevels, &C),
+    border: &Borders,
+    rays: &[[f32; 6]],
+    out: &mut [i32],
+) {
+    dispatch(
+        path,
+        Counts::<_, false> {
+            accel,
+            border,
+            options,
+            rays,
+            out: &mut *out,
+        },
+    );
+    if accel.has_placements() {
+        dispatch(
+            path,
+            Counts::<_, true> {
+                accel,
+                border,
+                options,
+                rays,
+                out,
+            },
+        );
     }
 }
