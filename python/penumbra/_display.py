@@ -88,8 +88,10 @@ def display(
 
 
 class LiveImage:
-    """One image in a notebook's output, replaced in place each time :meth:`show` is called
-    (an IPython display handle): what ``Scene.render(progress="notebook")`` shows."""
+    """One image in a notebook's output, replaced in place each time :meth:`show` is called:
+    what ``Scene.render(progress="notebook")`` shows. With ``ipywidgets`` installed it is an
+    ``ipywidgets.Image`` whose PNG is replaced (the front end redraws the image alone);
+    without, an IPython display handle whose output is replaced."""
 
     def __init__(self) -> None:
         if _shell() is None:
@@ -98,14 +100,25 @@ class LiveImage:
                 "use progress=True for a bar on stderr"
             )
         self._handle: Any = None
+        self._widget: Any = None
+        try:
+            import ipywidgets
+        except ImportError:
+            return
+        self._widget = ipywidgets.Image(format="png")
 
     def show(self, image: Any) -> None:
         """Show ``image`` (as :func:`picture` encodes it) in place of the one shown before,
         or below the cell the first time."""
         pic = picture(image)
-        if self._handle is None:
-            from IPython.display import display as show
+        from IPython.display import display as show
 
+        if self._widget is not None:
+            first = not self._widget.value
+            self._widget.value = pic.png
+            if first:
+                show(self._widget)
+        elif self._handle is None:
             self._handle = show(pic, display_id=True)
         else:
             self._handle.update(pic)

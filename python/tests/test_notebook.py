@@ -113,6 +113,44 @@ def test_progress_notebook_updates_one_image_per_pass(cornell, monkeypatch):
     ipython.display = ipython_display
     monkeypatch.setitem(sys.modules, "IPython", ipython)
     monkeypatch.setitem(sys.modules, "IPython.display", ipython_display)
+    monkeypatch.setitem(sys.modules, "ipywidgets", None)  # not installed: a display handle
     image = cornell.render(width=24, height=16, spp=16, progress="notebook")
     assert [k for k, _ in shown] == ["display"] + ["update"] * 4
     assert shown[-1][1].png == penumbra.picture(image).png
+
+
+def test_progress_notebook_replaces_an_ipywidgets_image_when_there_is_one(cornell, monkeypatch):
+    # Stand-ins for IPython's display and ipywidgets.Image: one widget shown once, its PNG
+    # replaced at every pass.
+    import types
+
+    shown, values = [], []
+
+    class Image:
+        def __init__(self, format):
+            assert format == "png"
+            self._value = b""
+
+        @property
+        def value(self):
+            return self._value
+
+        @value.setter
+        def value(self, png):
+            values.append(png)
+            self._value = png
+
+    ipython = types.ModuleType("IPython")
+    ipython.get_ipython = lambda: object()
+    ipython_display = types.ModuleType("IPython.display")
+    ipython_display.display = lambda widget: shown.append(widget)
+    ipython.display = ipython_display
+    widgets = types.ModuleType("ipywidgets")
+    widgets.Image = Image
+    monkeypatch.setitem(sys.modules, "IPython", ipython)
+    monkeypatch.setitem(sys.modules, "IPython.display", ipython_display)
+    monkeypatch.setitem(sys.modules, "ipywidgets", widgets)
+    image = cornell.render(width=24, height=16, spp=16, progress="notebook")
+    assert len(shown) == 1 and isinstance(shown[0], Image)
+    assert len(values) == 5 and len(set(values)) > 1
+    assert values[-1] == penumbra.picture(image).png
