@@ -200,7 +200,9 @@ class Scene:
           pixel's samples are taken in passes over the whole image, 1, 2, 4, ... samples, and
           after each pass but the last ``passes(samples, image)`` is called from this thread
           with the image so far (each pixel's mean over its first ``samples`` samples). The
-          result is bit for bit the image of a render without ``passes``. Not with ``aovs``.
+          first call has ``samples`` 0: the preview, the first sample of every second row,
+          each shown on the row below too, after half the work of one sample. The result is
+          bit for bit the image of a render without ``passes``. Not with ``aovs``.
 
         The GIL is released while rendering. Ctrl-C stops the render within about 0.1 s and
         raises ``KeyboardInterrupt``. Bad settings raise ``ValueError``.

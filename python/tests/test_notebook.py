@@ -115,7 +115,8 @@ def test_progress_notebook_updates_one_image_per_pass(cornell, monkeypatch):
     monkeypatch.setitem(sys.modules, "IPython.display", ipython_display)
     monkeypatch.setitem(sys.modules, "ipywidgets", None)  # not installed: a display handle
     image = cornell.render(width=24, height=16, spp=16, progress="notebook")
-    assert [k for k, _ in shown] == ["display"] + ["update"] * 4
+    # The preview, 1, 2, 4 and 8 samples, then the final image.
+    assert [k for k, _ in shown] == ["display"] + ["update"] * 5
     assert shown[-1][1].png == penumbra.picture(image).png
 
 
@@ -152,5 +153,5 @@ def test_progress_notebook_replaces_an_ipywidgets_image_when_there_is_one(cornel
     monkeypatch.setitem(sys.modules, "ipywidgets", widgets)
     image = cornell.render(width=24, height=16, spp=16, progress="notebook")
     assert len(shown) == 1 and isinstance(shown[0], Image)
-    assert len(values) == 5 and len(set(values)) > 1
+    assert len(values) == 6 and len(set(values)) > 1
     assert values[-1] == penumbra.picture(image).png

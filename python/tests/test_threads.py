@@ -134,7 +134,10 @@ def test_passes_show_the_image_so_far_and_end_in_the_image_of_one_pass(cornell):
 
     final = cornell.render(width=48, height=40, spp=16, threads=2, passes=passes)
     assert np.array_equal(final.view(np.uint32), once.view(np.uint32)), "bit for bit"
-    assert [s for s, _, _ in seen] == [1, 2, 4, 8]
+    # The preview (0: the first sample of the even rows, each shown twice), 1, 2, 4, 8.
+    assert [s for s, _, _ in seen] == [0, 1, 2, 4, 8]
+    preview, one = seen[0][1], seen[1][1]
+    assert np.array_equal(preview[0::2], one[0::2]) and np.array_equal(preview[1::2], preview[0::2])
     assert all(ident == me for _, _, ident in seen)
     assert all(img.shape == (40, 48, 3) and img.dtype == np.float32 for _, img, _ in seen)
     # Each pass is nearer the final image than the first one is.

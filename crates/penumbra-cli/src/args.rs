@@ -130,9 +130,9 @@ pub struct RenderArgs {
     /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
     #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
     pub aov: Option<Passes>,
-    /// Render in passes over the whole image (1, 2, 4, ... samples per pixel), each shown by
-    /// --display-server; the final image is the same as without. Ctrl-C writes the last
-    /// finished pass and exits with 130.
+    /// Render in passes over the whole image (a preview of every second row, then 1, 2, 4,
+    /// ... samples per pixel), each shown by --display-server; the final image is the same
+    /// as without. Ctrl-C writes the last finished pass and exits with 130.
     #[arg(long, conflicts_with = "aov")]
     pub progressive: bool,
     /// Show the image in tev as it renders (pbrt's flag): tev's IPC at HOST, port 14158

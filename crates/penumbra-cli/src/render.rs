@@ -284,6 +284,11 @@ fn write_last_pass(
     interrupt: &Interrupt,
 ) -> Failure {
     match job.output.write_anyway(film, scene.gamma) {
+        Ok(()) if samples == 0 => note(&format!(
+            "interrupted: wrote the preview pass (the first sample of every second row, each \
+             shown twice) to {}",
+            job.output.display()
+        )),
         Ok(()) => note(&format!(
             "interrupted: wrote the last finished pass ({samples} of {} samples per pixel) to {}",
             job.settings.spp,

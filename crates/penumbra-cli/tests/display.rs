@@ -190,13 +190,13 @@ fn progressive_passes_reach_the_viewer_and_end_in_the_same_file() {
     progressive.extend(["--progressive", "--display-server", &address].map(String::from));
     ok(run_in(&repository(), progressive));
     let seen = viewer.join().unwrap();
-    // Bit for bit the image of one pass; the viewer got every pixel once per pass (1, 2, 4,
-    // 8 and 16 samples), the last pass being the image.
+    // Bit for bit the image of one pass; the viewer got every pixel once per pass (the
+    // preview of the even rows, then 1, 2, 4, 8 and 16 samples), the last being the image.
     assert_eq!(
         std::fs::read(&once).unwrap(),
         std::fs::read(&passes).unwrap()
     );
-    assert!(seen.sent.iter().all(|&n| n == 5), "five passes");
+    assert!(seen.sent.iter().all(|&n| n == 6), "six passes");
     let (_, _, _, file) = read_pfm(&passes);
     assert!(seen
         .rgb()

@@ -1,7 +1,7 @@
 //! Progressive rendering through the library: the final film of a render in passes is the
 //! same, bit for bit, as the film of one pass, for every sampler and any thread count; each
 //! intermediate pass is the same for any thread count too, and refines toward the final
-//! image.
+//! image; the first, a preview of the even rows, shows each on the odd row below it.
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -55,15 +55,27 @@ fn passes_end_in_the_film_of_one_pass() {
             assert_eq!(bits(&last), bits(&once), "{sampler:?}, {threads} threads");
             let seen = seen.into_inner().unwrap();
             let counts: Vec<u32> = seen.iter().map(|(s, _)| *s).collect();
-            let expected: Vec<u32> = [1, 2, 4, 8].into_iter().filter(|&s| s < spp).collect();
+            // The preview (0: the first sample of the even rows), then 1, 2, 4, ... samples.
+            let expected: Vec<u32> = [0, 1, 2, 4, 8].into_iter().filter(|&s| s < spp).collect();
             assert_eq!(counts, expected, "{sampler:?}");
+            // The preview shows each even row on the odd row below too, and its even rows
+            // are those of the first whole sample.
+            let (preview, one) = (&seen[0].1, &seen[1].1);
+            let w = preview.width as usize;
+            let row = |f: &Film, y: usize| bits(f)[3 * w * y..3 * w * (y + 1)].to_vec();
+            for y in (0..preview.height as usize).step_by(2) {
+                assert_eq!(row(preview, y), row(one, y), "{sampler:?}, row {y}");
+                if y + 1 < preview.height as usize {
+                    assert_eq!(row(preview, y + 1), row(preview, y), "{sampler:?}, row {y}");
+                }
+            }
             by_threads.push(seen);
         }
         // Each pass is the same for any thread count.
         for ((_, a), (_, b)) in by_threads[0].iter().zip(&by_threads[1]) {
             assert_eq!(bits(a), bits(b), "{sampler:?}");
         }
-        // The first pass is a whole image, nearer the final one than black is.
+        // The preview is a whole image, nearer the final one than black is.
         let first = &by_threads[0][0].1;
         let black = Film {
             pixels: vec![Default::default(); first.pixels.len()],

@@ -26,7 +26,7 @@ use crate::sampling::fixed_offsets;
 use crate::world::World;
 use aov::AovContext;
 use job::{Buffers, Job};
-use passes::{load, pass_samples};
+use passes::{load, plan, preview_row, Rows};
 
 pub use aov::{Aov, AovFilm, AovPixel, AovValues, NO_ID};
 pub use passes::{Pass, PassSink};
@@ -71,9 +71,10 @@ pub struct RenderOptions<'a> {
     /// values.
     pub tiles: Option<&'a TileSink<'a>>,
     /// Progressive rendering: the samples of every pixel are taken in passes over the whole
-    /// film (1, 2, 4, … samples in all, see [`Pass`]) and this is called on the calling
-    /// thread after each pass but the last with the image so far. The final film is the same,
-    /// bit for bit, as without passes. Ignored by [`render_with_aovs`] (one pass).
+    /// film (a preview of every second row, then 1, 2, 4, … samples in all, see [`Pass`])
+    /// and this is called on the calling thread after each pass but the last with the image
+    /// so far. The final film is the same, bit for bit, as without passes. Ignored by
+    /// [`render_with_aovs`] (one pass).
     pub passes: Option<&'a PassSink<'a>>,
 }
 
@@ -315,12 +316,12 @@ fn render_impl(
     // The film holds each pixel's sum over the samples so far; it is divided at the end.
     let film = Mutex::new((pixels, aov_pixels));
     let passes = match (options.passes, with_aovs) {
-        (Some(_), false) => pass_samples(spp),
-        _ => std::iter::once(0..spp).collect(),
+        (Some(_), false) => plan(spp, rh),
+        _ => vec![(Rows::All, 0..spp)],
     };
 
-    for (index, samples) in passes.iter().enumerate() {
-        let count = samples.end as f32;
+    for (index, (rows, samples)) in passes.iter().enumerate() {
+        let (rows, count) = (*rows, samples.end as f32);
         pool.install(|| {
             // Scratch buffers are made once per rayon job, not per tile: a tile's worth of
             // work is small, and filling fresh buffers cost allocations and page faults.
@@ -336,10 +337,14 @@ fn render_impl(
                         values,
                         aovs,
                     } = worker;
-                    load(&film, region, &tile, samples.start > 0, values);
+                    let carried = samples.start > 0 || rows == Rows::Odd;
+                    load(&film, region, &tile, carried, values);
                     aovs.clear();
                     let (tw, mut shadow) = ((tile.x1 - tile.x0) as usize, 0);
                     for (y, sums) in (tile.y0..tile.y1).zip(values.chunks_mut(tw)) {
+                        if !rows.has(y) {
+                            continue;
+                        }
                         let xs = tile.x0..tile.x1;
                         match job.row(y, xs, samples.clone(), buffers, sums, aovs) {
                             Some(s) => shadow += s,
@@ -349,10 +354,12 @@ fn render_impl(
                     shadow_rays.fetch_add(shadow, Ordering::Relaxed);
                     store(&film, region, &tile, values, aovs);
                     if let Some(show) = options.tiles {
-                        let shown: Vec<Rgb> = values.iter().map(|&v| v / count).collect();
+                        let bounds = (tile.y0, tile.y1);
+                        let shown = preview(values, tw, bounds, rows == Rows::Even, count);
                         show(&tile, &shown, aovs);
                     }
-                    let n = values.len() as u64 * samples.len() as u64;
+                    let done_rows = (tile.y0..tile.y1).filter(|&y| rows.has(y)).count();
+                    let n = (done_rows * tw) as u64 * samples.len() as u64;
                     let d = done.fetch_add(n, Ordering::Relaxed) + n;
                     if let Some(progress) = options.progress {
                         progress(d / spp64, pixels_in_all);
@@ -364,15 +371,16 @@ fn render_impl(
         }
         if let (Some(show), true) = (options.passes, index + 1 < passes.len()) {
             let sums = &film.lock().unwrap_or_else(|e| e.into_inner()).0;
-            let pixels = sums.iter().map(|&v| v / count).collect();
+            let bounds = (region.y0, region.y1);
+            let first = rows == Rows::Even;
             let image = Film {
                 width: rw,
                 height: rh,
-                pixels,
+                pixels: preview(sums, rw as usize, bounds, first, count),
             };
             show(&Pass {
                 index,
-                samples: samples.end,
+                samples: if first { 0 } else { samples.end },
                 film: &image,
             });
         }
@@ -396,6 +404,27 @@ fn render_impl(
         pixels,
     };
     Ok((film, aov_pixels, stats))
+}
+
+/// The image of `sums` (rows `y0..y1` of `width` pixels) after `count` samples; with
+/// `preview`, after the even rows' first sample, each odd row showing its
+/// [`preview_row`].
+fn preview(
+    sums: &[Rgb],
+    width: usize,
+    (y0, y1): (u32, u32),
+    preview: bool,
+    count: f32,
+) -> Vec<Rgb> {
+    if !preview {
+        return sums.iter().map(|&v| v / count).collect();
+    }
+    (y0..y1)
+        .flat_map(|y| {
+            let from = (preview_row(y, (y0, y1)) - y0) as usize * width;
+            sums[from..from + width].iter().map(|&v| v / count)
+        })
+        .collect()
 }
 
 /// Copies the finished `tile`'s values (and AOVs, when computed) into the film of `region`.
