@@ -226,8 +226,11 @@ class RaycastingScene:
         matrix = _matrix(transform, (4, 4), call, "transform")
         return self._core.add_instance(geometry_id, matrix)
 
-    def cast_rays(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
-        """The closest hit (t >= 0) of each ray: a dict of :class:`Tensor` arrays, ``t_hit``
+    def cast_rays(
+        self, rays: Any, nthreads: int = 0, tnear: float = 0.0, tfar: float = math.inf
+    ) -> Dict[str, Tensor]:
+        """The closest hit (``tnear <= t <= tfar``; Open3D's ``cast_rays`` has no bounds and
+        takes t >= 0, penumbra's defaults) of each ray: a dict of :class:`Tensor` arrays, ``t_hit``
         (...) float32 in units of
         the direction's length, inf on a miss; ``geometry_ids`` and ``primitive_ids`` (...)
         uint32, ``INVALID_ID`` on a miss; ``primitive_uvs`` (..., 2) float32, the weights of
@@ -239,7 +242,9 @@ class RaycastingScene:
         call = "cast_rays"
         r, lead = _rows(rays, 6, call, "rays")
         row_length = lead[-1] if len(lead) >= 2 else 0
-        return _shaped(self._core.cast_rays(r, _threads(nthreads, call), row_length), lead)
+        near, far = _real(call, "tnear", tnear), _real(call, "tfar", tfar)
+        hits = self._core.cast_rays(r, _threads(nthreads, call), row_length, near, far)
+        return _shaped(hits, lead)
 
     def test_occlusions(
         self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0
@@ -252,13 +257,18 @@ class RaycastingScene:
         hit = self._core.test_occlusions(r, near, far, _threads(nthreads, call))
         return tensor(hit.reshape(lead))
 
-    def count_intersections(self, rays: Any, nthreads: int = 0) -> Tensor:
-        """How many times each ray crosses the surface (t >= 0): a (...) int32 array. A ray
-        through an edge shared by two triangles, or through a vertex, crosses once; from
-        outside a closed mesh the count is even."""
+    def count_intersections(
+        self, rays: Any, nthreads: int = 0, tnear: float = 0.0, tfar: float = math.inf
+    ) -> Tensor:
+        """How many times each ray crosses the surface with ``tnear <= t <= tfar`` (Open3D
+        counts t >= 0, penumbra's defaults; the bounds are penumbra's extension): a (...)
+        int32 array. A ray through an edge shared by two triangles, or through a vertex,
+        crosses once; from outside a closed mesh the count is even."""
         call = "count_intersections"
         r, lead = _rows(rays, 6, call, "rays")
-        return tensor(self._core.count_intersections(r, _threads(nthreads, call)).reshape(lead))
+        near, far = _real(call, "tnear", tnear), _real(call, "tfar", tfar)
+        counts = self._core.count_intersections(r, _threads(nthreads, call), near, far)
+        return tensor(counts.reshape(lead))
 
     def list_intersections(self, rays: Any, nthreads: int = 0) -> Dict[str, Tensor]:
         """Every crossing of every ray, as ``count_intersections`` counts them, sorted by t

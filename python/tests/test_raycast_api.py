@@ -370,3 +370,25 @@ def test_the_gil_is_released_during_a_query():
     assert time.perf_counter() - start > 0.05
     assert spins > 20  # this thread kept running Python meanwhile
     assert np.all(ticks[0] == 2000)
+
+
+def test_tnear_and_tfar_bound_cast_rays_and_count_intersections(sphere):
+    # penumbra's extension (Open3D#5870): the closest hit within [tnear, tfar] is the first
+    # listed crossing there, and the count is the listed crossings there.
+    rays = random_rays(np.random.default_rng(7), 500)
+    listed = sphere.list_intersections(rays)
+    splits, t = listed["ray_splits"].numpy(), listed["t_hit"].numpy()
+    for tnear, tfar in [(0.0, np.inf), (0.5, 2.0), (1.0, 1.0), (3.0, 1.0)]:
+        hit = sphere.cast_rays(rays, tnear=tnear, tfar=tfar)["t_hit"].numpy()
+        count = sphere.count_intersections(rays, tfar=tfar, tnear=tnear).numpy()
+        for i in range(len(rays)):
+            ts = t[splits[i] : splits[i + 1]]
+            ts = ts[(ts >= tnear) & (ts <= tfar)]
+            assert count[i] == len(ts)
+            assert hit[i] == (ts[0] if len(ts) else np.inf)
+    # The defaults are Open3D's queries, bit for bit.
+    plain = sphere.cast_rays(rays)
+    same = sphere.cast_rays(rays, tnear=0.0, tfar=np.inf)
+    assert all(np.array_equal(plain[k].numpy(), same[k].numpy()) for k in plain)
+    with pytest.raises((TypeError, ValueError), match="tnear"):
+        sphere.cast_rays(rays, tnear="near")

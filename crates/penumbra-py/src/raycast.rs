@@ -223,17 +223,19 @@ impl CoreRaycastingScene {
 
     /// Closest hits of (n, 6) rays; `row_length` > 0 when they are the rows of an image,
     /// that many rays per row (the same results, traced in square packets).
-    #[pyo3(signature = (rays, nthreads, row_length = 0))]
+    #[pyo3(signature = (rays, nthreads, row_length = 0, tnear = 0.0, tfar = f32::INFINITY))]
     fn cast_rays<'py>(
         &self,
         py: Python<'py>,
         rays: PyReadonlyArray2<'py, f32>,
         nthreads: usize,
         row_length: usize,
+        tnear: f32,
+        tfar: f32,
     ) -> PyResult<Bound<'py, PyDict>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
         let hits = self.query(py, "cast_rays", nthreads, |s, o| {
-            s.cast_rays_rows(rays, row_length, o)
+            s.cast_rays_between(rays, row_length, (tnear, tfar), o)
         })?;
         let d = PyDict::new(py);
         d.set_item("t_hit", vec1(py, hits.t_hit))?;
@@ -260,16 +262,19 @@ impl CoreRaycastingScene {
         Ok(vec1(py, hit))
     }
 
-    /// Surface crossings of each of (n, 6) rays, int32.
+    /// Surface crossings of each of (n, 6) rays with t in [tnear, tfar], int32.
+    #[pyo3(signature = (rays, nthreads, tnear = 0.0, tfar = f32::INFINITY))]
     fn count_intersections<'py>(
         &self,
         py: Python<'py>,
         rays: PyReadonlyArray2<'py, f32>,
         nthreads: usize,
+        tnear: f32,
+        tfar: f32,
     ) -> PyResult<Bound<'py, PyAny>> {
         let rays = rows::<f32, 6>(&rays, "rays")?;
         let counts = self.query(py, "count_intersections", nthreads, |s, o| {
-            s.count_intersections(rays, o)
+            s.count_intersections_between(rays, (tnear, tfar), o)
         })?;
         Ok(vec1(py, counts))
     }

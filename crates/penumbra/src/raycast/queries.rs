@@ -12,6 +12,9 @@ use crate::accel::prim::watertight::PreparedRay;
 use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Listing};
 use crate::simd::{dispatch, simd_path};
 
+/// The range of `t` of Open3D's `cast_rays` and `count_intersections`.
+const ALL: (f32, f32) = (0.0, f32::INFINITY);
+
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets
 /// (16 rays with AVX-512, 8 without) are then 4 × 4 or 4 × 2 neighbouring rays.
 const TILE: usize = 4;
@@ -85,7 +88,7 @@ impl RaycastingScene {
         rays: &[[f32; 6]],
         options: &QueryOptions,
     ) -> Result<CastRays, RaycastError> {
-        self.cast(rays, None, options)
+        self.cast(rays, None, ALL, options)
     }
 
     /// [`RaycastingScene::cast_rays`] on the rays of an image stored row after row,
@@ -102,15 +105,31 @@ impl RaycastingScene {
         row_length: usize,
         options: &QueryOptions,
     ) -> Result<CastRays, RaycastError> {
-        let tiled = (1..=MAX_TILED_ROW).contains(&row_length);
-        self.cast(rays, tiled.then_some(row_length), options)
+        self.cast_rays_between(rays, row_length, ALL, options)
     }
 
-    /// The closest hits of `rays`, in bands of [`TILE`] rows of `row_length` rays when given.
+    /// [`RaycastingScene::cast_rays_rows`] with only the hits of `t` in `[tnear, tfar]`
+    /// (`range`), as [`RaycastingScene::test_occlusions`] bounds its rays: penumbra's
+    /// extension of Open3D's `cast_rays`, which always takes `[0, ∞]` (Open3D#5870). Bounds
+    /// other than `[0, ∞]` trace the rays one at a time; an empty range hits nothing.
+    pub fn cast_rays_between(
+        &self,
+        rays: &[[f32; 6]],
+        row_length: usize,
+        range: (f32, f32),
+        options: &QueryOptions,
+    ) -> Result<CastRays, RaycastError> {
+        let tiled = (1..=MAX_TILED_ROW).contains(&row_length);
+        self.cast(rays, tiled.then_some(row_length), range, options)
+    }
+
+    /// The closest hits of `rays` with `t` in `range`, in bands of [`TILE`] rows of
+    /// `row_length` rays when given.
     fn cast(
         &self,
         rays: &[[f32; 6]],
         row_length: Option<usize>,
+        range: (f32, f32),
         options: &QueryOptions,
     ) -> Result<CastRays, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
@@ -149,7 +168,8 @@ impl RaycastingScene {
                 Some(o) => o.iter().map(|&i| rays[i]).collect(),
                 None => Cow::from(rays),
             };
-            closest_hits(simd_path(), (accel, options), &prepared, given, &mut hits);
+            let query = (&prepared[..], range);
+            closest_hits(simd_path(), (accel, options), query, given, &mut hits);
             for (j, hit) in hits.into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let i = index(j);
@@ -194,6 +214,18 @@ impl RaycastingScene {
         rays: &[[f32; 6]],
         options: &QueryOptions,
     ) -> Result<Vec<i32>, RaycastError> {
+        self.count_intersections_between(rays, ALL, options)
+    }
+
+    /// [`RaycastingScene::count_intersections`] of the crossings with `t` in `[tnear, tfar]`
+    /// (`range`): penumbra's extension of Open3D's query (Open3D#5870); an empty range
+    /// counts nothing.
+    pub fn count_intersections_between(
+        &self,
+        rays: &[[f32; 6]],
+        range: (f32, f32),
+        options: &QueryOptions,
+    ) -> Result<Vec<i32>, RaycastError> {
         let (accel, pool) = self.prepare(options)?;
         let border = &lazy::borders(&accel, &pool, options)?;
         let accel = &*accel;
@@ -202,7 +234,7 @@ impl RaycastingScene {
         let far = FarOrigins::new();
         run(&pool, options, items.enumerate(), |(k, (rays, out))| {
             far.check(k * CHUNK, rays);
-            counts(simd_path(), (accel, options), border, rays, out);
+            counts(simd_path(), (accel, options), (border, range), rays, out);
         })?;
         far.result()?;
         Ok(out)

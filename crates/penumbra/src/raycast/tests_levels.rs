@@ -86,11 +86,12 @@ fn answers(scene: &RaycastingScene, rays: &[[f32; 6]]) -> (Vec<ClosestHit>, Vec<
         // The kernels as the queries run them: the own tree's, then the placements'.
         let run = (&*accel, &options);
         let mut hits = vec![None; rays.len()];
-        closest_hits(path, run, &prepared, || rays.into(), &mut hits);
+        let every = (0.0, f32::INFINITY);
+        closest_hits(path, run, (&prepared, every), || rays.into(), &mut hits);
         let mut occluded = vec![false; rays.len()];
         occlusions(path, run, rays, (0.0, 1.0), &mut occluded);
         let mut counted = vec![0; rays.len()];
-        counts(path, run, &border, rays, &mut counted);
+        counts(path, run, (&border, every), rays, &mut counted);
         all.push((hits, occluded, counted));
     }
     for other in &all[1..] {
@@ -131,4 +132,39 @@ fn placed_meshes_answer_as_their_copies_on_every_path() {
         hits > 5000 && checked > 15000,
         "{hits} hits, {checked} checked"
     );
+}
+
+#[test]
+fn bounds_on_t_keep_the_hits_and_crossings_within_them() {
+    // Placed and copied scenes alike: the closest hit within [tnear, tfar] is the first
+    // crossing the unbounded list has there, and the bounded count is the list's crossings
+    // within the bounds.
+    let options = QueryOptions::default();
+    for scene in <[RaycastingScene; 2]>::from(scenes(3)) {
+        let rays = random_rays(3, 400);
+        let listed = scene.list_intersections(&rays, &options).unwrap();
+        for (tnear, tfar) in [(0.0, f32::INFINITY), (0.3, 0.8), (0.5, 0.5), (0.9, 0.1)] {
+            let cast = scene
+                .cast_rays_between(&rays, 0, (tnear, tfar), &options)
+                .unwrap();
+            let counted = scene
+                .count_intersections_between(&rays, (tnear, tfar), &options)
+                .unwrap();
+            for (i, (&count, &t)) in counted.iter().zip(&cast.t_hit).enumerate() {
+                let span = listed.ray_splits[i] as usize..listed.ray_splits[i + 1] as usize;
+                let within: Vec<f32> = listed.t_hit[span]
+                    .iter()
+                    .copied()
+                    .filter(|&t| (tnear..=tfar).contains(&t))
+                    .collect();
+                assert_eq!(count as usize, within.len(), "ray {i} in {tnear}..{tfar}");
+                let first = within.first().copied().unwrap_or(f32::INFINITY);
+                assert_eq!(t, first, "ray {i} in {tnear}..{tfar}");
+            }
+        }
+        // The default bounds are the plain queries', bit for bit (packets and all).
+        let plain = scene.cast_rays_rows(&rays, 20, &options).unwrap();
+        let bounded = scene.cast_rays_between(&rays, 20, (0.0, f32::INFINITY), &options);
+        assert_eq!(plain, bounded.unwrap());
+    }
 }

@@ -46,6 +46,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
                 SimdPath::Portable,
                 CastPackets {
                     accel,
+                    range: (0.0, f32::INFINITY),
                     options: &QueryOptions::default(),
                     rays,
                     hits: &mut hit,
@@ -58,6 +59,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
         let mut hits = vec![None; rays.len()];
         let kernel = CastPackets {
             accel,
+            range: (0.0, f32::INFINITY),
             options: &QueryOptions::default(),
             rays: &prepared,
             hits: &mut hits,

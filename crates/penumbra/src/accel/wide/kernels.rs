@@ -91,6 +91,8 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
 /// placements' hits of its ray of `rays` ([`WideLevels::closest_placed`]), `t` in `[0, ∞]`.
 pub(crate) struct ClosestPlaced<'a, C> {
     pub accel: &'a WideLevels,
+    /// Hits with `t` in this range count.
+    pub range: (f32, f32),
     /// Checked every [`CHECK`] rays.
     pub options: &'a C,
     pub rays: &'a [[f32; 6]],
@@ -108,8 +110,9 @@ impl<C: Control> Kernel for ClosestPlaced<'_, C> {
                 return;
             }
             for (ray, hit) in rays.iter().zip(hits) {
-                let all = (0.0, f32::INFINITY);
-                *hit = self.accel.closest_placed::<I>(ray, all, *hit, &mut stack);
+                *hit = self
+                    .accel
+                    .closest_placed::<I>(ray, self.range, *hit, &mut stack);
             }
         }
     }
@@ -120,6 +123,8 @@ impl<C: Control> Kernel for ClosestPlaced<'_, C> {
 /// the placements' added to it (two kernels, as for [`Occlusions`]).
 pub(crate) struct Counts<'a, C, const PLACED: bool> {
     pub accel: &'a WideLevels,
+    /// Crossings with `t` in this range count.
+    pub range: (f32, f32),
     /// [`WideLevels::borders`].
     pub border: &'a Borders<'a>,
     /// Checked every [`CHECK`] rays.
@@ -142,11 +147,12 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                 let mut n = 0i32;
                 let tally = &mut |_| n = n.saturating_add(1);
                 let (accel, border) = (self.accel, self.border);
+                let range = self.range;
                 if PLACED {
-                    accel.each_hit_placed::<I>(ray, border, &mut stack, tally);
+                    accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
                     *count = count.saturating_add(n);
                 } else if let Some(r) = prepare(ray) {
-                    accel.each_hit_own::<I>(&r, border, &mut stack, tally);
+                    accel.each_hit_own::<I>(&r, range, border, &mut stack, tally);
                     *count = n;
                 }
             }
@@ -185,8 +191,9 @@ impl<C: Control> Kernel for Listing<'_, C> {
             one.clear();
             let mut full = Ok(());
             if let Some(r) = prepare(ray) {
+                let all = (0.0, f32::INFINITY);
                 self.accel
-                    .each_hit::<I>(ray, &r, self.border, &mut stack, &mut |h| {
+                    .each_hit::<I>((ray, &r), all, self.border, &mut stack, &mut |h| {
                         // A ray may cross millions of triangles: grown fallibly.
                         if full.is_ok() {
                             full = options.grow(&mut one, 1, what);
@@ -211,18 +218,19 @@ impl<C: Control> Kernel for Listing<'_, C> {
     }
 }
 
-/// The closest hits of `prepared` on `path`, written to `hits`: the own tree by packets, then
-/// the placements, which read the rays as given in the same order (`rays`, made only when
-/// there are placements).
+/// The closest hits of `prepared` with `t` in `range` on `path`, written to `hits`: the own
+/// tree by packets, then the placements, which read the rays as given in the same order
+/// (`rays`, made only when there are placements).
 pub(crate) fn closest_hits<'r, C: Control>(
     path: SimdPath,
     (accel, options): (&WideLevels, &C),
-    prepared: &[Option<PreparedRay>],
+    (prepared, range): (&[Option<PreparedRay>], (f32, f32)),
     rays: impl FnOnce() -> Cow<'r, [[f32; 6]]>,
     hits: &mut [Option<SlotHit>],
 ) {
     let own = CastPackets {
         accel,
+        range,
         options,
         rays: prepared,
         hits: &mut *hits,
@@ -234,6 +242,7 @@ pub(crate) fn closest_hits<'r, C: Control>(
             path,
             ClosestPlaced {
                 accel,
+                range,
                 options,
                 rays,
                 hits,
@@ -274,29 +283,30 @@ pub(crate) fn occlusions<C: Control>(
     }
 }
 
-/// [`Counts`] of `rays` on `path`: the own tree's kernel, then the placements'.
+/// [`Counts`] of `rays` with `t` in `range` on `path`: the own tree's kernel, then the
+/// placements'.
 pub(crate) fn counts<C: Control>(
     path: SimdPath,
     (accel, options): (&WideLevels, &C),
-    border: &Borders,
+    (border, range): (&Borders, (f32, f32)),
     rays: &[[f32; 6]],
     out: &mut [i32],
 ) {
-    dispatch(
-        path,
-        Counts::<_, false> {
-            accel,
-            border,
-            options,
-            rays,
-            out: &mut *out,
-        },
-    );
+    let own = Counts::<_, false> {
+        accel,
+        range,
+        border,
+        options,
+        rays,
+        out: &mut *out,
+    };
+    dispatch(path, own);
     if accel.has_placements() {
         dispatch(
             path,
             Counts::<_, true> {
                 accel,
+                range,
                 border,
                 options,
                 rays,

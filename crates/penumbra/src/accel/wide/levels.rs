@@ -225,20 +225,20 @@ impl WideLevels {
         hit
     }
 
-    /// Calls `f` with every crossing of `ray` (prepared: `prepared`) from `t = 0` on, one per
-    /// crossing of each tree's surface (see [`WideBvh::each_hit`]): the own tree's, then the
-    /// placements'.
+    /// Calls `f` with every crossing of `ray` (prepared: `prepared`) with `t` in `range`, one
+    /// per crossing of each tree's surface (see [`WideBvh::each_hit`]): the own tree's, then
+    /// the placements'.
     #[inline(always)]
     pub fn each_hit<I: Isa>(
         &self,
-        ray: &[f32; 6],
-        prepared: &PreparedRay,
+        (ray, prepared): (&[f32; 6], &PreparedRay),
+        range: (f32, f32),
         borders: &Borders,
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        self.each_hit_own::<I>(prepared, borders, stack, f);
-        self.each_hit_placed::<I>(ray, borders, stack, f);
+        self.each_hit_own::<I>(prepared, range, borders, stack, f);
+        self.each_hit_placed::<I>(ray, range, borders, stack, f);
     }
 
     /// [`WideLevels::each_hit`] of the own tree alone.
@@ -246,12 +246,13 @@ impl WideLevels {
     pub fn each_hit_own<I: Isa>(
         &self,
         prepared: &PreparedRay,
+        range: (f32, f32),
         borders: &Borders,
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
         let own = (borders.own, self.own_alpha.as_deref());
-        self.own.each_hit::<I>(prepared, 0.0, own, stack, f);
+        self.own.each_hit::<I>(prepared, range, own, stack, f);
     }
 
     /// [`WideLevels::each_hit`] of the placements alone.
@@ -259,14 +260,15 @@ impl WideLevels {
     pub fn each_hit_placed<I: Isa>(
         &self,
         ray: &[f32; 6],
+        range: (f32, f32),
         borders: &Borders,
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        let mut bound = f32::INFINITY;
-        self.walk_top(ray, 0.0, &mut bound, |index, p, mesh, r, _| {
+        let mut bound = range.1;
+        self.walk_top(ray, range.0, &mut bound, |index, p, mesh, r, _| {
             let rule = (borders.meshes[p.mesh as usize], p.alpha.as_deref());
-            mesh.each_hit::<I>(r, 0.0, rule, stack, &mut |mut h| {
+            mesh.each_hit::<I>(r, range, rule, stack, &mut |mut h| {
                 (h.geometry, h.level) = (p.geometry, index);
                 f(h)
             });

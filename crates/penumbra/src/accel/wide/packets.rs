@@ -35,6 +35,8 @@ pub(crate) type ClosestHit = Option<SlotHit>;
 /// placements are asked after, by `kernels::ClosestPlaced`).
 pub(crate) struct CastPackets<'a, C> {
     pub accel: &'a WideLevels,
+    /// Hits with `t` in this range count: packets for `[0, ∞]`, single rays otherwise.
+    pub range: (f32, f32),
     /// Checked before each packet: a cancelled query stops there.
     pub options: &'a C,
     pub rays: &'a [Option<PreparedRay>],
@@ -48,6 +50,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
     fn run<const N: usize, I: Isa>(self) {
         let CastPackets {
             accel: levels,
+            range,
             options,
             rays,
             hits,
@@ -60,13 +63,14 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
             if options.cancelled() {
                 return;
             }
-            // Cut-out triangles are tested one ray at a time, by the filtered single-ray walk.
-            let all = (0.0, f32::INFINITY);
-            match lanes::<N>(rays).filter(|_| alpha.is_none()) {
+            // Cut-out triangles are tested one ray at a time, by the filtered single-ray walk,
+            // and so are rays with other bounds than `[0, ∞]`.
+            let packets = alpha.is_none() && range == (0.0, f32::INFINITY);
+            match lanes::<N>(rays).filter(|_| packets) {
                 Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
                 None => {
                     for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-                        *hit = ray.and_then(|r| accel.closest::<I>(&r, all, alpha, &mut stack));
+                        *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
                     }
                 }
             }

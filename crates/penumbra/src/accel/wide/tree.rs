@@ -399,19 +399,20 @@ impl WideBvh {
         ((geometry as u64) << 32) | primitive as u64
     }
 
-    /// Calls `f` with every hit with `t ≥ t_min` under the [`EdgeRule::Owned`] rule (one hit
-    /// per crossing of the surface), in traversal order; `border` is [`WideBvh::border`].
+    /// Calls `f` with every hit with `t` in `[t_min, t_max]` under the [`EdgeRule::Owned`] rule
+    /// (one hit per crossing of the surface), in traversal order; `border` is
+    /// [`WideBvh::border`].
     #[inline(always)]
     pub fn each_hit<I: Isa>(
         &self,
         ray: &PreparedRay,
-        t_min: f32,
+        (t_min, t_max): (f32, f32),
         (border, alpha): (&[Boundary], Option<&AlphaTests>),
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
         let rule = (EdgeRule::Owned, border);
-        let mut t_max = f32::INFINITY;
+        let mut t_max = t_max;
         self.walk::<I>(
             ray,
             t_min,
