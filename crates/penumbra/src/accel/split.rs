@@ -64,6 +64,14 @@ impl BinBox {
             max: self.max.into(),
         }
     }
+
+    /// [`Aabb::half_area`] of a box that is not empty (a union of occupied bins), without
+    /// the emptiness test: the same arithmetic, so the same bits.
+    #[inline(always)]
+    fn half_area(self) -> f32 {
+        let e = self.max - self.min;
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
 }
 
 /// Per axis, the bounds and number of the primitives whose centroid falls in each bin, and
@@ -96,18 +104,25 @@ impl Bins {
                 let b = bin_at(at[axis]);
                 self.bounds[axis][b] = self.bounds[axis][b].union(bounds);
                 self.counts[axis][b] += 1;
-                self.occupied[axis] |= 1 << b;
             }
+        }
+    }
+
+    /// Marks the bins that hold a primitive, once binning is done (per bin, not per
+    /// primitive: a primitive is binned at every level of the tree, a bin once per node).
+    fn mark_occupied(&mut self) {
+        for axis in 0..3 {
+            let counts = &self.counts[axis];
+            self.occupied[axis] = (0..BINS).fold(0, |m, b| m | u16::from(counts[b] > 0) << b);
         }
     }
 
     fn merge(mut self, other: Bins) -> Bins {
         for axis in 0..3 {
-            for b in occupied(other.occupied[axis]) {
+            for b in 0..BINS {
                 self.bounds[axis][b] = self.bounds[axis][b].union(other.bounds[axis][b]);
                 self.counts[axis][b] += other.counts[axis][b];
             }
-            self.occupied[axis] |= other.occupied[axis];
         }
         self
     }
@@ -209,6 +224,7 @@ fn choose(
     } else {
         bins.add(prims, min, scale);
     }
+    bins.mark_occupied();
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin)
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
@@ -226,7 +242,7 @@ fn choose(
         for b in occupied_descending(used) {
             acc = acc.union(bin_bounds[b]);
             count += bin_counts[b] as usize;
-            right_cost[b] = acc.aabb().half_area() * count as f32;
+            right_cost[b] = acc.half_area() * count as f32;
         }
         let (mut acc, mut count) = (BinBox::EMPTY, 0);
         let mut bins_used = occupied(used).peekable();
@@ -234,7 +250,7 @@ fn choose(
             acc = acc.union(bin_bounds[b]);
             count += bin_counts[b] as usize;
             // `next` is the first occupied bin right of the plane after `b`.
-            let cost = acc.aabb().half_area() * count as f32 + right_cost[next];
+            let cost = acc.half_area() * count as f32 + right_cost[next];
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
