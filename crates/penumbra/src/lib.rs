@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod camera_path;
 mod distribution;
 mod encode8;
 mod files;
@@ -84,6 +85,7 @@ pub use accel::{
     intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
 };
 pub use camera::{Camera, CameraError, PinholeCamera};
+pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
