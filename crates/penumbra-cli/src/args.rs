@@ -20,7 +20,7 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
     #[command(version)]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Validate a scene file (or a bare .obj or .ply mesh) and print a summary.
     #[command(version)]
     Check(CheckArgs),
@@ -89,6 +89,26 @@ pub struct RenderArgs {
     /// {camera}).
     #[arg(long, value_name = "NAMES")]
     pub camera: Option<String>,
+    /// Frames of path cameras ([[cameras.NAME.keys]] or an orbit) to render: A:B (both
+    /// included, as in Blender), A:B:STEP, one frame A, or `all` (the default for a path
+    /// camera). -o then needs {frame} (or {frame:04}) when more than one image is rendered.
+    #[arg(long, value_name = "A:B[:STEP]", value_parser = crate::sequence::parse_frames, allow_hyphen_values = true)]
+    pub frames: Option<crate::sequence::Frames>,
+    /// Render only every N-th task of the run (cameras × frames, in order), starting at the
+    /// K-th (0-based): a SLURM array or a Kubernetes indexed job gives each process its K.
+    #[arg(long, value_name = "K/N", value_parser = crate::sequence::parse_shard)]
+    pub shard: Option<crate::sequence::Shard>,
+    /// Skip a task whose image exists and whose record beside it (OUT.meta.json, written by
+    /// every run with --resume) says it was rendered with exactly the same settings.
+    #[arg(long)]
+    pub resume: bool,
+    /// Write every task's camera (intrinsics K and pose) to this JSON file.
+    #[arg(long, value_name = "FILE.json")]
+    pub poses: Option<PathBuf>,
+    /// The layout of --poses: `penumbra` ({"frames": [...]}, OpenCV and OpenGL poses) or
+    /// `nerf` (a transforms.json as instant-ngp and nerfstudio read it).
+    #[arg(long, value_name = "F", default_value = "penumbra", value_parser = ["penumbra", "nerf"], requires = "poses")]
+    pub poses_format: String,
     /// Worker threads (0: all cores).
     #[arg(
         short,

@@ -1,5 +1,7 @@
-//! `penumbra render`: load and build the scene once, plan one render per camera (settings,
-//! region and output, all checked before any work), then render, write and report each.
+//! `penumbra render`: load and build the scene once, plan one render per task (camera ×
+//! frame; settings, region and output, all checked before any work; see `plan`), write the
+//! poses, then render, write and report each task of this shard (skipping, with `--resume`,
+//! those done before).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -8,27 +10,21 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::{
-    AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderSettings,
-    Rgb, Scene, SceneFile, SettingsError, View, World, MAX_THREADS,
+    AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, Rgb, Scene,
+    StagedFile, MAX_THREADS,
 };
 
 use crate::aov::{self, Passes};
 use crate::args::RenderArgs;
-use crate::cameras;
 use crate::display::Preview;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
-use crate::output::{self, expand, names_camera, scene_stem, Fields, Output, Target};
-use crate::settings::{flag_of, patch, region};
+use crate::output::{self, Target};
+use crate::plan::{self, Job};
+use crate::settings::flag_of;
 use crate::signals::Interrupt;
 use crate::summary::Report;
-
-/// One render of the run.
-struct Job {
-    settings: RenderSettings,
-    region: Option<PixelBounds>,
-    output: Output,
-}
+use crate::{poses, record};
 
 pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let interrupt = Interrupt::install();
@@ -49,7 +45,18 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let scene = file.build(args.threads).map_err(invalid)?;
     // The scene file, then its meshes and textures: everything of loading but the BVH.
     let parse_time = file_time + scene.load_time;
-    let jobs = plan(args, &file, &scene)?;
+    let all = plan::plan(args, &file, &scene)?;
+    if let Some(path) = &args.poses {
+        // From here on files are written: a signal stops the run between two writes.
+        interrupt.defer();
+        poses::write(path, &args.poses_format, &all, &scene, &interrupt)?;
+    }
+    let count = all.len();
+    let jobs: Vec<Job> = match args.shard {
+        Some(shard) => all.into_iter().filter(|j| shard.takes(j.task)).collect(),
+        None => all,
+    };
+    let digest = args.resume.then(|| record::digest(file.text(), &args.set));
     let load_time = load_start.elapsed();
     interrupt.check()?;
     let mut preview = args
@@ -58,6 +65,16 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         .and_then(|server| Preview::connect(server, note));
 
     for job in &jobs {
+        interrupt.check()?;
+        let recorded = digest
+            .as_deref()
+            .map(|d| record::settings(job, d, args.aov.as_ref(), scene.gamma));
+        if let Some(settings) = &recorded {
+            if record::done(job, settings) {
+                skipped(args, job, count)?;
+                continue;
+            }
+        }
         job.output.make_folder()?;
         if let Some(p) = preview.as_mut() {
             let passes = args.aov.clone().unwrap_or(Passes(Vec::new()));
@@ -116,31 +133,55 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             e => runtime(e),
         })?;
         interrupt.check()?;
+        // With --resume, the old record goes before the image is replaced, and the new one is
+        // renamed into place right after it (see `record`).
+        let mut record = match (recorded, &job.output.target) {
+            (Some(settings), Target::File(image)) => {
+                record::remove(image)?;
+                Some((settings, image))
+            }
+            _ => None,
+        };
+        let mut stage_record = |aov_files: &[PathBuf]| -> Result<Vec<StagedFile>, Failure> {
+            let Some((settings, image)) = record.take() else {
+                return Ok(Vec::new());
+            };
+            let mut files = vec![image.clone()];
+            files.extend(aov_files.iter().cloned());
+            Ok(vec![record::stage(job, settings, &files, &scene)?])
+        };
         // The files written beside the image, one per pass (none for an EXR, which holds them).
         // The image and its pass files are staged, then renamed into place together.
         let aov_files = match (&args.aov, &aovs, &job.output.target) {
             (Some(passes), Some(aovs), Target::File(path)) => {
                 if job.output.format == OutputFormat::Exr {
                     let exr = aov::stage_exr(path, &film, aovs, passes)?;
-                    output::commit(vec![exr], &interrupt)?;
+                    let mut files = vec![exr];
+                    files.extend(stage_record(&[])?);
+                    output::commit(files, &interrupt)?;
                     Vec::new()
                 } else {
                     let files = aov::stage_files(path, aovs, passes, &interrupt)?;
-                    let paths = files.iter().map(|f| f.path().to_owned()).collect();
-                    job.output.write(&film, scene.gamma, files, &interrupt)?;
+                    let paths: Vec<PathBuf> = files.iter().map(|f| f.path().to_owned()).collect();
+                    let after = stage_record(&paths)?;
+                    job.output
+                        .write(&film, scene.gamma, files, after, &interrupt)?;
                     paths
                 }
             }
             _ => {
+                let after = stage_record(&[])?;
                 job.output
-                    .write(&film, scene.gamma, Vec::new(), &interrupt)?;
+                    .write(&film, scene.gamma, Vec::new(), after, &interrupt)?;
                 Vec::new()
             }
         };
 
         let report = Report {
             scene: &scene_name(&args.scene),
-            camera: camera_name(&job.settings.view, &scene.world),
+            camera: &job.camera,
+            frame: job.frame,
+            task: (job.task, count),
             output: &job.output.display(),
             aov_files: &aov_files,
             film: &film,
@@ -160,100 +201,26 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Every render of the run, each checked (settings, output name and format, image size)
-/// before anything is rendered or written.
-fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, Failure> {
-    let views = cameras::select(args.camera.as_deref(), &scene.world)?;
-    let several = views.len() > 1;
-    let (pattern, from) = output_pattern(args, scene, several)?;
-    if several && pattern.to_str().is_none_or(|p| !names_camera(p)) {
-        return Err(invalid(format!(
-            "{from}: {} cameras need {{camera}} in the output name, such as out/{{scene}}_{{camera}}.png",
-            views.len()
-        )));
-    }
-    let stem = scene_stem(&args.scene, is_stdin(&args.scene));
-    let mut jobs: Vec<Job> = Vec::new();
-    for view in &views {
-        // Settings from flags are checked before anything is written or rendered.
-        let bad = |e: SettingsError| invalid(format!("{}: {e}", flag_of(&e)));
-        let settings = patch(args, &scene.settings, view.as_deref())
-            .apply(&scene.settings, file.samples())
-            .map_err(bad)?;
-        settings.check(&scene.world).map_err(bad)?;
-        let name = match pattern.to_str() {
-            Some(p) => {
-                let fields = Fields {
-                    camera: camera_name(&settings.view, &scene.world),
-                    scene: &stem,
-                    spp: settings.spp,
-                    seed: settings.seed,
-                };
-                PathBuf::from(expand(p, &fields).map_err(|e| invalid(format!("{from}: {e}")))?)
-            }
-            // Not UTF-8: no fields to expand.
-            None => pattern.clone(),
-        };
-        let output = Output::new(name, args.format)?;
-        if args.aov.is_some() && output.target == Target::Stdout {
-            return Err(invalid(
-                "--aov: passes are written beside an image file, not to standard output (-o -)",
-            ));
-        }
-        let region = region(args, &settings);
-        let (w, h) = match region {
-            Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),
-            None => (settings.width, settings.height),
-        };
-        output.check_size(w, h)?;
-        // Camera names that differ only in a path separator (made `_`) meet here.
-        if let Some(other) = jobs.iter().find(|j| j.output.target == output.target) {
-            return Err(invalid(format!(
-                "{from}: two renders would write {}",
-                other.output.display()
-            )));
-        }
-        jobs.push(Job {
-            settings,
-            region,
-            output,
-        });
-    }
-    Ok(jobs)
-}
-
-/// The output name before expansion and the flag or key it comes from: `-o`, else
-/// `film.output`, else `<scene stem>.png` beside the scene (`<scene stem>_{camera}.png` for
-/// several cameras).
-fn output_pattern(
-    args: &RenderArgs,
-    scene: &Scene,
-    several: bool,
-) -> Result<(PathBuf, &'static str), Failure> {
-    if let Some(o) = &args.output {
-        return Ok((o.clone(), "-o"));
-    }
-    if let Some(o) = &scene.output {
-        return Ok((o.clone(), "film.output"));
-    }
-    if is_stdin(&args.scene) {
-        return Err(invalid(
-            "-o: a scene read from standard input needs -o (or film.output)",
+/// Reports a task `--resume` skips: its image is there, made with the same settings.
+fn skipped(args: &RenderArgs, job: &Job, count: usize) -> Result<(), Failure> {
+    if !args.quiet {
+        note(&format!(
+            "penumbra: [{}/{count}] done before, skipped -> {}",
+            job.task + 1,
+            job.output.display()
         ));
     }
-    let stem = args.scene.file_stem().unwrap_or_default();
-    let mut name = stem.to_owned();
-    name.push(if several { "_{camera}.png" } else { ".png" });
-    Ok((args.scene.with_file_name(name), "-o"))
-}
-
-/// The camera's name for `{camera}`.
-fn camera_name<'a>(view: &'a View, world: &'a World) -> &'a str {
-    match view {
-        View::Named(n) => n,
-        View::First => world.cameras().first().map_or("camera", |(n, _)| n),
-        View::Camera(_) => "camera",
+    if args.json {
+        let line = serde_json::json!({
+            "camera": job.camera,
+            "frame": job.frame,
+            "task": job.task,
+            "output": job.output.display(),
+            "status": "skipped",
+        });
+        say(&line.to_string())?;
     }
+    Ok(())
 }
 
 /// The flag that chose the region.

@@ -64,6 +64,7 @@ mod math;
 mod memory;
 mod names;
 mod pool;
+mod pose;
 mod raycast;
 mod render;
 mod sampling;
@@ -102,6 +103,7 @@ pub use material::{Cutout, Material};
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use names::{escape_controls, file_name_part, UnknownName};
 pub use pool::MAX_THREADS;
+pub use pose::{CameraPose, Mat3Rows, Mat4Rows};
 pub use raycast::{
     create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
