@@ -102,6 +102,10 @@ pub struct RenderArgs {
     /// every run with --resume) says it was rendered with exactly the same settings.
     #[arg(long)]
     pub resume: bool,
+    /// Write OUT.meta.json beside each image (as --resume does): how it was made, the files
+    /// written, K and the pose, and which object ids belong to which [[objects]] entry.
+    #[arg(long)]
+    pub meta: bool,
     /// Write every task's camera (intrinsics K and pose) to this JSON file.
     #[arg(long, value_name = "FILE.json")]
     pub poses: Option<PathBuf>,
@@ -145,8 +149,9 @@ pub struct RenderArgs {
     /// --light-samples still apply (--spp without --sampler keeps the scene's sampler).
     #[arg(long)]
     pub quick: bool,
-    /// Passes beside the image: a comma list of depth, normal, albedo, position, object_id,
-    /// primitive_id, or all. An .exr output holds them as extra channels; other outputs get
+    /// Passes beside the image: a comma list of depth (the distance along the ray; alias
+    /// range), normal, albedo, position, object_id, primitive_id, z (planar depth along the
+    /// camera's forward axis), or all. An .exr output holds them as extra channels; other outputs get
     /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
     #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
     pub aov: Option<Passes>,

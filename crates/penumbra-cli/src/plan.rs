@@ -111,10 +111,11 @@ fn job(
             "--aov: passes are written beside an image file, not to standard output (-o -)",
         ));
     }
-    if args.resume && output.target == Target::Stdout {
-        return Err(invalid(
-            "--resume: a record is written beside an image file, not standard output (-o -)",
-        ));
+    if (args.resume || args.meta) && output.target == Target::Stdout {
+        let flag = if args.resume { "--resume" } else { "--meta" };
+        return Err(invalid(format!(
+            "{flag}: a record is written beside an image file, not standard output (-o -)"
+        )));
     }
     let region = region(args, &settings);
     let (w, h) = match region {

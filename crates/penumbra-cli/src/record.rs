@@ -1,5 +1,7 @@
-//! `--resume`: the record written beside each image (`out.png` → `out.meta.json`) saying how
-//! it was made, and the test of whether a task is done.
+//! `--resume` and `--meta`: the record written beside each image (`out.png` →
+//! `out.meta.json`) saying how it was made, the files written, the camera (K and pose) and
+//! which object ids belong to which `[[objects]]` entry; and the test of whether a task is
+//! done.
 //!
 //! A task is done when its image and every file its record lists exist and the record's
 //! `settings` are exactly those the task would render with now: the scene's digest (its
@@ -10,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use penumbra::{CameraPose, Override, Scene, StagedFile, View, World};
+use penumbra::{CameraPose, Override, Scene, SceneFile, StagedFile, View, World};
 use serde_json::{json, Value};
 
 use crate::aov::Passes;
@@ -120,11 +122,30 @@ pub fn remove(image: &Path) -> Result<(), Failure> {
     }
 }
 
+/// Each `[[objects]]` entry: its key, its type (and file) and the object ids it added, as
+/// `[first, end)` (one id, or one per copy of `instances`): what `object_id` values name.
+fn objects(file: &SceneFile, scene: &Scene) -> Vec<Value> {
+    file.desc
+        .objects
+        .iter()
+        .zip(&scene.objects)
+        .enumerate()
+        .map(|(i, (o, ids))| {
+            json!({
+                "key": format!("objects[{i}]"),
+                "type": crate::check::object_kind(o),
+                "ids": [ids.start, ids.end],
+            })
+        })
+        .collect()
+}
+
 /// The record of a finished job, staged: its settings, the files written and its camera.
 pub fn stage(
     job: &Job,
     settings: Value,
     files: &[PathBuf],
+    file: &SceneFile,
     scene: &Scene,
 ) -> Result<StagedFile, Failure> {
     let Target::File(image) = &job.output.target else {
@@ -135,8 +156,13 @@ pub fn stage(
         "settings": settings,
         "image": image.display().to_string(),
         "files": files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
+        "width": job.region.map_or(job.settings.width, |b| b.x1.saturating_sub(b.x0)),
+        "height": job.region.map_or(job.settings.height, |b| b.y1.saturating_sub(b.y0)),
         "K": pose.map(|p| p.k),
         "camera_to_world": pose.map(|p| p.camera_to_world),
+        "camera_to_world_opengl": pose.map(|p| p.camera_to_world_opengl),
+        "world_to_camera": pose.map(|p| p.world_to_camera),
+        "objects": objects(file, scene),
     });
     let text = serde_json::to_string(&record).map_err(runtime)? + "\n";
     StagedFile::write_bytes(&path_of(image), text.as_bytes()).map_err(runtime)

@@ -56,7 +56,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         Some(shard) => all.into_iter().filter(|j| shard.takes(j.task)).collect(),
         None => all,
     };
-    let digest = args.resume.then(|| record::digest(file.text(), &args.set));
+    let digest = (args.resume || args.meta).then(|| record::digest(file.text(), &args.set));
     let load_time = load_start.elapsed();
     interrupt.check()?;
     let mut preview = args
@@ -69,7 +69,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         let recorded = digest
             .as_deref()
             .map(|d| record::settings(job, d, args.aov.as_ref(), scene.gamma));
-        if let Some(settings) = &recorded {
+        if let Some(settings) = recorded.as_ref().filter(|_| args.resume) {
             if record::done(job, settings) {
                 skipped(args, job, count)?;
                 continue;
@@ -148,7 +148,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             };
             let mut files = vec![image.clone()];
             files.extend(aov_files.iter().cloned());
-            Ok(vec![record::stage(job, settings, &files, &scene)?])
+            Ok(vec![record::stage(job, settings, &files, &file, &scene)?])
         };
         // The files written beside the image, one per pass (none for an EXR, which holds them).
         // The image and its pass files are staged, then renamed into place together.

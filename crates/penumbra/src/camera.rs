@@ -143,6 +143,11 @@ impl PinholeCamera {
         self.eye
     }
 
+    /// The unit direction the camera looks in (toward `look_at`).
+    pub fn forward(&self) -> Vec3 {
+        self.forward
+    }
+
     /// The ray through film point `(x, y)`: x in `[0, width)` from the left edge, y in
     /// `[0, height)` from the top edge. The direction is normalized.
     pub fn ray(&self, x: f32, y: f32) -> Ray {
