@@ -102,6 +102,18 @@ pub struct RenderArgs {
     /// every run with --resume) says it was rendered with exactly the same settings.
     #[arg(long)]
     pub resume: bool,
+    /// Append one JSON line per task to this file as it ends: task, camera, frame, seed,
+    /// seconds, peak memory, host, outputs, attempts, status (rendered, skipped, failed).
+    #[arg(long, value_name = "FILE.jsonl")]
+    pub manifest: Option<PathBuf>,
+    /// Try a task that failed at run time (a file not written, memory) up to N more times;
+    /// then go on, and list the failed tasks at the end (exit code 1).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub retries: u32,
+    /// List the tasks of this run (and shard) on stdout, and whether --resume would skip
+    /// them; render and write nothing.
+    #[arg(long)]
+    pub dry_run: bool,
     /// Write OUT.meta.json beside each image (as --resume does): how it was made, the files
     /// written, K and the pose, and which object ids belong to which [[objects]] entry.
     #[arg(long)]

@@ -19,6 +19,7 @@ mod completions;
 mod display;
 mod failure;
 mod input;
+mod manifest;
 mod output;
 mod plan;
 mod poses;
@@ -28,6 +29,7 @@ mod sequence;
 mod settings;
 mod signals;
 mod summary;
+mod task;
 mod warnings;
 
 use std::process::ExitCode;

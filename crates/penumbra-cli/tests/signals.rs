@@ -247,16 +247,20 @@ fn statuses(stdout: &[u8]) -> Vec<(i64, String)> {
 fn a_sequence_stopped_by_a_signal_keeps_its_frames_and_resume_finishes_it() {
     let sb = TempDir::new("signal-sequence");
     let scene = sb.write("s.toml", heavy_orbit());
-    // Each frame is 1024 × 4096 shadow rays on one thread: a fraction of a second.
+    // Each frame is 4096 × 4096 shadow rays on one thread: a fraction of a second.
+    let manifest = sb.join("manifest.jsonl");
+    let manifest_arg = manifest.to_str().unwrap();
     let args = [
         "--spp",
-        "1024",
+        "4096",
         "--light-samples",
         "64",
         "-t",
         "1",
         "--resume",
         "--json",
+        "--manifest",
+        manifest_arg,
     ];
     let out = sb.join("run/f{frame}.png");
     let clean = sb.join("clean/f{frame}.png");
@@ -302,6 +306,19 @@ fn a_sequence_stopped_by_a_signal_keeps_its_frames_and_resume_finishes_it() {
             got.iter().map(|(f, _)| *f).collect::<Vec<_>>(),
             [0, 1, 2, 3]
         );
+        // The manifest of both runs: no frame rendered twice.
+        let text = std::fs::read_to_string(&manifest).unwrap();
+        let mut counts = [0; 4];
+        for (f, status) in statuses(text.as_bytes()) {
+            if status == "rendered" {
+                counts[f as usize] += 1;
+            }
+        }
+        assert!(
+            counts.iter().all(|&n| n <= 1),
+            "SIG{signal}: {counts:?}\n{text}"
+        );
+        std::fs::remove_file(&manifest).unwrap();
     }
     // Every frame is the one a run without interruption writes.
     let full = Command::new(env!("CARGO_BIN_EXE_penumbra"))
