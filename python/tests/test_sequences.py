@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import penumbra
+import penumbra.poses
 from penumbra import views
 from conftest import SCENES, read_pfm, run_cli, same_bits
 
@@ -65,3 +66,39 @@ def test_an_orbit_paths_frames_are_the_images_of_views_orbit(tmp_path):
     for frame in (1, 4):
         image = scene.render(camera=turn[frame]["camera"], width=24, height=16)
         assert same_bits(image, read_pfm(tmp_path / f"f{frame}.pfm")), frame
+
+
+def test_python_poses_are_the_command_lines(tmp_path):
+    # The orbit as a path of the scene file (CLI) and as views.orbit (Python): the same K,
+    # poses and NeRF transforms, number for number.
+    center, radius, height, frames, start, fov = (0.0, 1.0, 0.0), 2.5, 0.4, 5, 15, 45
+    for fmt in ("penumbra", "nerf"):
+        run_cli(
+            "render", CORNELL, "--set", orbit_override(center, radius, height, frames, start, fov),
+            "--camera", "turn", "--width", 6, "--height", 4, "--spp", 1, "--quiet",
+            "-o", tmp_path / "img" / "turn{frame:04}.png", "--poses", tmp_path / f"cli_{fmt}.json",
+            "--poses-format", fmt,
+        )
+        turn = views.orbit(
+            center=center, radius=radius, frames=frames, height=height, fov=fov,
+            start_degrees=start, name="turn{index:04d}",
+        )
+        mine = tmp_path / f"py_{fmt}.json"
+        penumbra.poses.write_poses(
+            mine, turn, 6, 4, output=str(tmp_path / "img" / "{name}.png"), format=fmt
+        )
+        cli = json.loads((tmp_path / f"cli_{fmt}.json").read_text())
+        py = json.loads(mine.read_text())
+        for c, p in zip(cli["frames"], py["frames"]):
+            if fmt == "nerf":
+                assert c["file_path"] == p["file_path"] == f"img/turn{c['frame']:04d}.png"
+                keys = ("transform_matrix", "fl_x", "fl_y", "cx", "cy", "w", "h")
+            else:
+                keys = ("frame", "file", "width", "height", "fov", "K", "camera_to_world",
+                        "camera_to_world_opengl", "world_to_camera", "position", "look_at", "up")
+            for key in keys:
+                assert c[key] == p[key], (fmt, c["frame"], key)
+    pose = penumbra.poses.camera_pose(turn[0]["camera"], 6, 4)
+    assert pose["K"][0, 2] == 2.5 and pose["K"][1, 2] == 1.5
+    with pytest.raises(ValueError, match="explicit camera"):
+        penumbra.poses.poses(["front"], 6, 4)

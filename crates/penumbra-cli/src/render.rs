@@ -47,14 +47,13 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let digest = (args.resume || args.meta).then(|| record::digest(file.text(), &args.set));
     let load_time = load_start.elapsed();
     interrupt.check()?;
+    if args.dry_run {
+        return dry_run(args, &jobs, &all, digest.as_deref(), scene.gamma, count);
+    }
     let mut preview = args
         .display_server
         .as_deref()
         .and_then(|server| Preview::connect(server, note));
-
-    if args.dry_run {
-        return dry_run(args, &jobs, &all, digest.as_deref(), scene.gamma, count);
-    }
     let mut manifest = Manifest::open(args.manifest.as_deref())?;
     if let Some(path) = &args.poses {
         // From here on files are written: a signal stops the run between two writes.
