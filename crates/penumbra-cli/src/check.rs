@@ -45,6 +45,23 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let s = world.stats();
     let settings = &scene.settings;
     let cameras: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
+    // A camera with keys or a path, with its frames: "turn (frames 0 to 119)".
+    let camera_text: Vec<String> = cameras
+        .iter()
+        .map(|&n| match scene.path(n) {
+            Some(p) => format!(
+                "{n} (frames {} to {})",
+                p.frames().start(),
+                p.frames().end()
+            ),
+            None => n.to_owned(),
+        })
+        .collect();
+    let paths: serde_json::Map<String, Value> = scene
+        .paths
+        .iter()
+        .map(|(n, p)| (n.clone(), json!([p.frames().start(), p.frames().end()])))
+        .collect();
     if args.json {
         let summary = json!({
             "scene": name,
@@ -68,6 +85,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             "materials": s.materials,
             "textures": s.textures,
             "cameras": cameras,
+            "camera_frames": paths,
             "bounds": bounds_json(world.bounds()),
             "objects": objects.iter().map(|o| json!({
                 "key": o.key,
@@ -113,7 +131,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     lines.extend([
         format!("  materials  {}", s.materials),
         format!("  textures   {}", s.textures),
-        format!("  cameras    {}", cameras.join(", ")),
+        format!("  cameras    {}", camera_text.join(", ")),
         format!("  bounds     {}", bounds_text(world.bounds())),
         format!("  objects    {}", objects.len()),
     ]);

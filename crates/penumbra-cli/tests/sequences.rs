@@ -288,3 +288,63 @@ fn without_camera_a_first_path_camera_renders_every_frame() {
         ["s.toml", "s_0000.png", "s_0001.png", "s_0002.png"]
     );
 }
+
+#[test]
+fn check_lists_each_path_cameras_frames() {
+    let dir = TempDir::new("seq-check");
+    dir.write("s.toml", scene());
+    let r = ok(run_in(dir.path(), ["check", "s.toml"]));
+    assert!(
+        r.out()
+            .contains("cameras    front, fly (frames 2 to 9), turn (frames 0 to 5)"),
+        "{}",
+        r.out()
+    );
+    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    let v: Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(v["cameras"], serde_json::json!(["front", "fly", "turn"]));
+    assert_eq!(
+        v["camera_frames"],
+        serde_json::json!({"fly": [2, 9], "turn": [0, 5]})
+    );
+}
+
+#[test]
+fn resume_renders_a_frame_again_when_one_of_its_pass_files_is_gone() {
+    let dir = TempDir::new("seq-resume-aov");
+    dir.write("s.toml", scene());
+    let run = || {
+        let r = ok(run_in(
+            dir.path(),
+            [
+                "render",
+                "s.toml",
+                "--camera",
+                "turn",
+                "--frames",
+                "0:2",
+                "--aov",
+                "depth",
+                "-o",
+                "out/{frame}.png",
+                "--resume",
+                "--json",
+                "-q",
+            ],
+        ));
+        json_lines(&r.out())
+            .iter()
+            .map(|l| l["status"].as_str().unwrap().to_owned())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(run(), ["rendered", "rendered", "rendered"]);
+    let record: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("out/1.meta.json")).unwrap()).unwrap();
+    assert_eq!(
+        record["files"],
+        serde_json::json!(["out/1.png", "out/1.depth.pfm"])
+    );
+    std::fs::remove_file(dir.join("out/1.depth.pfm")).unwrap();
+    assert_eq!(run(), ["skipped", "rendered", "skipped"]);
+    assert!(dir.join("out/1.depth.pfm").is_file());
+}
