@@ -39,6 +39,9 @@ class CoreScene:
     @property
     def object_ids(self) -> List[Tuple[int, int]]: ...
     def pack(self) -> Dict[str, Any]: ...
+    def camera_path(
+        self, name: str
+    ) -> Optional[Tuple[int, List[Tuple[_Vec, _Vec, _Vec, float]]]]: ...
     def render(
         self,
         *,

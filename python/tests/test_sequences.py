@@ -102,3 +102,43 @@ def test_python_poses_are_the_command_lines(tmp_path):
     assert pose["K"][0, 2] == 2.5 and pose["K"][1, 2] == 1.5
     with pytest.raises(ValueError, match="explicit camera"):
         penumbra.poses.poses(["front"], 6, 4)
+
+
+def test_a_path_cameras_views_are_the_command_lines_frames(tmp_path):
+    # The keyframed camera of a scene file as Python views (the task list the command line
+    # renders): each frame's image is the command line's, bit for bit.
+    keys = """
+[cameras.fly]
+fov = 40
+[[cameras.fly.keys]]
+frame = 3
+position = [0, 1, 3.5]
+look_at = [0, 1, 0]
+[[cameras.fly.keys]]
+frame = 5
+position = [1, 1.5, 3]
+look_at = [0, 0.8, 0]
+fov = 30
+[[cameras.fly.keys]]
+frame = 8
+position = [-1, 1, 3]
+look_at = [0, 1, 0]
+"""
+    path = tmp_path / "fly.toml"
+    path.write_text(CORNELL.read_text() + keys)
+    run_cli(
+        "render", path, "--camera", "fly", "--frames", "4:8:2", "--width", 20, "--height", 14,
+        "--quiet", "-o", tmp_path / "fly{frame}.pfm",
+    )
+    scene = penumbra.load(path)
+    assert scene.camera_path("front") is None
+    assert sorted(scene.camera_path("fly")) == list(range(3, 9))
+    fly = views.path(scene, "fly", frames=range(4, 9, 2), width=20, height=14)
+    assert [v["name"] for v in fly] == ["fly0004", "fly0006", "fly0008"]
+    for v, frame in zip(fly, (4, 6, 8)):
+        image = scene.render(camera=v["camera"], width=20, height=14)
+        assert same_bits(image, read_pfm(tmp_path / f"fly{frame}.pfm")), frame
+    with pytest.raises(ValueError, match="frames 3 to 8"):
+        views.path(scene, "fly", frames=[9])
+    with pytest.raises(ValueError, match="no keys or path"):
+        views.path(scene, "front")
