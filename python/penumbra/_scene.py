@@ -89,6 +89,19 @@ class Scene:
         """The names of the scene's cameras, in file order; the first is the default."""
         return self._core.cameras
 
+    def camera_path(self, name: str) -> Optional[Dict[int, Camera]]:
+        """The cameras of the camera ``name`` with keys or a path (``[[cameras.NAME.keys]]``,
+        ``path = { type = "orbit", ... }``), by frame, first to last: the cameras the command
+        line renders for its frames. None for a still camera or a name the scene lacks."""
+        got = self._core.camera_path(name)
+        if got is None:
+            return None
+        first, cameras = got
+        return {
+            first + k: Camera(position=p, look_at=l, up=u, fov=fov)
+            for k, (p, l, u, fov) in enumerate(cameras)
+        }
+
     @property
     def settings(self) -> Dict[str, Any]:
         """The file's default render settings: ``width``, ``height``, ``spp``, ``sampler``,

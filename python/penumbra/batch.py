@@ -1,7 +1,8 @@
 """The batch command line: render the views a jobs file names on a Ray cluster.
 
     python -m penumbra.batch JOBS.toml [--address local|auto|HOST:PORT] [--num-cpus N]
-                             [--cpus-per-task N] [--force] [--json] [--quiet]
+                             [--cpus-per-task N] [--force] [--manifest FILE.jsonl]
+                             [--json] [--quiet]
 
 A jobs file (TOML; relative paths are relative to its folder)::
 
@@ -31,7 +32,10 @@ A jobs file (TOML; relative paths are relative to its folder)::
     frames = 24
     height = 0.5
 
-Views whose image exists already are skipped (``--force`` renders them again). Each view's
+Views whose image exists already are skipped (``--force`` renders them again). With
+``--manifest FILE.jsonl`` each view's line (task, camera, seed, seconds, peak memory and host
+of its task, outputs, status) is appended to FILE as it ends, as ``penumbra render
+--manifest`` writes it. Each view's
 line (name, image, time) is printed as soon as it is done, skipped views first, so that an
 interrupted batch has told what it finished: on stdout, or with ``--json`` on stderr while
 stdout gets the whole summary as one JSON object at the end. A mistake names its view (its
@@ -215,6 +219,43 @@ def view_line(r: Dict[str, Any]) -> str:
     return f"{r['name']}\t{r['path']}\t{how}"
 
 
+def open_manifest(path: Optional[str]) -> Optional[TextIO]:
+    """The manifest file opened for appending (its folder made), or None without one."""
+    if path is None:
+        return None
+    folder = os.path.dirname(path)
+    if folder:
+        os.makedirs(folder, exist_ok=True)
+    return open(path, "a", encoding="utf-8", buffering=1)
+
+
+def manifest_line(
+    index: int, view: Dict[str, Any], r: Dict[str, Any], scene_seed: int
+) -> Dict[str, Any]:
+    """A view's line of the manifest, with the keys of ``penumbra render --manifest``'s:
+    ``task``, ``camera`` (a camera name, else None), ``frame`` (None: views have no frame),
+    ``seed``, ``seconds``, ``peak_memory_bytes`` and ``host`` (of the task's process; None
+    for a skipped view), ``outputs``, ``attempts`` (None: Ray retries on its own),
+    ``status`` (``rendered`` or ``skipped``) and ``error``."""
+    from .views import aov_path
+
+    outputs = [r["path"]] + ([aov_path(r["path"])] if view["aovs"] else [])
+    camera = view["camera"]
+    return {
+        "task": index,
+        "camera": camera if isinstance(camera, str) else None,
+        "frame": None,
+        "seed": view["seed"] if view["seed"] is not None else scene_seed,
+        "seconds": r.get("seconds", 0.0),
+        "peak_memory_bytes": r.get("peak_memory_bytes"),
+        "host": r.get("host"),
+        "outputs": outputs,
+        "attempts": None,
+        "status": "skipped" if r["skipped"] else "rendered",
+        "error": None,
+    }
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Runs the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit
     status."""
@@ -240,6 +281,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument(
         "--quiet", "-q", action="store_true", help="no progress bar (nor, with --json, view lines)"
     )
+    parser.add_argument(
+        "--manifest",
+        metavar="FILE.jsonl",
+        help="append one JSON line per view as it ends, as `penumbra render --manifest` does",
+    )
     args = parser.parse_args(argv)
 
     try:
@@ -259,14 +305,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ValueError as e:  # JobsError and penumbra.SceneError
         print(f"penumbra.batch: {e}", file=sys.stderr)
         return 2
-    if args.json:
-        with _stdout_to_stderr() as out:
-            code, summary = _run(args, jobs, scene)
-            if code == 0:
-                json.dump({"views": summary}, out, indent=1)
-                print(file=out)
-        return code
-    return _run(args, jobs, scene)[0]
+    try:
+        args.manifest_file = open_manifest(args.manifest)
+    except OSError as e:
+        print(f"penumbra.batch: --manifest {args.manifest}: cannot write the manifest: {e}",
+              file=sys.stderr)
+        return 2
+    try:
+        if args.json:
+            with _stdout_to_stderr() as out:
+                code, summary = _run(args, jobs, scene)
+                if code == 0:
+                    json.dump({"views": summary}, out, indent=1)
+                    print(file=out)
+            return code
+        return _run(args, jobs, scene)[0]
+    finally:
+        if args.manifest_file is not None:
+            args.manifest_file.close()
 
 
 @contextlib.contextmanager
@@ -297,9 +353,16 @@ def _run(
     # the end, on stdout) as progress on stderr, which --quiet silences.
     lines = sys.stderr if args.json else sys.stdout
 
+    index = {v["name"]: i for i, v in enumerate(jobs["views"])}
+
     def finished(r: Dict[str, Any]) -> None:
         if not (args.json and args.quiet):
             print(view_line(r), file=lines, flush=True)
+        if args.manifest_file is not None:
+            i = index[r["name"]]
+            line = manifest_line(i, jobs["views"][i], r, scene.settings["seed"])
+            args.manifest_file.write(json.dumps(line) + "\n")
+            args.manifest_file.flush()
 
     cpus, what = jobs["cpus_per_task"], f"{args.jobs}: cpus_per_task"
     if args.cpus_per_task is not None:

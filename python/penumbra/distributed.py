@@ -107,7 +107,18 @@ def _render_task(
         "builds": _builds,
         "pid": os.getpid(),
         "node": ray.get_runtime_context().get_node_id(),
+        "host": socket.gethostname(),
+        "peak_memory_bytes": _peak_memory(),
     }
+
+
+def _peak_memory() -> Optional[int]:
+    """This process's peak resident memory in bytes (Linux counts ru_maxrss in KiB)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return None
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 # What the driver has shipped in the current Ray session: each scene's pack digest (the pack is
@@ -361,7 +372,8 @@ def render_views(
     A view whose image exists already is skipped (not rendered again) unless ``force``: an
     interrupted batch, run again, does only what is missing. Returns one dict per view, in
     order: ``name``, ``path``, ``skipped``, and for rendered views ``seconds`` (the render's),
-    ``rays_per_second``, ``node`` (Ray node id), ``pid`` and ``built`` (whether that task built
+    ``rays_per_second``, ``node`` (Ray node id), ``host``, ``peak_memory_bytes`` (the task's
+    process's), ``pid`` and ``built`` (whether that task built
     the world). ``on_view``, when given, is called with each view's dict as soon as it is
     known: at once for a skipped view, when its image is written for the others (in the
     order they finish), so that an interrupted batch has told what it finished.
@@ -405,6 +417,8 @@ def render_views(
             seconds=st["seconds"],
             rays_per_second=st["rays_per_second"],
             node=result["node"],
+            host=result["host"],
+            peak_memory_bytes=result["peak_memory_bytes"],
             pid=result["pid"],
             built=result["built"],
         )

@@ -28,7 +28,7 @@ import json
 import math
 import numbers
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
 from . import _core
 from ._camera import Camera
@@ -223,6 +223,36 @@ def orbit(
             }
         )
     return out
+
+
+def path(
+    scene: Any,
+    camera: str,
+    frames: Optional[Iterable[int]] = None,
+    name: str = "{camera}{frame:04d}",
+    **settings: Any,
+) -> List[Dict[str, Any]]:
+    """The views of a scene file's camera with keys or a path (``[[cameras.NAME.keys]]``,
+    ``path = { type = "orbit", ... }``), one per frame: the task list ``penumbra render
+    --camera NAME --frames ...`` renders, for :func:`penumbra.distributed.render_views` or
+    :meth:`penumbra.Scene.render`. ``frames`` picks frames (default: all, first to last; one
+    outside the path raises ``ValueError``); ``name`` is formatted with ``camera`` and
+    ``frame``; ``settings`` go into every view."""
+    cameras = scene.camera_path(camera)
+    if cameras is None:
+        raise ValueError(
+            f"camera {camera!r} has no keys or path (the scene's cameras: "
+            f"{', '.join(scene.cameras)})"
+        )
+    picked = list(cameras) if frames is None else list(frames)
+    for f in picked:
+        if f not in cameras:
+            first, last = min(cameras), max(cameras)
+            raise ValueError(f"camera {camera!r} has frames {first} to {last}, not {f!r}")
+    return [
+        {"name": name.format(camera=camera, frame=f), "camera": cameras[f], **settings}
+        for f in picked
+    ]
 
 
 def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:

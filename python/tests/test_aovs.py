@@ -148,3 +148,17 @@ def test_aovs_do_not_depend_on_threads(threads):
     _, b = s.render(aovs=penumbra.AOV_NAMES, threads=2)
     for name in penumbra.AOV_NAMES:
         assert a[name].tobytes() == b[name].tobytes(), name
+
+
+def test_z_is_planar_depth_and_depth_the_distance_along_the_ray():
+    # The quad faces the camera EYE_Z away: z is EYE_Z all over it, depth is z over the
+    # cosine of each center ray to the optical axis, and both are inf off it.
+    _, aov = scene().render(aovs=("depth", "z"))
+    assert aov["z"].shape == (H, W) and aov["z"].dtype == np.float32
+    hit = np.isfinite(aov["depth"])
+    assert hit.sum() > W * H // 10
+    assert np.array_equal(hit, np.isfinite(aov["z"]))
+    assert np.allclose(aov["z"][hit], EYE_Z, rtol=1e-6)
+    cosine = -center_rays()[..., 2]
+    assert np.allclose(aov["depth"][hit] * cosine[hit], aov["z"][hit], rtol=1e-5)
+    assert aov["depth"][hit].max() > EYE_Z * 1.01

@@ -200,3 +200,28 @@ def test_more_cpus_per_task_than_any_node_has_exit_2_at_once(tmp_path):
     assert out.returncode == 2, out.stderr
     assert "--cpus-per-task is 4 CPUs per task, more than any node of the cluster has (at most 1)" in out.stderr
     assert time.monotonic() - start < 60 and not (tmp_path / "out").exists()
+
+
+def test_the_manifest_has_a_line_per_view_of_every_run(tmp_path):
+    jobs = example_jobs(
+        tmp_path,
+        **{"spp = 4": "spp = 1", "width = 256": "width = 16", "height = 256": "height = 12"},
+    )
+    manifest = tmp_path / "logs" / "manifest.jsonl"
+    for _ in range(2):
+        out = run_batch(jobs, "--num-cpus", 2, "--manifest", manifest, "--quiet")
+        assert out.returncode == 0, out.stderr
+    lines = [json.loads(line) for line in manifest.read_text().splitlines()]
+    assert len(lines) == 2 * 11
+    first, second = lines[:11], lines[11:]
+    assert sorted(line["task"] for line in first) == list(range(11))
+    assert all(line["status"] == "rendered" for line in first)
+    assert all(line["status"] == "skipped" for line in second), "nothing rendered twice"
+    spec = batch.read_jobs(str(jobs))
+    for line in first:
+        v = spec["views"][line["task"]]
+        assert line["outputs"] == [str(tmp_path / "out" / f"{v['name']}.png")]
+        assert line["host"] and line["peak_memory_bytes"] > 1 << 20 and line["seconds"] > 0
+        assert line["camera"] == (v["camera"] if isinstance(v["camera"], str) else None)
+    bad = run_batch(jobs, "--manifest", tmp_path)
+    assert bad.returncode == 2 and "cannot write the manifest" in bad.stderr, bad.stderr

@@ -11,11 +11,11 @@ from importlib.metadata import version
 import pytest
 
 import penumbra
-from penumbra import _camera, _image, _pack, _raycast, _scene, _tensor, views
+from penumbra import _camera, _image, _pack, _raycast, _scene, _tensor, poses, views
 
 from conftest import ROOT
 
-MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, _tensor, views]
+MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, _tensor, views, poses]
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)

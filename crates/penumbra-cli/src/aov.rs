@@ -34,7 +34,7 @@ use crate::signals::Interrupt;
 /// channel).
 fn channels(p: Aov) -> &'static [&'static str] {
     match p {
-        Aov::Depth => &["Z"],
+        Aov::Depth | Aov::Z => &["Z"],
         Aov::Normal | Aov::Position => &["X", "Y", "Z"],
         Aov::Albedo => &["R", "G", "B"],
         Aov::ObjectId | Aov::PrimitiveId => &[],
@@ -61,6 +61,7 @@ pub fn push_values(passes: &Passes, px: &AovPixel, out: &mut Vec<f32>) {
     for &p in &passes.0 {
         match p {
             Aov::Depth => out.push(px.depth),
+            Aov::Z => out.push(px.z),
             Aov::Normal => out.extend(px.normal.to_array()),
             Aov::Albedo => out.extend(px.albedo.to_array()),
             Aov::Position => out.extend(px.position.to_array()),
@@ -216,8 +217,10 @@ mod tests {
         let e = parse("depth,zdepth").unwrap_err();
         assert_eq!(
             e,
-            "unknown pass `zdepth` (known: depth, normal, albedo, position, object_id, primitive_id, or all)"
+            "unknown pass `zdepth` (known: depth, normal, albedo, position, object_id, primitive_id, z, or all)"
         );
+        // `range` is the distance along the ray: depth.
+        assert_eq!(parse("range,z").unwrap(), Passes(vec![Aov::Depth, Aov::Z]));
     }
 
     #[test]

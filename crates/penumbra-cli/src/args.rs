@@ -20,7 +20,7 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
     #[command(version)]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Validate a scene file (or a bare .obj or .ply mesh) and print a summary.
     #[command(version)]
     Check(CheckArgs),
@@ -89,6 +89,42 @@ pub struct RenderArgs {
     /// {camera}).
     #[arg(long, value_name = "NAMES")]
     pub camera: Option<String>,
+    /// Frames of path cameras ([[cameras.NAME.keys]] or an orbit) to render: A:B (both
+    /// included, as in Blender), A:B:STEP, one frame A, or `all` (the default for a path
+    /// camera). -o then needs {frame} (or {frame:04}) when more than one image is rendered.
+    #[arg(long, value_name = "A:B[:STEP]", value_parser = crate::sequence::parse_frames, allow_hyphen_values = true)]
+    pub frames: Option<crate::sequence::Frames>,
+    /// Render only every N-th task of the run (cameras × frames, in order), starting at the
+    /// K-th (0-based): a SLURM array or a Kubernetes indexed job gives each process its K.
+    #[arg(long, value_name = "K/N", value_parser = crate::sequence::parse_shard)]
+    pub shard: Option<crate::sequence::Shard>,
+    /// Skip a task whose image exists and whose record beside it (OUT.meta.json, written by
+    /// every run with --resume) says it was rendered with exactly the same settings.
+    #[arg(long)]
+    pub resume: bool,
+    /// Append one JSON line per task to this file as it ends: task, camera, frame, seed,
+    /// seconds, peak memory, host, outputs, attempts, status (rendered, skipped, failed).
+    #[arg(long, value_name = "FILE.jsonl")]
+    pub manifest: Option<PathBuf>,
+    /// Try a task that failed at run time (a file not written, memory) up to N more times;
+    /// then go on, and list the failed tasks at the end (exit code 1).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub retries: u32,
+    /// List the tasks of this run (and shard) on stdout, and whether --resume would skip
+    /// them; render and write nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Write OUT.meta.json beside each image (as --resume does): how it was made, the files
+    /// written, K and the pose, and which object ids belong to which [[objects]] entry.
+    #[arg(long)]
+    pub meta: bool,
+    /// Write every task's camera (intrinsics K and pose) to this JSON file.
+    #[arg(long, value_name = "FILE.json")]
+    pub poses: Option<PathBuf>,
+    /// The layout of --poses: `penumbra` ({"frames": [...]}, OpenCV and OpenGL poses) or
+    /// `nerf` (a transforms.json as instant-ngp and nerfstudio read it).
+    #[arg(long, value_name = "F", default_value = "penumbra", value_parser = ["penumbra", "nerf"], requires = "poses")]
+    pub poses_format: String,
     /// Worker threads (0: all cores).
     #[arg(
         short,
@@ -125,8 +161,9 @@ pub struct RenderArgs {
     /// --light-samples still apply (--spp without --sampler keeps the scene's sampler).
     #[arg(long)]
     pub quick: bool,
-    /// Passes beside the image: a comma list of depth, normal, albedo, position, object_id,
-    /// primitive_id, or all. An .exr output holds them as extra channels; other outputs get
+    /// Passes beside the image: a comma list of depth (the distance along the ray; alias
+    /// range), normal, albedo, position, object_id, primitive_id, z (planar depth along the
+    /// camera's forward axis), or all. An .exr output holds them as extra channels; other outputs get
     /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
     #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
     pub aov: Option<Passes>,

@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use penumbra::{desc::ShapeDesc, Aabb, Light, SceneDesc, World, WorldStats};
+use penumbra::{desc::ObjectDesc, desc::ShapeDesc, Aabb, Light, SceneDesc, World, WorldStats};
 use serde_json::{json, Value};
 
 use crate::args::CheckArgs;
@@ -45,6 +45,23 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let s = world.stats();
     let settings = &scene.settings;
     let cameras: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
+    // A camera with keys or a path, with its frames: "turn (frames 0 to 119)".
+    let camera_text: Vec<String> = cameras
+        .iter()
+        .map(|&n| match scene.path(n) {
+            Some(p) => format!(
+                "{n} (frames {} to {})",
+                p.frames().start(),
+                p.frames().end()
+            ),
+            None => n.to_owned(),
+        })
+        .collect();
+    let paths: serde_json::Map<String, Value> = scene
+        .paths
+        .iter()
+        .map(|(n, p)| (n.clone(), json!([p.frames().start(), p.frames().end()])))
+        .collect();
     if args.json {
         let summary = json!({
             "scene": name,
@@ -68,6 +85,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             "materials": s.materials,
             "textures": s.textures,
             "cameras": cameras,
+            "camera_frames": paths,
             "bounds": bounds_json(world.bounds()),
             "objects": objects.iter().map(|o| json!({
                 "key": o.key,
@@ -113,7 +131,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     lines.extend([
         format!("  materials  {}", s.materials),
         format!("  textures   {}", s.textures),
-        format!("  cameras    {}", cameras.join(", ")),
+        format!("  cameras    {}", camera_text.join(", ")),
         format!("  bounds     {}", bounds_text(world.bounds())),
         format!("  objects    {}", objects.len()),
     ]);
@@ -190,6 +208,18 @@ fn triangles_line(s: &WorldStats) -> String {
     )
 }
 
+/// An object's type, and the file for a mesh: `mesh models/bunny.obj`.
+pub fn object_kind(o: &ObjectDesc) -> String {
+    match &o.shape {
+        ShapeDesc::Triangle(_) => "triangle".to_owned(),
+        ShapeDesc::Quad(_) => "quad".to_owned(),
+        ShapeDesc::Cube(_) => "cube".to_owned(),
+        ShapeDesc::Sphere(_) => "sphere".to_owned(),
+        ShapeDesc::Mesh(m) => format!("mesh {}", m.file),
+        ShapeDesc::Instances(d) => format!("instances {}", d.file),
+    }
+}
+
 /// Each `[[objects]]` entry's triangles (as rays see them: every copy counted) and
 /// world-space bounds, in file order; `ids` are the object ids each entry added.
 fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInfo> {
@@ -222,14 +252,7 @@ fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInf
         .enumerate()
         .map(|(i, (o, (triangles, bounds)))| ObjectInfo {
             key: format!("objects[{i}]"),
-            kind: match &o.shape {
-                ShapeDesc::Triangle(_) => "triangle".to_owned(),
-                ShapeDesc::Quad(_) => "quad".to_owned(),
-                ShapeDesc::Cube(_) => "cube".to_owned(),
-                ShapeDesc::Sphere(_) => "sphere".to_owned(),
-                ShapeDesc::Mesh(m) => format!("mesh {}", m.file),
-                ShapeDesc::Instances(d) => format!("instances {}", d.file),
-            },
+            kind: object_kind(o),
             triangles,
             bounds,
         })

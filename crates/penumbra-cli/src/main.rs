@@ -4,10 +4,12 @@
 //!
 //! One module per concept: `args` (the grammar); `render`, `check`, `check_obj` and
 //! `completions` (the subcommands); `aov` (`--aov` passes); `warnings` (what `check` flags);
-//! `input` (the scene from a file or stdin); `cameras` (`--camera` selection); `settings`
+//! `input` (the scene from a file or stdin); `cameras` (`--camera` selection); `sequence`
+//! (`--frames`, `--shard`, the task list); `plan` (one checked job per task); `settings`
 //! (flags over the file's settings); `output` (output names, formats, folders, stdout);
-//! `summary` (what a run reports); `signals` (SIGINT, SIGTERM, SIGHUP); and `failure` (exit
-//! codes and writing to stdout and stderr).
+//! `task` (one job rendered and written); `record` (`--resume` and `--meta` records);
+//! `poses` (`--poses`); `manifest` (`--manifest`); `summary` (what a run reports); `signals`
+//! (SIGINT, SIGTERM, SIGHUP); and `failure` (exit codes and writing to stdout and stderr).
 
 mod aov;
 mod args;
@@ -19,11 +21,17 @@ mod completions;
 mod display;
 mod failure;
 mod input;
+mod manifest;
 mod output;
+mod plan;
+mod poses;
+mod record;
 mod render;
+mod sequence;
 mod settings;
 mod signals;
 mod summary;
+mod task;
 mod warnings;
 
 use std::process::ExitCode;

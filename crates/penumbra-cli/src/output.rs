@@ -1,5 +1,5 @@
-//! Where an image goes: the output name (with `{camera}`, `{scene}`, `{spp}` and `{seed}`
-//! replaced), its format, its folder (made when missing), or standard output for `-o -`.
+//! Where an image goes: the output name (with `{camera}`, `{frame}`, `{scene}`, `{spp}` and
+//! `{seed}` replaced), its format, its folder (made when missing), or standard output for `-o -`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -21,10 +21,12 @@ pub struct Fields<'a> {
     pub scene: &'a str,
     pub spp: u32,
     pub seed: u64,
+    /// The frame of a path camera; `None` for a still camera.
+    pub frame: Option<i64>,
 }
 
 /// The names a pattern may use.
-const FIELDS: &str = "{camera}, {scene}, {spp}, {seed}";
+const FIELDS: &str = "{camera}, {frame} (or {frame:04}), {scene}, {spp}, {seed}";
 
 /// `pattern` with each `{field}` replaced; `{{` and `}}` are literal braces.
 pub fn expand(pattern: &str, f: &Fields) -> Result<String, String> {
@@ -51,6 +53,25 @@ pub fn expand(pattern: &str, f: &Fields) -> Result<String, String> {
             "scene" => f.scene.to_owned(),
             "spp" => f.spp.to_string(),
             "seed" => f.seed.to_string(),
+            field if field == "frame" || field.starts_with("frame:") => {
+                let width = match &field["frame".len()..] {
+                    "" => 0,
+                    spec => spec[1..]
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&w| w <= 20 && spec[1..].starts_with('0'))
+                        .ok_or_else(|| {
+                            format!("`{{{field}}}` in `{pattern}`: a frame's width is written {{frame:04}}")
+                        })?,
+                };
+                let frame = f.frame.ok_or_else(|| {
+                    format!(
+                        "`{{frame}}` in `{pattern}`: camera `{}` is a still camera, with no frames",
+                        f.camera
+                    )
+                })?;
+                format!("{frame:0width$}")
+            }
             other => {
                 return Err(format!(
                     "unknown field `{{{other}}}` in `{pattern}` (known: {FIELDS})"
@@ -69,8 +90,14 @@ pub fn names_camera(pattern: &str) -> bool {
     pattern.replace("{{", "").contains("{camera}")
 }
 
+/// True when `pattern` names the frame (`{frame}` or `{frame:04}`).
+pub fn names_frame(pattern: &str) -> bool {
+    let p = pattern.replace("{{", "");
+    p.contains("{frame}") || p.contains("{frame:")
+}
+
 /// An image's destination.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Target {
     File(PathBuf),
     Stdout,
@@ -149,9 +176,6 @@ impl Output {
         }
     }
 
-    /// Writes the image with `extra` files (its AOVs): files appear complete and together or
-    /// not at all (a signal or a failed write leaves the old files, or none); standard output
-    /// gets the encoded bytes at once.
     /// Writes `film` although a signal was received: the last pass of an interrupted
     /// `--progressive` render (staged and renamed into place like any image).
     pub fn write_anyway(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
@@ -165,11 +189,16 @@ impl Output {
         }
     }
 
+    /// Writes the image with `extra` files (its AOVs) renamed into place before it and
+    /// `after` (its `--resume` record) after it: files appear complete and together or not at
+    /// all (a signal or a failed write leaves the old files, or none); standard output gets
+    /// the encoded bytes at once.
     pub fn write(
         &self,
         film: &Film,
         gamma: Option<f32>,
         extra: Vec<StagedFile>,
+        after: Vec<StagedFile>,
         interrupt: &Interrupt,
     ) -> Result<(), Failure> {
         match &self.target {
@@ -180,9 +209,10 @@ impl Output {
                         e @ ImageError::NonFinite { .. } => invalid(e),
                         e => runtime(e),
                     })?;
-                // The image last: it stays as it was if any rename before it fails.
+                // The image after its passes: it stays as it was if any rename before it fails.
                 let mut files = extra;
                 files.push(image);
+                files.extend(after);
                 commit(files, interrupt)
             }
             Target::Stdout => self.write_stdout(film, gamma),
@@ -226,6 +256,7 @@ mod tests {
             scene: "cornell",
             spp: 16,
             seed: 7,
+            frame: Some(42),
         }
     }
 
@@ -240,9 +271,27 @@ mod tests {
         assert_eq!(e("plain.png").unwrap(), "plain.png");
         assert_eq!(e("{{camera}}.png").unwrap(), "{camera}.png");
         assert_eq!(e("a}b.png").unwrap(), "a}b.png");
-        assert!(e("{frame}.png")
+        assert!(e("{frames}.png")
             .unwrap_err()
-            .contains("unknown field `{frame}`"));
+            .contains("unknown field `{frames}`"));
+        assert_eq!(e("f{frame}.png").unwrap(), "f42.png");
+        assert_eq!(e("f{frame:04}.png").unwrap(), "f0042.png");
+        assert_eq!(
+            e("f{frame:1}.png").map_err(|e| e.contains("{frame:04}")),
+            Err(true)
+        );
+        let still = Fields {
+            frame: None,
+            ..fields()
+        };
+        assert!(expand("{frame}.png", &still)
+            .unwrap_err()
+            .contains("still camera"));
+        let negative = Fields {
+            frame: Some(-3),
+            ..fields()
+        };
+        assert_eq!(expand("{frame:04}.png", &negative).unwrap(), "-003.png");
         assert!(e("{camera.png").unwrap_err().contains("unclosed"));
     }
 
@@ -251,5 +300,7 @@ mod tests {
         assert!(names_camera("out/{camera}.png"));
         assert!(!names_camera("out/{{camera}}.png"));
         assert!(!names_camera("out/x.png"));
+        assert!(names_frame("out/{frame:04}.png") && names_frame("{frame}"));
+        assert!(!names_frame("{{frame}}.png") && !names_frame("frame.png"));
     }
 }

@@ -1,34 +1,23 @@
-//! `penumbra render`: load and build the scene once, plan one render per camera (settings,
-//! region and output, all checked before any work), then render, write and report each.
+//! `penumbra render`: load and build the scene once, plan one render per task (camera ×
+//! frame; settings, region and output, all checked before any work; see `plan`), write the
+//! poses, then render, write (see `task`) and report each task of this shard: skipping, with
+//! `--resume`, those done before; trying a failed one again up to `--retries` times, then
+//! going on and listing the failures at the end (exit code 1); one `--manifest` line each.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
-use penumbra::{
-    AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderSettings,
-    Rgb, Scene, SceneFile, SettingsError, View, World, MAX_THREADS,
-};
+use penumbra::MAX_THREADS;
 
-use crate::aov::{self, Passes};
 use crate::args::RenderArgs;
-use crate::cameras;
 use crate::display::Preview;
 use crate::failure::{invalid, note, runtime, say, Failure};
 use crate::input::{self, is_stdin};
-use crate::output::{self, expand, names_camera, scene_stem, Fields, Output, Target};
-use crate::settings::{flag_of, patch, region};
+use crate::manifest::{Manifest, Status};
+use crate::plan::{self, Job};
 use crate::signals::Interrupt;
 use crate::summary::Report;
-
-/// One render of the run.
-struct Job {
-    settings: RenderSettings,
-    region: Option<PixelBounds>,
-    output: Output,
-}
+use crate::{poses, record, task};
 
 pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let interrupt = Interrupt::install();
@@ -49,104 +38,109 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let scene = file.build(args.threads).map_err(invalid)?;
     // The scene file, then its meshes and textures: everything of loading but the BVH.
     let parse_time = file_time + scene.load_time;
-    let jobs = plan(args, &file, &scene)?;
+    let all = plan::plan(args, &file, &scene)?;
+    let count = all.len();
+    // This process's tasks, by index into `all`.
+    let jobs: Vec<usize> = (0..count)
+        .filter(|&i| args.shard.is_none_or(|shard| shard.takes(i)))
+        .collect();
+    let digest = (args.resume || args.meta).then(|| record::digest(file.text(), &args.set));
     let load_time = load_start.elapsed();
     interrupt.check()?;
+    if args.dry_run {
+        return dry_run(args, &jobs, &all, digest.as_deref(), scene.gamma, count);
+    }
     let mut preview = args
         .display_server
         .as_deref()
         .and_then(|server| Preview::connect(server, note));
-
-    for job in &jobs {
-        job.output.make_folder()?;
-        if let Some(p) = preview.as_mut() {
-            let passes = args.aov.clone().unwrap_or(Passes(Vec::new()));
-            p.begin(
-                &job.output.display(),
-                job.settings.width,
-                job.settings.height,
-                &passes,
-            );
-        }
-        // With --progressive, the image of the last finished pass: what Ctrl-C writes.
-        let last_pass: Mutex<Option<(u32, Film)>> = Mutex::new(None);
-        let keep = |pass: &Pass| {
-            let mut last = last_pass.lock().unwrap_or_else(|e| e.into_inner());
-            *last = Some((pass.samples, pass.film.clone()));
-        };
-        let show = |tile: &PixelBounds, pixels: &[Rgb], aovs: &[AovPixel]| {
-            if let Some(p) = preview.as_ref() {
-                p.tile(tile, pixels, aovs);
-            }
-        };
-        let options = RenderOptions {
-            threads: args.threads,
-            region: job.region,
-            cancel: Some(interrupt.flag()),
-            progress: None,
-            tiles: preview.is_some().then_some(&show as _),
-            passes: args.progressive.then_some(&keep as _),
-        };
+    let mut manifest = Manifest::open(args.manifest.as_deref())?;
+    if let Some(path) = &args.poses {
+        // From here on files are written: a signal stops the run between two writes.
         interrupt.defer();
-        let (film, aovs, stats) = with_progress(args.quiet, |progress| {
-            let options = RenderOptions {
-                progress: Some(progress),
-                ..options
-            };
-            if args.aov.is_some() {
-                penumbra::render_with_aovs(&scene.world, &job.settings, &options)
-                    .map(|(film, aovs, stats)| (film, Some(aovs), stats))
-            } else {
-                penumbra::render(&scene.world, &job.settings, &options)
-                    .map(|(film, stats)| (film, None, stats))
-            }
-        })
-        .map_err(|e| match e {
-            RenderError::Cancelled => {
-                let last = last_pass.lock().unwrap_or_else(|e| e.into_inner()).take();
-                match last {
-                    Some((samples, film)) => {
-                        write_last_pass(job, &film, samples, &scene, &interrupt)
-                    }
-                    None => interrupt.failure(),
-                }
-            }
-            e @ RenderError::BadRegion { .. } => invalid(format!("{}: {e}", region_flag(args))),
-            RenderError::Settings(e) => invalid(format!("{}: {e}", flag_of(&e))),
-            e => runtime(e),
-        })?;
+        poses::write(path, &args.poses_format, &all, &scene, &interrupt)?;
+    }
+    let mut failed: Vec<(&Job, String)> = Vec::new();
+    for job in jobs.iter().map(|&i| &all[i]) {
         interrupt.check()?;
-        // The files written beside the image, one per pass (none for an EXR, which holds them).
-        // The image and its pass files are staged, then renamed into place together.
-        let aov_files = match (&args.aov, &aovs, &job.output.target) {
-            (Some(passes), Some(aovs), Target::File(path)) => {
-                if job.output.format == OutputFormat::Exr {
-                    let exr = aov::stage_exr(path, &film, aovs, passes)?;
-                    output::commit(vec![exr], &interrupt)?;
-                    Vec::new()
-                } else {
-                    let files = aov::stage_files(path, aovs, passes, &interrupt)?;
-                    let paths = files.iter().map(|f| f.path().to_owned()).collect();
-                    job.output.write(&film, scene.gamma, files, &interrupt)?;
-                    paths
-                }
+        let start = Instant::now();
+        let recorded = digest
+            .as_deref()
+            .map(|d| record::settings(job, d, args.aov.as_ref(), scene.gamma));
+        if let Some(settings) = recorded.as_ref().filter(|_| args.resume) {
+            if record::done(job, settings) {
+                skipped(args, job, count)?;
+                let outputs = [job.output.display()];
+                manifest.write(job, Status::Skipped, 0.0, 0, &outputs, None)?;
+                continue;
             }
-            _ => {
-                job.output
-                    .write(&film, scene.gamma, Vec::new(), &interrupt)?;
-                Vec::new()
+        }
+        // A runtime failure (a file that cannot be written, memory) is tried again up to
+        // --retries times; invalid input and signals end the run at once.
+        let mut attempts = 0;
+        let outcome = loop {
+            attempts += 1;
+            let r = task::run(
+                args,
+                &file,
+                &scene,
+                job,
+                recorded.clone(),
+                &mut preview,
+                &interrupt,
+            );
+            match r {
+                Err(f) if f.code == 1 && attempts <= args.retries => {
+                    note(&format!(
+                        "penumbra: [{}/{count}] attempt {attempts} failed, trying again: {}",
+                        job.task + 1,
+                        f.message
+                    ));
+                }
+                r => break r,
             }
         };
-
+        let seconds = start.elapsed().as_secs_f64();
+        let done = match outcome {
+            Ok(done) => done,
+            Err(f) => {
+                let outputs: [String; 0] = [];
+                manifest.write(
+                    job,
+                    Status::Failed,
+                    seconds,
+                    attempts,
+                    &outputs,
+                    Some(&f.message),
+                )?;
+                if f.code != 1 {
+                    return Err(f);
+                }
+                if count > 1 {
+                    note(&format!(
+                        "penumbra: [{}/{count}] failed: {}",
+                        job.task + 1,
+                        f.message
+                    ));
+                }
+                failed.push((job, f.message));
+                continue;
+            }
+        };
+        let mut outputs = vec![job.output.display()];
+        outputs.extend(done.aov_files.iter().map(|p| p.display().to_string()));
+        manifest.write(job, Status::Rendered, seconds, attempts, &outputs, None)?;
         let report = Report {
             scene: &scene_name(&args.scene),
-            camera: camera_name(&job.settings.view, &scene.world),
+            camera: &job.camera,
+            frame: job.frame,
+            task: (job.task, count),
             output: &job.output.display(),
-            aov_files: &aov_files,
-            film: &film,
+            aov_files: &done.aov_files,
+            film: &done.film,
             settings: &job.settings,
             world: &scene.world,
-            stats: &stats,
+            stats: &done.stats,
             load_time,
             parse_time,
         };
@@ -157,112 +151,91 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             say(&report.json().to_string())?;
         }
     }
+    match &failed[..] {
+        [] => Ok(()),
+        // One task of one: its own message, as a run of one image has always said it.
+        [(_, message)] if count == 1 => Err(runtime(message)),
+        _ => {
+            let list: Vec<String> = failed
+                .iter()
+                .map(|(job, message)| {
+                    format!("task {} ({}): {message}", job.task, job.output.display())
+                })
+                .collect();
+            Err(runtime(format!(
+                "{} of {} tasks failed: {}",
+                failed.len(),
+                jobs.len(),
+                list.join("; ")
+            )))
+        }
+    }
+}
+
+/// `--dry-run`: the tasks this process would render, one line each on stdout (a JSON object
+/// each with --json), and whether `--resume` would skip them; nothing is written.
+fn dry_run(
+    args: &RenderArgs,
+    jobs: &[usize],
+    all: &[Job],
+    digest: Option<&str>,
+    gamma: Option<f32>,
+    count: usize,
+) -> Result<(), Failure> {
+    for job in jobs.iter().map(|&i| &all[i]) {
+        let done = args.resume
+            && digest.is_some_and(|d| {
+                record::done(job, &record::settings(job, d, args.aov.as_ref(), gamma))
+            });
+        let status = if done { "skipped" } else { "planned" };
+        if args.json {
+            let line = serde_json::json!({
+                "task": job.task,
+                "camera": job.camera,
+                "frame": job.frame,
+                "seed": job.settings.seed,
+                "output": job.output.display(),
+                "status": status,
+            });
+            say(&line.to_string())?;
+        } else {
+            let frame = job.frame.map_or(String::new(), |f| format!(" frame {f}"));
+            say(&format!(
+                "task {} of {count}: camera {}{frame} -> {}{}",
+                job.task,
+                job.camera,
+                job.output.display(),
+                if done {
+                    " (done before: skipped with --resume)"
+                } else {
+                    ""
+                }
+            ))?;
+        }
+    }
     Ok(())
 }
 
-/// Every render of the run, each checked (settings, output name and format, image size)
-/// before anything is rendered or written.
-fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Job>, Failure> {
-    let views = cameras::select(args.camera.as_deref(), &scene.world)?;
-    let several = views.len() > 1;
-    let (pattern, from) = output_pattern(args, scene, several)?;
-    if several && pattern.to_str().is_none_or(|p| !names_camera(p)) {
-        return Err(invalid(format!(
-            "{from}: {} cameras need {{camera}} in the output name, such as out/{{scene}}_{{camera}}.png",
-            views.len()
-        )));
-    }
-    let stem = scene_stem(&args.scene, is_stdin(&args.scene));
-    let mut jobs: Vec<Job> = Vec::new();
-    for view in &views {
-        // Settings from flags are checked before anything is written or rendered.
-        let bad = |e: SettingsError| invalid(format!("{}: {e}", flag_of(&e)));
-        let settings = patch(args, &scene.settings, view.as_deref())
-            .apply(&scene.settings, file.samples())
-            .map_err(bad)?;
-        settings.check(&scene.world).map_err(bad)?;
-        let name = match pattern.to_str() {
-            Some(p) => {
-                let fields = Fields {
-                    camera: camera_name(&settings.view, &scene.world),
-                    scene: &stem,
-                    spp: settings.spp,
-                    seed: settings.seed,
-                };
-                PathBuf::from(expand(p, &fields).map_err(|e| invalid(format!("{from}: {e}")))?)
-            }
-            // Not UTF-8: no fields to expand.
-            None => pattern.clone(),
-        };
-        let output = Output::new(name, args.format)?;
-        if args.aov.is_some() && output.target == Target::Stdout {
-            return Err(invalid(
-                "--aov: passes are written beside an image file, not to standard output (-o -)",
-            ));
-        }
-        let region = region(args, &settings);
-        let (w, h) = match region {
-            Some(b) => (b.x1.saturating_sub(b.x0), b.y1.saturating_sub(b.y0)),
-            None => (settings.width, settings.height),
-        };
-        output.check_size(w, h)?;
-        // Camera names that differ only in a path separator (made `_`) meet here.
-        if let Some(other) = jobs.iter().find(|j| j.output.target == output.target) {
-            return Err(invalid(format!(
-                "{from}: two renders would write {}",
-                other.output.display()
-            )));
-        }
-        jobs.push(Job {
-            settings,
-            region,
-            output,
-        });
-    }
-    Ok(jobs)
-}
-
-/// The output name before expansion and the flag or key it comes from: `-o`, else
-/// `film.output`, else `<scene stem>.png` beside the scene (`<scene stem>_{camera}.png` for
-/// several cameras).
-fn output_pattern(
-    args: &RenderArgs,
-    scene: &Scene,
-    several: bool,
-) -> Result<(PathBuf, &'static str), Failure> {
-    if let Some(o) = &args.output {
-        return Ok((o.clone(), "-o"));
-    }
-    if let Some(o) = &scene.output {
-        return Ok((o.clone(), "film.output"));
-    }
-    if is_stdin(&args.scene) {
-        return Err(invalid(
-            "-o: a scene read from standard input needs -o (or film.output)",
+/// Reports a task `--resume` skips: its image is there, made with the same settings.
+fn skipped(args: &RenderArgs, job: &Job, count: usize) -> Result<(), Failure> {
+    if !args.quiet {
+        note(&format!(
+            "penumbra: [{}/{count}] done before, skipped -> {}",
+            job.task + 1,
+            job.output.display()
         ));
     }
-    let stem = args.scene.file_stem().unwrap_or_default();
-    let mut name = stem.to_owned();
-    name.push(if several { "_{camera}.png" } else { ".png" });
-    Ok((args.scene.with_file_name(name), "-o"))
-}
-
-/// The camera's name for `{camera}`.
-fn camera_name<'a>(view: &'a View, world: &'a World) -> &'a str {
-    match view {
-        View::Named(n) => n,
-        View::First => world.cameras().first().map_or("camera", |(n, _)| n),
-        View::Camera(_) => "camera",
+    if args.json {
+        let line = serde_json::json!({
+            "camera": job.camera,
+            "frame": job.frame,
+            "task": job.task,
+            "output": job.output.display(),
+            "status": "skipped",
+        });
+        say(&line.to_string())?;
     }
-}
-
-/// The flag that chose the region.
-fn region_flag(args: &RenderArgs) -> &'static str {
-    if args.cropwindow.is_some() {
-        "--cropwindow"
-    } else {
-        "--pixelbounds"
-    }
+    Ok(())
 }
 
 /// How summaries name the scene.
@@ -272,55 +245,4 @@ fn scene_name(scene: &Path) -> PathBuf {
     } else {
         scene.to_owned()
     }
-}
-
-/// The failure of a `--progressive` render that a signal stopped, after writing the image of
-/// its last finished pass (`samples` per pixel) where the final image would have gone.
-fn write_last_pass(
-    job: &Job,
-    film: &Film,
-    samples: u32,
-    scene: &Scene,
-    interrupt: &Interrupt,
-) -> Failure {
-    match job.output.write_anyway(film, scene.gamma) {
-        Ok(()) if samples == 0 => note(&format!(
-            "interrupted: wrote the preview pass (the first sample of every second row, each \
-             shown twice) to {}",
-            job.output.display()
-        )),
-        Ok(()) => note(&format!(
-            "interrupted: wrote the last finished pass ({samples} of {} samples per pixel) to {}",
-            job.settings.spp,
-            job.output.display()
-        )),
-        Err(e) => note(&format!("error: {}", e.message)),
-    }
-    interrupt.failure()
-}
-
-/// Runs `work` with a progress bar on stderr (none with `quiet` or when stderr is not a
-/// terminal).
-fn with_progress<T>(quiet: bool, work: impl FnOnce(&(dyn Fn(u64, u64) + Sync)) -> T) -> T {
-    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
-        let bar = ProgressBar::new(100);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{bar:40.cyan/blue} {percent:>3}% {elapsed_precise} eta {eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar
-    });
-    let progress = |done: u64, total: u64| {
-        if let Some(bar) = &bar {
-            bar.set_length(total);
-            bar.set_position(done);
-        }
-    };
-    let result = work(&progress);
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
-    result
 }

@@ -30,6 +30,10 @@ pub struct Report<'a> {
     pub scene: &'a Path,
     /// The camera's name.
     pub camera: &'a str,
+    /// The frame of a path camera.
+    pub frame: Option<i64>,
+    /// The task's place in the run (from 0) and the run's number of tasks.
+    pub task: (usize, usize),
     pub output: &'a str,
     /// The `--aov` files written beside the output, if any.
     pub aov_files: &'a [PathBuf],
@@ -58,8 +62,14 @@ impl Report<'_> {
         };
         let world_stats = self.world.stats();
         let samples = light_samples(self.world, settings.light_samples);
+        // "[3/120] frame 2, " for a task of a sequence.
+        let task = match (self.frame, self.task) {
+            (Some(frame), (i, n)) => format!("[{}/{n}] frame {frame}, ", i + 1),
+            (None, (i, n)) if n > 1 => format!("[{}/{n}] ", i + 1),
+            _ => String::new(),
+        };
         format!(
-            "penumbra: {size}, {} spp {}, {} light sample{}, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {:.2} Mrays/s, {} thread{} -> {}",
+            "penumbra: {task}{size}, {} spp {}, {} light sample{}, {} triangles, load {:.2} s (BVH {:.2} s), render {:.2} s, {:.2} Mrays/s, {} thread{} -> {}",
             settings.spp,
             settings.sampler.name(),
             samples,
@@ -82,6 +92,9 @@ impl Report<'_> {
         json!({
             "scene": self.scene.display().to_string(),
             "camera": self.camera,
+            "frame": self.frame,
+            "task": self.task.0,
+            "status": "rendered",
             "output": self.output,
             "aovs": self.aov_files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "width": film.width,

@@ -122,6 +122,7 @@ fn png_output_gets_one_file_per_pass_with_exact_values() {
             "shot.png",
             "shot.position.pfm",
             "shot.primitive_id.exr",
+            "shot.z.pfm",
         ],
         "no temporary file is left"
     );
@@ -129,6 +130,21 @@ fn png_output_gets_one_file_per_pass_with_exact_values() {
     let (w, h, c, depth) = read_pfm(&dir.join("out/shot.depth.pfm"));
     assert_eq!((w, h, c), (5, 5, 1));
     check_depth(&depth);
+    // z is planar: 5 across the whole quad facing the camera, where depth grows to its edges.
+    let (_, _, c, z) = read_pfm(&dir.join("out/shot.z.pfm"));
+    assert_eq!(c, 1);
+    for i in 0..25 {
+        if on_quad(i % 5, i / 5) {
+            assert!(
+                (z[i] - 5.0).abs() < 1e-5 && z[i] <= depth[i],
+                "pixel {i}: {}",
+                z[i]
+            );
+        } else {
+            assert_eq!(z[i], f32::INFINITY, "pixel {i}");
+        }
+    }
+    assert!(depth[6] > 5.1, "a corner pixel's depth is not its z");
 
     let (_, _, c, normal) = read_pfm(&dir.join("out/shot.normal.pfm"));
     assert_eq!(c, 3);
@@ -318,9 +334,10 @@ fn the_summary_names_every_file_written() {
         "position.pfm",
         "object_id.exr",
         "primitive_id.exr",
+        "z.pfm",
     ];
     let files: Vec<String> = passes.iter().map(|p| format!("out/shot.{p}")).collect();
-    let line = format!("-> out/shot.png + 6 AOV files: {}\n", files.join(", "));
+    let line = format!("-> out/shot.png + 7 AOV files: {}\n", files.join(", "));
     assert!(r.stderr.ends_with(&line), "{}", r.stderr);
     let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     assert_eq!(summary["output"], "out/shot.png");

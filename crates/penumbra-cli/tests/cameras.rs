@@ -165,7 +165,7 @@ fn without_o_several_cameras_go_beside_the_scene() {
 fn camera_and_pattern_mistakes_are_input_errors() {
     let dir = TempDir::new("cams-errors");
     dir.write("room.toml", three_cameras());
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
         (
             &["--camera", "all", "-o", "one.png"],
             "3 cameras need {camera}",
@@ -178,7 +178,9 @@ fn camera_and_pattern_mistakes_are_input_errors() {
             &["--camera", "front,nope", "-o", "{camera}.png"],
             "no camera named \"nope\"",
         ),
-        (&["-o", "{frame}.png"], "unknown field `{frame}`"),
+        (&["-o", "{frames}.png"], "unknown field `{frames}`"),
+        // {frame} is a path camera's frame (tests/sequences.rs); a still camera has none.
+        (&["-o", "{frame}.png"], "still camera"),
         (
             &["--camera", "front,", "-o", "{camera}.png"],
             "an empty name",

@@ -220,3 +220,119 @@ fn ctrl_c_during_progressive_writes_the_last_finished_pass() {
     assert!(red > 0.0, "a lit floor: {red}");
     assert!(temporary_files(sb.path()).is_empty());
 }
+
+/// [`ONE_HEAVY_PIXEL`] seen by an orbit of 4 frames.
+fn heavy_orbit() -> String {
+    ONE_HEAVY_PIXEL.replace(
+        "[camera]\nposition = [0, 2, 1]\nlook_at = [0, 0, 0]\nfov = 60\n",
+        "[camera]\nfov = 60\npath = { type = \"orbit\", center = [0, 0, 0], radius = 1, height = 2, frames = 4 }\n",
+    )
+}
+
+/// The status of each task of a `--json` run's stdout, by frame.
+fn statuses(stdout: &[u8]) -> Vec<(i64, String)> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            (
+                v["frame"].as_i64().unwrap(),
+                v["status"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_sequence_stopped_by_a_signal_keeps_its_frames_and_resume_finishes_it() {
+    let sb = TempDir::new("signal-sequence");
+    let scene = sb.write("s.toml", heavy_orbit());
+    // Each frame is 4096 × 4096 shadow rays on one thread: a fraction of a second.
+    let manifest = sb.join("manifest.jsonl");
+    let manifest_arg = manifest.to_str().unwrap();
+    let args = [
+        "--spp",
+        "4096",
+        "--light-samples",
+        "64",
+        "-t",
+        "1",
+        "--resume",
+        "--json",
+        "--manifest",
+        manifest_arg,
+    ];
+    let out = sb.join("run/f{frame}.png");
+    let clean = sb.join("clean/f{frame}.png");
+    for (signal, code) in [("INT", Some(130)), ("KILL", None)] {
+        let _ = std::fs::remove_dir_all(sb.join("run"));
+        let child = spawn_render(&scene, &out, &args);
+        // Frame 1 is done when its record is there (renamed into place right after it).
+        let second = sb.join("run/f1.meta.json");
+        let start = Instant::now();
+        while !second.exists() {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "frame 1 never came"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        send(&child, signal);
+        let (got, stderr, _) = wait_at_most(child, Duration::from_secs(5), signal);
+        assert_eq!(got, code, "SIG{signal}: {stderr}");
+        if signal == "INT" {
+            assert_interrupted(signal, &stderr);
+            assert!(temporary_files(&sb.join("run")).is_empty());
+        }
+        // Frames 0 and 1 are done; the rest render now, none twice.
+        let rerun = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--quiet"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(rerun.status.success(), "{rerun:?}");
+        let got = statuses(&rerun.stdout);
+        let done: Vec<i64> = got
+            .iter()
+            .filter(|(_, s)| s == "skipped")
+            .map(|(f, _)| *f)
+            .collect();
+        assert!(done.starts_with(&[0, 1]), "SIG{signal}: {got:?}");
+        assert_eq!(
+            got.iter().map(|(f, _)| *f).collect::<Vec<_>>(),
+            [0, 1, 2, 3]
+        );
+        // The manifest of both runs: no frame rendered twice.
+        let text = std::fs::read_to_string(&manifest).unwrap();
+        let mut counts = [0; 4];
+        for (f, status) in statuses(text.as_bytes()) {
+            if status == "rendered" {
+                counts[f as usize] += 1;
+            }
+        }
+        assert!(
+            counts.iter().all(|&n| n <= 1),
+            "SIG{signal}: {counts:?}\n{text}"
+        );
+        std::fs::remove_file(&manifest).unwrap();
+    }
+    // Every frame is the one a run without interruption writes.
+    let full = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&clean)
+        .args(["--quiet"])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(full.status.success());
+    for f in 0..4 {
+        let read = |dir: &str| std::fs::read(sb.join(dir).join(format!("f{f}.png"))).unwrap();
+        assert_eq!(read("run"), read("clean"), "frame {f}");
+    }
+}

@@ -27,3 +27,37 @@ pub(crate) fn camera(
 pub fn check_camera(position: [f32; 3], look_at: [f32; 3], up: [f32; 3], fov: f32) -> PyResult<()> {
     camera(position, look_at, up, fov).map(|_| ())
 }
+
+/// The camera's intrinsics and poses on a `width × height` film (see `penumbra::CameraPose`
+/// and docs/spec.md §10): K, camera_to_world (OpenCV axes), camera_to_world_opengl and
+/// world_to_camera, each a list of rows. Raises `ValueError` as [`check_camera`] does, and
+/// for an empty film.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn camera_pose(
+    position: [f32; 3],
+    look_at: [f32; 3],
+    up: [f32; 3],
+    fov: f32,
+    width: u32,
+    height: u32,
+) -> PyResult<(
+    penumbra::Mat3Rows,
+    penumbra::Mat4Rows,
+    penumbra::Mat4Rows,
+    penumbra::Mat4Rows,
+)> {
+    if width == 0 || height == 0 {
+        return Err(PyValueError::new_err(format!(
+            "a {width}x{height} film has no pixels"
+        )));
+    }
+    let c = camera(position, look_at, up, fov)?;
+    let p = penumbra::CameraPose::new(&c, width, height, (0, 0));
+    Ok((
+        p.k,
+        p.camera_to_world,
+        p.camera_to_world_opengl,
+        p.world_to_camera,
+    ))
+}

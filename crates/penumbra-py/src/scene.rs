@@ -27,6 +27,8 @@ pub struct CoreScene {
     pub(crate) files: Vec<PathBuf>,
     /// For each `objects` entry, the object ids it added.
     objects: Vec<std::ops::Range<u32>>,
+    /// The cameras with keys or a path, by name.
+    paths: Vec<(String, penumbra::CameraPath)>,
 }
 
 /// Parses and builds with the GIL released.
@@ -50,6 +52,7 @@ pub(crate) fn build(
         file,
         files: scene.files,
         objects: scene.objects,
+        paths: scene.paths,
     })
 }
 
@@ -134,6 +137,22 @@ impl CoreScene {
     fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         let b = self.world.bounds();
         (b.min.to_array(), b.max.to_array())
+    }
+
+    /// A camera with keys or a path, frame by frame: its first frame and each frame's
+    /// (position, look_at, up, fov); `None` for a still camera or an unknown name.
+    #[allow(clippy::type_complexity)]
+    fn camera_path(&self, name: &str) -> Option<(i64, Vec<([f32; 3], [f32; 3], [f32; 3], f32)>)> {
+        let path = self.paths.iter().find(|(n, _)| n == name).map(|(_, p)| p)?;
+        let cameras = path
+            .frames()
+            .filter_map(|f| path.camera(f))
+            .map(|c| {
+                let [p, l, u] = [c.position(), c.look_at(), c.up()].map(|v| v.to_array());
+                (p, l, u, c.fov_y_deg())
+            })
+            .collect();
+        Some((*path.frames().start(), cameras))
     }
 
     /// The names of the scene's cameras, in file order (the first is the default).

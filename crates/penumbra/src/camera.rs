@@ -99,6 +99,13 @@ impl Camera {
     pub fn fov_y_deg(&self) -> f32 {
         self.fov_y_deg
     }
+
+    /// The camera's orthonormal frame as rays are made from it (SPEC §3): forward
+    /// f = normalize(look_at − position), right r = normalize(f × up) and the true up r × f.
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        // `Camera::new` checked the frame, so it exists.
+        frame(self.position, self.look_at, self.up).unwrap_or((Vec3::NEG_Z, Vec3::X, Vec3::Y))
+    }
 }
 
 /// A [`Camera`] projected onto a film of `width × height` pixels: turns film points into rays.
@@ -118,12 +125,7 @@ pub struct PinholeCamera {
 impl PinholeCamera {
     /// `camera` on a film of `width × height` pixels (both at least 1).
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        // `Camera::new` checked the frame, so it exists.
-        let (forward, right, up) = frame(camera.position, camera.look_at, camera.up).unwrap_or((
-            Vec3::NEG_Z,
-            Vec3::X,
-            Vec3::Y,
-        ));
+        let (forward, right, up) = camera.basis();
         Self {
             eye: camera.position,
             forward,
@@ -139,6 +141,11 @@ impl PinholeCamera {
     /// Where every ray starts: the camera's position.
     pub fn eye(&self) -> Vec3 {
         self.eye
+    }
+
+    /// The unit direction the camera looks in (toward `look_at`).
+    pub fn forward(&self) -> Vec3 {
+        self.forward
     }
 
     /// The ray through film point `(x, y)`: x in `[0, width)` from the left edge, y in

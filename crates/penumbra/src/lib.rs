@@ -48,6 +48,7 @@
 
 mod accel;
 mod camera;
+mod camera_path;
 mod distribution;
 mod encode8;
 mod files;
@@ -63,6 +64,7 @@ mod math;
 mod memory;
 mod names;
 mod pool;
+mod pose;
 mod raycast;
 mod render;
 mod sampling;
@@ -84,6 +86,7 @@ pub use accel::{
     intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
 };
 pub use camera::{Camera, CameraError, PinholeCamera};
+pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
@@ -100,6 +103,7 @@ pub use material::{Cutout, Material};
 pub use math::{Aabb, Ray, Rgb, Transform};
 pub use names::{escape_controls, file_name_part, UnknownName};
 pub use pool::MAX_THREADS;
+pub use pose::{CameraPose, Mat3Rows, Mat4Rows};
 pub use raycast::{
     create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,

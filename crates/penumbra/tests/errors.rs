@@ -273,6 +273,37 @@ fn table() -> Vec<Case> {
             .build_error(BadValue, at("cameras.side"), Some("cameras"), &["either", "not both"]),
         toml("no camera", without_camera(BASE))
             .build_error(MissingKey, FileStart, None, &["missing", "camera"]),
+
+        // --- Camera paths (building; a path's shape when parsing) ---
+        toml("camera keys out of frame order",
+             format!("{}\n[cameras.fly]\n{}", named_camera(BASE), keys(&[10, 5])))
+            .build_error(BadValue, at("frame = 5"), Some("cameras.fly.keys[1].frame"),
+                         &["frame 5", "after frame 10", "order"]),
+        toml("two camera keys of one frame",
+             format!("{}\n[cameras.fly]\n{}", named_camera(BASE), keys(&[3, 10, 10])))
+            .build_error(BadValue, at_nth("frame = 10", 1), Some("cameras.fly.keys[2].frame"),
+                         &["frame 10", "keys[1]"]),
+        toml("camera path without keys",
+             format!("{}\n[cameras.fly]\nfov = 40\nkeys = []\n", named_camera(BASE)))
+            .build_error(BadValue, at("keys"), Some("cameras.fly.keys"), &["at least one key"]),
+        toml("a key without fov", format!("{}\n[cameras.fly]\n{}", named_camera(BASE),
+                                          keys(&[1, 2]).replacen("fov = 40\n", "", 1)))
+            .build_error(MissingKey, at_nth("[[cameras.fly.keys]]", 0), Some("cameras.fly.keys[0]"),
+                         &["missing", "fov"]),
+        toml("orbit of 0 frames",
+             format!("{}\n[cameras.turn]\nfov = 40\npath = {{ type = \"orbit\", center = [0, 0, 0], radius = 4, frames = 0 }}\n",
+                     named_camera(BASE)))
+            .build_error(BadValue, at("frames = 0"), Some("cameras.turn.path.frames"),
+                         &["from 1", "not 0"]),
+        toml("orbit of an unknown kind",
+             format!("{}\n[cameras.turn]\nfov = 40\npath = {{ type = \"spiral\", center = [0, 0, 0], radius = 4, frames = 8 }}\n",
+                     named_camera(BASE)))
+            .parse_error(BadValue, value_of("type = \"spiral\""), Some("cameras.turn.path.type"),
+                         &["spiral", "orbit"]),
+        toml("keys and a path",
+             format!("{}\n[cameras.fly]\npath = {{ type = \"orbit\", center = [0, 0, 0], radius = 4, frames = 8 }}\n{}",
+                     named_camera(BASE), keys(&[1, 2])))
+            .parse_error(BadValue, at("[cameras.fly]"), Some("cameras.fly"), &["keys or a path"]),
         toml("zero scale", edit(BASE, "size = 1\n", "size = 1\nscale = 0\n"))
             .build_error(BadValue, at("scale"), Some("objects[1].scale"), &["scale", "zero"]),
         toml("zero scale along one axis", edit(BASE, "size = 1\n", "size = 1\nscale = [1, 0, 1]\n"))
@@ -549,6 +580,17 @@ fn with_render(lines: &str) -> String {
 }
 
 /// BASE with its `[camera]` called `front`.
+/// A `[cameras.NAME]` table's body: fov 40 and one key at each of `frames`, in the order given.
+fn keys(frames: &[i64]) -> String {
+    let mut out = "fov = 40\n".to_owned();
+    for (i, f) in frames.iter().enumerate() {
+        out += &format!(
+            "[[cameras.fly.keys]]\nframe = {f}\nposition = [{i}, 1, 5]\nlook_at = [0, 0, 0]\n"
+        );
+    }
+    out
+}
+
 fn named_camera(text: &str) -> String {
     edit(text, "[camera]", "[cameras.front]")
 }

@@ -65,7 +65,10 @@ fn a_later_override_wins_and_tables_are_created() {
     assert!(file.desc.render.ambient.is_some());
     // A whole table as an inline TOML value.
     let file = toml(&["camera={position=[0,0,9], look_at=[0,0,0], fov=30}"]).unwrap();
-    assert_eq!(file.desc.camera.unwrap().fov.0, 30.0);
+    let Some(penumbra::desc::CameraDesc::Still(camera)) = file.desc.camera else {
+        panic!("not a still camera: {:?}", file.desc.camera);
+    };
+    assert_eq!(camera.fov.0, 30.0);
 }
 
 #[test]

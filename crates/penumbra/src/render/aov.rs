@@ -2,7 +2,8 @@
 //! as dataset generators and denoisers use them (Mitsuba's `aov` integrator, Blender's passes).
 //!
 //! How each is taken over a pixel:
-//! - `depth`, `position`, `normal`, `object_id` and `primitive_id` come from one ray: the ray
+//! - `depth` (alias `range`), `z`, `position`, `normal`, `object_id` and `primitive_id` come
+//!   from one ray: the ray
 //!   through the pixel's center, whatever the sampler and sample count. They never blend two
 //!   surfaces at a silhouette, they agree with each other (`position` is the camera position
 //!   plus `depth` along that ray's unit direction), and they do not change with the seed or
@@ -10,7 +11,12 @@
 //! - `albedo` is filtered like the colour: the mean over all of the pixel's samples, a sample
 //!   that misses counting as black. It matches the colour's edges, as denoisers expect.
 //!
-//! On a miss: depth is `+inf`, position, normal and albedo are zero, and both ids are
+//! `depth` is the distance along that ray (Mitsuba's depth, a range); `z` is the planar depth
+//! along the camera's forward axis (ROS REP 118's, OpenCV's Z): `depth` times the cosine
+//! between the ray and the forward axis, so that `z` is the same across a wall facing the
+//! camera.
+//!
+//! On a miss: depth and z are `+inf`, position, normal and albedo are zero, and both ids are
 //! [`NO_ID`].
 //!
 //! What is written or returned of them is one conversion, [`AovFilm::values`]: the values of
@@ -48,6 +54,9 @@ pub struct AovPixel {
     /// Distance from the camera to the surface along the ray through the pixel center (not
     /// the z-depth); `+inf` on a miss.
     pub depth: f32,
+    /// Planar depth: the hit's distance along the camera's forward axis (the camera-space Z
+    /// of `position`); `+inf` on a miss.
+    pub z: f32,
     /// World-space hit point of the center ray; zero on a miss.
     pub position: Vec3,
     /// World-space unit shading normal of the center ray's hit, turned to the camera's side
@@ -67,6 +76,7 @@ impl AovPixel {
     /// The value of a pixel whose center ray hits nothing and whose samples all miss.
     pub const MISS: AovPixel = AovPixel {
         depth: f32::INFINITY,
+        z: f32::INFINITY,
         position: Vec3::ZERO,
         normal: Vec3::ZERO,
         albedo: Rgb::ZERO,
@@ -109,21 +119,24 @@ pub enum Aov {
     ObjectId,
     /// [`AovPixel::primitive_id`].
     PrimitiveId,
+    /// [`AovPixel::z`].
+    Z,
 }
 
 impl Aov {
     /// Every AOV, in the order files, channels and messages list them.
-    pub const ALL: [Aov; 6] = [
+    pub const ALL: [Aov; 7] = [
         Aov::Depth,
         Aov::Normal,
         Aov::Albedo,
         Aov::Position,
         Aov::ObjectId,
         Aov::PrimitiveId,
+        Aov::Z,
     ];
 
-    /// Its name: "depth", "normal", "albedo", "position", "object_id" or "primitive_id";
-    /// [`str::parse`] takes it back.
+    /// Its name: "depth", "normal", "albedo", "position", "object_id", "primitive_id" or
+    /// "z"; [`str::parse`] takes it back (and "range" for depth).
     pub fn name(self) -> &'static str {
         match self {
             Aov::Depth => "depth",
@@ -132,6 +145,7 @@ impl Aov {
             Aov::Position => "position",
             Aov::ObjectId => "object_id",
             Aov::PrimitiveId => "primitive_id",
+            Aov::Z => "z",
         }
     }
 
@@ -139,7 +153,7 @@ impl Aov {
     pub fn components(self) -> usize {
         match self {
             Aov::Normal | Aov::Albedo | Aov::Position => 3,
-            Aov::Depth | Aov::ObjectId | Aov::PrimitiveId => 1,
+            Aov::Depth | Aov::Z | Aov::ObjectId | Aov::PrimitiveId => 1,
         }
     }
 
@@ -149,11 +163,15 @@ impl Aov {
     }
 }
 
-/// An AOV by its [`Aov::name`]; an unknown name is an error listing the names.
+/// An AOV by its [`Aov::name`], or `range` for [`Aov::Depth`] (the distance along the ray);
+/// an unknown name is an error listing the names.
 impl FromStr for Aov {
     type Err = UnknownName;
 
     fn from_str(name: &str) -> Result<Aov, UnknownName> {
+        if name == "range" {
+            return Ok(Aov::Depth);
+        }
         parse_name("AOV", name, &Aov::ALL, Aov::name)
     }
 }
@@ -179,6 +197,7 @@ impl AovFilm {
         };
         match aov {
             Aov::Depth => collect(px.len(), px.iter().map(|p| p.depth)).map(AovValues::Floats),
+            Aov::Z => collect(px.len(), px.iter().map(|p| p.z)).map(AovValues::Floats),
             Aov::Normal => vec3(|p| p.normal),
             Aov::Albedo => vec3(|p| p.albedo),
             Aov::Position => vec3(|p| p.position),
@@ -236,6 +255,7 @@ impl AovContext {
         AovPixel {
             // The camera's rays have unit directions, so t is the distance.
             depth: hit.t,
+            z: hit.t * ray.direction.dot(camera.forward()),
             position: surface.position,
             normal: facing_normal(&ray, &surface),
             albedo: Rgb::ZERO,
@@ -302,12 +322,37 @@ mod tests {
     }
 
     #[test]
+    fn z_is_planar_depth_and_depth_the_distance_along_the_ray() {
+        // A wall facing the camera 3 units away: z is 3 everywhere on it, depth grows toward
+        // the edges, and z is the forward coordinate of the position.
+        let mut b = WorldBuilder::new();
+        let m = b.add_material(Material::default()).unwrap();
+        let q = quad(Vec3::new(-10.0, -10.0, 0.0), 20.0 * Vec3::X, 20.0 * Vec3::Y);
+        b.add_mesh(&q, &Transform::IDENTITY, &[m]).unwrap();
+        let world = b.build(1);
+        let eye = Vec3::new(0.0, 0.0, 3.0);
+        let cam = Camera::new(eye, Vec3::ZERO, Vec3::Y, 90.0).unwrap();
+        let camera = PinholeCamera::new(&cam, 7, 5);
+        let ctx = AovContext::new(&world);
+        for (x, y) in [(0, 0), (3, 2), (6, 4), (1, 3)] {
+            let px = ctx.center(&world, &camera, x, y);
+            assert!((px.z - 3.0).abs() < 1e-5, "{x},{y}: {}", px.z);
+            assert!(px.depth >= px.z);
+            assert!(((px.position - eye).length() - px.depth).abs() < 1e-5);
+            assert!(((px.position - eye).dot(camera.forward()) - px.z).abs() < 1e-5);
+        }
+        assert!(ctx.center(&world, &camera, 0, 0).depth > 3.5);
+        assert_eq!(AovPixel::MISS.z, f32::INFINITY);
+    }
+
+    #[test]
     fn aov_names_round_trip() {
         for a in Aov::ALL {
             assert_eq!(a.name().parse::<Aov>(), Ok(a));
         }
         let e = "zdepth".parse::<Aov>().unwrap_err();
-        assert_eq!((e.name.as_str(), e.known.len()), ("zdepth", 6));
+        assert_eq!((e.name.as_str(), e.known.len()), ("zdepth", 7));
+        assert_eq!("range".parse::<Aov>(), Ok(Aov::Depth));
         assert!(e
             .to_string()
             .starts_with(r#"unknown AOV "zdepth" (use "depth", "normal""#));
@@ -317,6 +362,7 @@ mod tests {
     fn values_come_pixel_by_pixel_in_film_order() {
         let px = |i: u32| AovPixel {
             depth: i as f32,
+            z: 0.5 * i as f32,
             position: Vec3::new(1.0, 2.0, 3.0) * i as f32,
             normal: Vec3::new(0.0, 0.0, i as f32),
             albedo: Rgb::new(0.5, i as f32, 0.25),

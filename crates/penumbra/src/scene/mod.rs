@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::camera_path::CameraPath;
 use crate::files::{read_bounded, Files};
 use crate::render::RenderSettings;
 use crate::world::World;
@@ -97,6 +98,16 @@ pub struct Scene {
     /// What the build ignored in the files it read (glTF features penumbra does not render:
     /// animations, normal maps, …), one sentence each, naming the file.
     pub warnings: Vec<String>,
+    /// The cameras with keys or a path, by name, in file order. The world holds each under
+    /// its name at the path's first frame.
+    pub paths: Vec<(String, CameraPath)>,
+}
+
+impl Scene {
+    /// The path of the camera called `name`; `None` for a still camera or an unknown name.
+    pub fn path(&self, name: &str) -> Option<&CameraPath> {
+        self.paths.iter().find(|(n, _)| n == name).map(|(_, p)| p)
+    }
 }
 
 impl SceneFile {

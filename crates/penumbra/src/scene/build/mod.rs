@@ -9,6 +9,7 @@ mod budget;
 mod gltf;
 mod materials;
 mod objects;
+mod paths;
 mod placements;
 mod settings;
 
@@ -54,6 +55,8 @@ struct Builder<'a> {
     lighting: Lighting,
     /// The memory the scene may take, and what it takes so far.
     budget: budget::Budget,
+    /// The cameras with a path, by name, in file order.
+    paths: Vec<(String, crate::camera_path::CameraPath)>,
 }
 
 /// The light a material reflects, for its radiance bound.
@@ -84,6 +87,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
             model: LightModel::Phong,
         },
         budget: budget::Budget::new(crate::memory::available()),
+        paths: Vec::new(),
     };
     let film = b.film()?;
     let file_cameras = b.cameras()?;
@@ -188,6 +192,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         files: b.read.into_iter().collect(),
         objects,
         warnings: b.warnings,
+        paths: b.paths,
     })
 }
 

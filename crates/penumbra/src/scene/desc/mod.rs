@@ -31,6 +31,7 @@
 //! assert_eq!(scene.desc.film.width, 64);
 //! ```
 
+mod cameras;
 mod lights;
 mod objects;
 mod tagged;
@@ -39,6 +40,7 @@ mod values;
 
 use serde::Deserialize;
 
+pub use cameras::{CameraDesc, CameraKeyDesc, CameraPathDesc, PathType, StillCameraDesc};
 pub use lights::{
     AreaLightDesc, DirectionalLightDesc, EnvironmentLightDesc, LightDesc, LightType,
     PointLightDesc, SpotLightDesc,
@@ -95,20 +97,6 @@ pub struct FilmDesc {
     pub output: Option<String>,
     /// Plain power-law encoding `c^(1/gamma)` instead of the sRGB curve.
     pub gamma: Option<Num>,
-}
-
-/// `[camera]` or `[cameras.NAME]`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct CameraDesc {
-    /// Eye position.
-    pub position: Vec3Desc,
-    /// The point seen at the film's center.
-    pub look_at: Vec3Desc,
-    /// Up direction (default +y).
-    pub up: Option<Vec3Desc>,
-    /// Vertical field of view in degrees, in (0, 180).
-    pub fov: Num,
 }
 
 /// `[render]`.

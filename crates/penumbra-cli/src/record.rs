@@ -1,0 +1,169 @@
+//! `--resume` and `--meta`: the record written beside each image (`out.png` →
+//! `out.meta.json`) saying how it was made, the files written, the camera (K and pose) and
+//! which object ids belong to which `[[objects]]` entry; and the test of whether a task is
+//! done.
+//!
+//! A task is done when its image and every file its record lists exist and the record's
+//! `settings` are exactly those the task would render with now: the scene's digest (its
+//! text and `--set` overrides), penumbra's version, the camera (its pose to the bit), film,
+//! region, sampler, samples, seed, shading, passes and output format. A record is removed
+//! before its image is replaced and written after it, so that an interrupted run never
+//! leaves a record beside an image it does not describe.
+
+use std::path::{Path, PathBuf};
+
+use penumbra::{CameraPose, Override, Scene, SceneFile, StagedFile, View, World};
+use serde_json::{json, Value};
+
+use crate::aov::Passes;
+use crate::failure::{runtime, Failure};
+use crate::output::Target;
+use crate::plan::Job;
+
+/// The largest record read back: far more than any record penumbra writes.
+const MAX_RECORD_BYTES: u64 = 1 << 20;
+
+/// Where the record of the image at `image` goes: its stem with `.meta.json`, beside the
+/// `--aov` files (`out.depth.pfm`).
+pub fn path_of(image: &Path) -> PathBuf {
+    image.with_extension("meta.json")
+}
+
+/// A short digest of the scene text and overrides: 64-bit FNV-1a, in hex. It tells runs of
+/// one scene apart from runs of an edited one; it does not read the meshes and images.
+pub fn digest(text: &str, overrides: &[Override]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            hash ^= u64::from(b);
+            hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    eat(text.as_bytes());
+    for o in overrides {
+        eat(b"\0--set\0");
+        eat(o.text().as_bytes());
+    }
+    format!("{hash:016x}")
+}
+
+/// What a task's image depends on, as its record keeps it.
+pub fn settings(job: &Job, digest: &str, passes: Option<&Passes>, gamma: Option<f32>) -> Value {
+    json!({
+        "penumbra": env!("CARGO_PKG_VERSION"),
+        "scene_digest": digest,
+        "camera": job.camera,
+        "frame": job.frame,
+        // Debug formatting writes every f32 so that it reads back to the same bits.
+        "render": format!("{:?}", job.settings),
+        "region": job.region.map(|b| [b.x0, b.x1, b.y0, b.y1]),
+        "aovs": format!("{passes:?}"),
+        "gamma": gamma,
+        "format": job.output.format.extension(),
+    })
+}
+
+/// The camera of a job, for its pose.
+pub fn camera_of(job: &Job, world: &World) -> Option<penumbra::Camera> {
+    match &job.settings.view {
+        View::Camera(c) => Some(*c),
+        View::Named(n) => world.camera(n).copied(),
+        View::First => world.cameras().first().map(|(_, c)| *c),
+    }
+}
+
+/// The pose of a job's image (of its region, when it has one).
+pub fn pose_of(job: &Job, world: &World) -> Option<CameraPose> {
+    let offset = job.region.map_or((0, 0), |b| (b.x0, b.y0));
+    camera_of(job, world)
+        .map(|c| CameraPose::new(&c, job.settings.width, job.settings.height, offset))
+}
+
+/// True when the job's image is there, made with exactly `settings`.
+pub fn done(job: &Job, settings: &Value) -> bool {
+    let Target::File(image) = &job.output.target else {
+        return false;
+    };
+    if !image.is_file() {
+        return false;
+    }
+    let Ok(bytes) = read_bounded(&path_of(image)) else {
+        return false;
+    };
+    let Ok(record) = serde_json::from_slice::<Value>(&bytes) else {
+        return false;
+    };
+    let files_there = record["files"].as_array().is_some_and(|files| {
+        files
+            .iter()
+            .all(|f| f.as_str().is_some_and(|f| Path::new(f).is_file()))
+    });
+    record.get("settings") == Some(settings) && files_there
+}
+
+fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_RECORD_BYTES)
+        .read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Removes the record of `image`, if any, before the image is replaced.
+pub fn remove(image: &Path) -> Result<(), Failure> {
+    let path = path_of(image);
+    match std::fs::remove_file(&path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(runtime(format!(
+            "{}: cannot remove the old record: {e}",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Each `[[objects]]` entry: its key, its type (and file) and the object ids it added, as
+/// `[first, end)` (one id, or one per copy of `instances`): what `object_id` values name.
+fn objects(file: &SceneFile, scene: &Scene) -> Vec<Value> {
+    file.desc
+        .objects
+        .iter()
+        .zip(&scene.objects)
+        .enumerate()
+        .map(|(i, (o, ids))| {
+            json!({
+                "key": format!("objects[{i}]"),
+                "type": crate::check::object_kind(o),
+                "ids": [ids.start, ids.end],
+            })
+        })
+        .collect()
+}
+
+/// The record of a finished job, staged: its settings, the files written and its camera.
+pub fn stage(
+    job: &Job,
+    settings: Value,
+    files: &[PathBuf],
+    file: &SceneFile,
+    scene: &Scene,
+) -> Result<StagedFile, Failure> {
+    let Target::File(image) = &job.output.target else {
+        return Err(runtime("a record needs an image file"));
+    };
+    let pose = pose_of(job, &scene.world);
+    let record = json!({
+        "settings": settings,
+        "image": image.display().to_string(),
+        "files": files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
+        "width": job.region.map_or(job.settings.width, |b| b.x1.saturating_sub(b.x0)),
+        "height": job.region.map_or(job.settings.height, |b| b.y1.saturating_sub(b.y0)),
+        "K": pose.map(|p| p.k),
+        "camera_to_world": pose.map(|p| p.camera_to_world),
+        "camera_to_world_opengl": pose.map(|p| p.camera_to_world_opengl),
+        "world_to_camera": pose.map(|p| p.world_to_camera),
+        "objects": objects(file, scene),
+    });
+    let text = serde_json::to_string(&record).map_err(runtime)? + "\n";
+    StagedFile::write_bytes(&path_of(image), text.as_bytes()).map_err(runtime)
+}

@@ -1,0 +1,216 @@
+//! `--poses` (issue 28): the intrinsics K and poses written for each image put a world point
+//! on the pixel the renderer shows it at, and `--poses-format nerf` writes a transforms.json.
+
+mod harness;
+#[path = "../../penumbra/tests/support/mod.rs"]
+mod support;
+
+use harness::{ok, read_pfm, run_in};
+use serde_json::Value;
+use support::{TempDir, BASE_TOML};
+
+const STILL: &str =
+    "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov = 45\n";
+
+/// The base scene seen by a keyframed camera `fly` (frames 0 to 4) looking off-centre with a
+/// tilted up, so that no axis or centre is special.
+fn scene() -> String {
+    BASE_TOML.replace(
+        STILL,
+        "[cameras.fly]\nup = [0.2, 1, 0.1]\n\
+         [[cameras.fly.keys]]\nframe = 0\nposition = [1.5, 2, 4]\nlook_at = [0.3, 0.1, -0.4]\nfov = 50\n\
+         [[cameras.fly.keys]]\nframe = 4\nposition = [-2, 1.5, 3.5]\nlook_at = [0.2, 0, 0]\nfov = 38\n",
+    )
+}
+
+fn read_json(path: &std::path::Path) -> Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+fn matrix(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            row.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+/// The largest distance, over every pixel with a hit, between the pixel's integer
+/// coordinates and where K and world_to_camera put the world point its position AOV shows.
+fn largest_reprojection_error(dir: &TempDir, pose: &Value, position: &str) -> f64 {
+    let (w, h, channels, values) = read_pfm(&dir.join(position));
+    assert_eq!(channels, 3);
+    assert_eq!(pose["width"].as_u64(), Some(w as u64));
+    assert_eq!(pose["height"].as_u64(), Some(h as u64));
+    let (k, m) = (matrix(&pose["K"]), matrix(&pose["world_to_camera"]));
+    let (mut worst, mut hits) = (0.0f64, 0);
+    for j in 0..h {
+        for i in 0..w {
+            let p: Vec<f64> = values[(j * w + i) * 3..][..3]
+                .iter()
+                .map(|&x| x as f64)
+                .collect();
+            if p.iter().all(|&x| x == 0.0) {
+                continue; // a miss
+            }
+            hits += 1;
+            let c: Vec<f64> = (0..3)
+                .map(|r| m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3])
+                .collect();
+            assert!(c[2] > 0.0, "pixel {i},{j} is behind the camera");
+            let u = k[0][0] * c[0] / c[2] + k[0][1] * c[1] / c[2] + k[0][2];
+            let v = k[1][1] * c[1] / c[2] + k[1][2];
+            worst = worst.max((u - i as f64).hypot(v - j as f64));
+        }
+    }
+    assert!(hits > w * h / 4, "only {hits} pixels hit");
+    worst
+}
+
+#[test]
+fn k_and_the_pose_put_each_hit_on_the_pixel_that_shows_it() {
+    let dir = TempDir::new("poses-reproject");
+    dir.write("s.toml", scene());
+    ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "s.toml",
+            "--camera",
+            "fly",
+            "--frames",
+            "0:4:2",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--aov",
+            "position",
+            "-o",
+            "out/f{frame}.png",
+            "--poses",
+            "out/poses.json",
+        ],
+    ));
+    let poses = read_json(&dir.join("out/poses.json"));
+    let frames = poses["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    for (pose, frame) in frames.iter().zip([0, 2, 4]) {
+        assert_eq!(pose["frame"], frame);
+        assert_eq!(pose["camera"], "fly");
+        assert_eq!(pose["file"], format!("out/f{frame}.png"));
+        // A centred camera: cx = (W − 1)/2, cy = (H − 1)/2.
+        let k = matrix(&pose["K"]);
+        assert_eq!((k[0][2], k[1][2]), (19.5, 14.5));
+        let worst = largest_reprojection_error(&dir, pose, &format!("out/f{frame}.position.pfm"));
+        // Half a pixel is the issue's bound; the convention is right to a hair.
+        assert!(worst < 0.01, "frame {frame}: {worst} pixels off");
+    }
+    // OpenGL's pose is OpenCV's with y and z flipped; world_to_camera is its inverse.
+    let p = &frames[1];
+    let (cv, gl) = (
+        matrix(&p["camera_to_world"]),
+        matrix(&p["camera_to_world_opengl"]),
+    );
+    for r in 0..3 {
+        assert_eq!(
+            (gl[r][0], gl[r][1], gl[r][2], gl[r][3]),
+            (cv[r][0], -cv[r][1], -cv[r][2], cv[r][3])
+        );
+    }
+}
+
+#[test]
+fn a_regions_k_is_shifted_to_the_regions_pixels() {
+    let dir = TempDir::new("poses-region");
+    dir.write("s.toml", scene());
+    ok(run_in(
+        dir.path(),
+        [
+            "render",
+            "s.toml",
+            "--camera",
+            "fly",
+            "--frames",
+            "3",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--pixelbounds",
+            "12,34,4,27",
+            "--aov",
+            "position",
+            "-o",
+            "r.png",
+            "--poses",
+            "p.json",
+        ],
+    ));
+    let poses = read_json(&dir.join("p.json"));
+    let pose = &poses["frames"][0];
+    let k = matrix(&pose["K"]);
+    assert_eq!((k[0][2], k[1][2]), (19.5 - 12.0, 14.5 - 4.0));
+    let worst = largest_reprojection_error(&dir, pose, "r.position.pfm");
+    assert!(worst < 0.01, "{worst} pixels off");
+}
+
+#[test]
+fn nerf_transforms_name_the_images_beside_them_with_opengl_poses() {
+    let dir = TempDir::new("poses-nerf");
+    dir.write("s.toml", scene());
+    let args = [
+        "render", "s.toml", "--camera", "fly", "--width", "16", "--height", "12",
+    ];
+    ok(run_in(
+        dir.path(),
+        args.iter().copied().chain([
+            "-o",
+            "data/images/{frame:03}.png",
+            "--poses",
+            "data/transforms.json",
+            "--poses-format",
+            "nerf",
+        ]),
+    ));
+    ok(run_in(
+        dir.path(),
+        args.iter()
+            .copied()
+            .chain(["-o", "cv/{frame}.png", "--poses", "cv/poses.json"]),
+    ));
+    let nerf = read_json(&dir.join("data/transforms.json"));
+    let cv = read_json(&dir.join("cv/poses.json"));
+    assert_eq!(nerf["camera_model"], "OPENCV");
+    // NeRF counts pixel centres at +½: a centred camera has cx = W/2.
+    assert_eq!(
+        (nerf["w"].as_u64(), nerf["h"].as_u64()),
+        (Some(16), Some(12))
+    );
+    assert_eq!(
+        (nerf["cx"].as_f64(), nerf["cy"].as_f64()),
+        (Some(8.0), Some(6.0))
+    );
+    let fy = nerf["fl_y"].as_f64().unwrap();
+    let angle_y = nerf["camera_angle_y"].as_f64().unwrap();
+    assert!((angle_y - 50f64.to_radians()).abs() < 1e-6, "{angle_y}");
+    assert!((fy - 6.0 / (25f64.to_radians()).tan()).abs() < 1e-9, "{fy}");
+    let frames = nerf["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 5);
+    for (f, (frame, pose)) in frames
+        .iter()
+        .zip(cv["frames"].as_array().unwrap())
+        .enumerate()
+    {
+        let file = frame["file_path"].as_str().unwrap();
+        assert_eq!(file, format!("images/{f:03}.png"));
+        assert!(dir.join("data").join(file).is_file(), "{file}");
+        assert_eq!(frame["transform_matrix"], pose["camera_to_world_opengl"]);
+    }
+}
