@@ -7,10 +7,7 @@ mod support;
 
 use harness::{ok, read_pfm, run_in};
 use serde_json::Value;
-use support::{TempDir, BASE_TOML};
-
-const STILL: &str =
-    "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov = 45\n";
+use support::{TempDir, BASE_CAMERA as STILL, BASE_TOML};
 
 /// The base scene seen by a keyframed camera `fly` (frames 0 to 4) looking off-centre with a
 /// tilted up, so that no axis or centre is special.

@@ -9,10 +9,7 @@ use std::path::Path;
 
 use harness::{error_line, ok, run_in};
 use serde_json::Value;
-use support::{TempDir, BASE_TOML};
-
-const STILL: &str =
-    "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov = 45\n";
+use support::{TempDir, BASE_CAMERA as STILL, BASE_TOML};
 
 /// The base scene with a still camera `front`, a keyframed camera `fly` (frames 2 to 9) and
 /// an orbit `turn` (frames 0 to 5).

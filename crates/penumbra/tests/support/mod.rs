@@ -159,6 +159,11 @@ center = [0, 0, 0]
 size = 1
 "#;
 
+/// The camera table of [`BASE_TOML`], for tests that replace it (with cameras of their own,
+/// paths, keys).
+pub const BASE_CAMERA: &str =
+    "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov = 45\n";
+
 /// [`BASE_TOML`] in JSON, one table or object per line so that lines can be asserted.
 pub const BASE_JSON: &str = r#"{
   "film": {"width": 16, "height": 12},
