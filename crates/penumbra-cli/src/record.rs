@@ -29,9 +29,11 @@ pub fn path_of(image: &Path) -> PathBuf {
     image.with_extension("meta.json")
 }
 
-/// A short digest of the scene text and overrides: 64-bit FNV-1a, in hex. It tells runs of
-/// one scene apart from runs of an edited one; it does not read the meshes and images.
-pub fn digest(text: &str, overrides: &[Override]) -> String {
+/// A short digest of the scene text, its overrides and the bytes of `files`, every file its
+/// build read (meshes, material libraries, images: [`penumbra::Scene::files`], read again
+/// here; one that cannot be read counts as such): 64-bit FNV-1a, in hex. It tells runs of one
+/// scene apart from runs of an edited one, or of one whose mesh or texture changed.
+pub fn digest(text: &str, overrides: &[Override], files: &[PathBuf]) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |bytes: &[u8]| {
         for &b in bytes {
@@ -43,6 +45,13 @@ pub fn digest(text: &str, overrides: &[Override]) -> String {
     for o in overrides {
         eat(b"\0--set\0");
         eat(o.text().as_bytes());
+    }
+    for path in files {
+        eat(b"\0file\0");
+        match std::fs::read(path) {
+            Ok(bytes) => eat(&bytes),
+            Err(_) => eat(b"\0unreadable\0"),
+        }
     }
     format!("{hash:016x}")
 }

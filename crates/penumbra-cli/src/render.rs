@@ -44,7 +44,8 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let jobs: Vec<usize> = (0..count)
         .filter(|&i| args.shard.is_none_or(|shard| shard.takes(i)))
         .collect();
-    let digest = (args.resume || args.meta).then(|| record::digest(file.text(), &args.set));
+    let digest =
+        (args.resume || args.meta).then(|| record::digest(file.text(), &args.set, &scene.files));
     let load_time = load_start.elapsed();
     interrupt.check()?;
     if args.dry_run {

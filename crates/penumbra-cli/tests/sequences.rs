@@ -345,3 +345,30 @@ fn resume_renders_a_frame_again_when_one_of_its_pass_files_is_gone() {
     assert_eq!(run(), ["skipped", "rendered", "skipped"]);
     assert!(dir.join("out/1.depth.pfm").is_file());
 }
+
+#[test]
+fn resume_renders_again_when_a_mesh_the_scene_reads_changed() {
+    let dir = TempDir::new("seq-resume-mesh");
+    let triangle = "v -1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    dir.write("tri.obj", triangle);
+    dir.write(
+        "s.toml",
+        format!("{BASE_TOML}\n[[objects]]\ntype = \"mesh\"\nfile = \"tri.obj\"\n"),
+    );
+    let run = || {
+        let args = [
+            "render", "s.toml", "-o", "out.png", "--resume", "--json", "-q",
+        ];
+        let r = ok(run_in(dir.path(), args));
+        json_lines(&r.out())[0]["status"]
+            .as_str()
+            .unwrap()
+            .to_owned()
+    };
+    assert_eq!(run(), "rendered");
+    assert_eq!(run(), "skipped");
+    // The same scene text, another mesh: its record no longer matches.
+    dir.write("tri.obj", triangle.replace("v 0 1 0", "v 0 2 0"));
+    assert_eq!(run(), "rendered");
+    assert_eq!(run(), "skipped");
+}
