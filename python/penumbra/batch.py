@@ -211,11 +211,12 @@ def check_views(path: str, jobs: Dict[str, Any], scene: Any) -> None:
 
 def view_line(r: Dict[str, Any]) -> str:
     """A view's line of the summary: name, image path, and how it went."""
-    how = (
-        "skipped (exists)"
-        if r["skipped"]
-        else f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
-    )
+    if r.get("error"):
+        how = f"failed: {r['error']}"
+    elif r["skipped"]:
+        how = "skipped (exists)"
+    else:
+        how = f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
     return f"{r['name']}\t{r['path']}\t{how}"
 
 
@@ -236,7 +237,7 @@ def manifest_line(
     ``task``, ``camera`` (a camera name, else None), ``frame`` (None: views have no frame),
     ``seed``, ``seconds``, ``peak_memory_bytes`` and ``host`` (of the task's process; None
     for a skipped view), ``outputs``, ``attempts`` (None: Ray retries on its own),
-    ``status`` (``rendered`` or ``skipped``) and ``error``."""
+    ``status`` (``rendered``, ``skipped`` or ``failed``) and ``error``."""
     from .views import aov_path
 
     outputs = [r["path"]] + ([aov_path(r["path"])] if view["aovs"] else [])
@@ -251,8 +252,8 @@ def manifest_line(
         "host": r.get("host"),
         "outputs": outputs,
         "attempts": None,
-        "status": "skipped" if r["skipped"] else "rendered",
-        "error": None,
+        "status": "failed" if r.get("error") else "skipped" if r["skipped"] else "rendered",
+        "error": r.get("error"),
     }
 
 
@@ -378,6 +379,7 @@ def _run(
             force=args.force,
             progress=not args.quiet and sys.stderr.isatty() or None,
             on_view=finished,
+            keep_going=True,
         )
     except KeyboardInterrupt:
         print("penumbra.batch: interrupted", file=sys.stderr)
@@ -393,6 +395,13 @@ def _run(
             import ray
 
             ray.shutdown()
+    failures = [r for r in summary if r.get("error")]
+    if failures:
+        # The others are done; the failed ones are listed last, as the command line does.
+        print(f"penumbra.batch: {len(failures)} of {len(summary)} views failed:", file=sys.stderr)
+        for r in failures:
+            print(f"  {r['name']}: {r['error']}", file=sys.stderr)
+        return 1, summary
     return 0, summary
 
 

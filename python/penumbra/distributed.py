@@ -151,11 +151,14 @@ def _gather(
     progress: Any,
     unit: str,
     label: Callable[[int], str],
+    on_failure: Optional[Callable[[int, Exception], None]] = None,
 ) -> None:
     """Waits for every task, calling ``on_result(index, result)`` as each finishes (with a
     progress bar cleared meanwhile, so that what it prints stays readable); cancels the rest
-    on any error or Ctrl-C. A task that failed raises one line naming it by ``label(index)``
-    (see :func:`_task_failure`), not Ray's remote traceback."""
+    on any error or Ctrl-C. A task that failed (after Ray's retries) raises one line naming
+    it by ``label(index)`` (see :func:`_task_failure`), not Ray's remote traceback; with
+    ``on_failure``, that error, or one ``on_result`` raised, goes to ``on_failure(index,
+    error)`` instead and the other tasks go on."""
     index = {ref: i for i, ref in enumerate(refs)}
     pending = list(refs)
     bar = _bar(progress, len(refs), unit)
@@ -169,12 +172,21 @@ def _gather(
                 try:
                     result = ray.get(ref)
                 except ray.exceptions.RayError as e:
-                    raise _task_failure(e, label(index[ref])) from None
-                if bar is None:
-                    on_result(index[ref], result)
-                else:
-                    with bar.external_write_mode():
+                    failure = _task_failure(e, label(index[ref]))
+                    if on_failure is None:
+                        raise failure from None
+                    on_failure(index[ref], failure)
+                    continue
+                try:
+                    if bar is None:
                         on_result(index[ref], result)
+                    else:
+                        with bar.external_write_mode():
+                            on_result(index[ref], result)
+                except Exception as e:
+                    if on_failure is None:
+                        raise
+                    on_failure(index[ref], e)
                 if bar is not None:
                     bar.update(1)
                 elif callable(progress):
@@ -362,6 +374,7 @@ def render_views(
     force: bool = False,
     progress: Any = None,
     on_view: Optional[Callable[[Dict[str, Any]], Any]] = None,
+    keep_going: bool = False,
 ) -> List[Dict[str, Any]]:
     """Render every view (see :mod:`penumbra.views`: camera names, :class:`penumbra.Camera`
     objects, view dicts, :func:`penumbra.views.orbit`) as one task each and write its image to
@@ -377,6 +390,10 @@ def render_views(
     the world). ``on_view``, when given, is called with each view's dict as soon as it is
     known: at once for a skipped view, when its image is written for the others (in the
     order they finish), so that an interrupted batch has told what it finished.
+
+    A view whose task fails (after Ray's retries, ``MAX_RETRIES``) or whose image cannot be
+    written raises at once, the other tasks cancelled; with ``keep_going`` the others go on,
+    and the failed view's dict has ``error`` (one line) and ``skipped`` False.
     """
     defaults = _settings(locals())
     defaults["aovs"] = (aovs,) if isinstance(aovs, str) else tuple(aovs)
@@ -425,7 +442,14 @@ def render_views(
         if on_view is not None:
             on_view(summary[i])
 
-    _gather(refs, save, progress, "view", lambda k: label(todo[k], batch[todo[k]]["name"]))
+    def failed(k: int, error: Exception) -> None:
+        i = todo[k]
+        summary[i].update(skipped=False, error=str(error) or type(error).__name__)
+        if on_view is not None:
+            on_view(summary[i])
+
+    name = lambda k: label(todo[k], batch[todo[k]]["name"])  # noqa: E731
+    _gather(refs, save, progress, "view", name, failed if keep_going else None)
     return summary
 
 

@@ -225,3 +225,25 @@ def test_the_manifest_has_a_line_per_view_of_every_run(tmp_path):
         assert line["camera"] == (v["camera"] if isinstance(v["camera"], str) else None)
     bad = run_batch(jobs, "--manifest", tmp_path)
     assert bad.returncode == 2 and "cannot write the manifest" in bad.stderr, bad.stderr
+
+
+def test_a_view_that_fails_is_listed_at_the_end_and_the_others_are_done(tmp_path):
+    jobs = example_jobs(
+        tmp_path,
+        **{"spp = 4": "spp = 1", "width = 256": "width = 16", "height = 256": "height = 12"},
+    )
+    spec = batch.read_jobs(str(jobs))
+    names = [v["name"] for v in spec["views"]]
+    # A folder where the second view's image goes: its write fails, however often retried.
+    blocked = tmp_path / "out" / f"{names[1]}.png"
+    blocked.mkdir(parents=True)
+    manifest = tmp_path / "manifest.jsonl"
+    out = run_batch(jobs, "--num-cpus", 2, "--manifest", manifest, "--quiet")
+    assert out.returncode == 1, out.stderr
+    assert f"1 of {len(names)} views failed" in out.stderr
+    assert any(line.strip().startswith(f"{names[1]}:") for line in out.stderr.splitlines())
+    for name in names[:1] + names[2:]:
+        assert (tmp_path / "out" / f"{name}.png").is_file(), name
+    lines = {json.loads(line)["task"]: json.loads(line) for line in manifest.read_text().splitlines()}
+    assert lines[1]["status"] == "failed" and lines[1]["error"]
+    assert all(lines[t]["status"] == "rendered" for t in lines if t != 1)
