@@ -329,6 +329,11 @@ pub(super) fn world_box(mesh: &Bvh, transform: &Transform) -> Aabb {
 
 /// The world-to-object map of `transform`, inverted in double precision.
 pub(super) fn inverse(transform: &Transform) -> Affine3A {
-    let m = transform.world_from_object.as_dmat4().inverse();
-    Affine3A::from_mat4(DMat4::as_mat4(&m))
+    Affine3A::from_mat4(DMat4::as_mat4(&inverse_f64(transform)))
+}
+
+/// The world-to-object map of `transform` in double precision, of which [`inverse`] is the
+/// `f32` form.
+pub(super) fn inverse_f64(transform: &Transform) -> DMat4 {
+    transform.world_from_object.as_dmat4().inverse()
 }

@@ -22,11 +22,11 @@
 
 use std::sync::Arc;
 
-use glam::{Affine3A, DAffine3, DMat4, Vec3, Vec3A};
+use glam::{Affine3A, DAffine3, Vec3, Vec3A};
 
 use super::nearest::{Frame, Nearest};
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
-use crate::accel::instances::world_box;
+use crate::accel::instances::{inverse, inverse_f64, world_box};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{unit_normal, PreparedRay};
 use crate::accel::traverse::{slab_scaled, walk_nearest};
@@ -100,15 +100,15 @@ impl WideLevels {
         let placed = placements
             .into_iter()
             .map(|placement| {
-                let inverse = placement.transform.world_from_object.as_dmat4().inverse();
-                let linear = glam::DMat3::from_mat4(inverse);
+                let exact = inverse_f64(&placement.transform);
+                let linear = glam::DMat3::from_mat4(exact);
                 let frobenius_sq = [linear.x_axis, linear.y_axis, linear.z_axis]
                     .iter()
                     .map(|c| c.length_squared())
                     .sum::<f64>();
                 Placed {
-                    object_from_world: Affine3A::from_mat4(DMat4::as_mat4(&inverse)),
-                    object_from_world_f64: DAffine3::from_mat4(inverse),
+                    object_from_world: inverse(&placement.transform),
+                    object_from_world_f64: DAffine3::from_mat4(exact),
                     shrink_sq: (1.0 - 1e-6) / frobenius_sq,
                     placement,
                 }
