@@ -5,16 +5,21 @@ importable, on the same meshes and rays, alternately in the same run.
     python tools/bench_raycast.py                                  # the Stanford bunny
     python tools/bench_raycast.py MESH.obj [MESH.obj ...] --threads 2 --scale 0.25
 
-For each mesh (an OBJ file; polygons are fanned into triangles): (a) 1024² coherent pinhole
-rays from a camera that frames the mesh, as `create_rays_pinhole` makes them (an image, shape
-(1024, 1024, 6), which both libraries take as it is), (b) 1 M incoherent rays between random
-points around and inside its bounding box, (c) 1 M occlusion segments between random points of
-its box. Times cast_rays on (a) and (b), count_intersections on (b) and test_occlusions on (c),
-each --repeat times, the two libraries alternately, and prints Mrays/s of the best runs, the
-penumbra / Open3D ratio of the best runs, the median of the ratios of each run to the other
-library's run beside it (steadier on a busy machine), and the fraction of rays with identical
-results (primitive ids, counts, occlusion flags). --scale shrinks the batches (1024² · scale and
-1 M · scale rays) on a busy machine. Progress on stderr, table on stdout.
+For each mesh (an OBJ file; polygons are fanned into triangles) the workloads are:
+(a) 1024² coherent pinhole rays from a camera that frames the mesh, as `create_rays_pinhole`
+makes them (an image, shape (1024, 1024, 6), which both libraries take as it is); (b) 1 M
+incoherent rays between random points around and inside its bounding box; (c) 1 M occlusion
+segments between random points of its box; (d) 1 M query points in its box; (e) 128 k query
+points in its box grown by 10 %; (f) rays from random points around the box aimed at the midpoint
+of every edge and at every vertex (the watertightness workload). The calls: cast_rays on (a),
+(b) and (f), count_intersections, list_intersections on (b), test_occlusions on (c),
+compute_occupancy on (d), compute_signed_distance, compute_distance and compute_closest_points
+on (e). Each runs --repeat times, the two libraries alternately; the table gives M items/s of
+the best runs, the penumbra / Open3D speed ratio of the best runs, the median of the ratios of
+each run to the other library's run beside it (steadier on a busy machine), and the fraction of
+items with the same result (primitive ids, counts, flags, occupancy; distances and points
+within 1e-4 of the box's size). --only NAME[,NAME] keeps the calls named (e.g. list_intersections).
+--scale shrinks every batch on a busy machine. Progress on stderr, table on stdout.
 """
 
 from __future__ import annotations
@@ -49,7 +54,7 @@ def read_obj(path: Path):
     return np.array(verts, np.float32), np.array(tris, np.uint32)
 
 
-def workloads(v: np.ndarray, scale: float, rng: np.random.Generator):
+def workloads(v: np.ndarray, t: np.ndarray, scale: float, rng: np.random.Generator):
     lo, hi = v.min(axis=0).astype(np.float64), v.max(axis=0).astype(np.float64)
     center, size = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
     side = max(16, int(1024 * scale**0.5))
@@ -62,18 +67,64 @@ def workloads(v: np.ndarray, scale: float, rng: np.random.Generator):
     incoherent = np.hstack([a, b - a]).astype(np.float32)
     p, q = rng.uniform(lo, hi, (n, 3)), rng.uniform(lo, hi, (n, 3))
     segments = np.hstack([p, q - p]).astype(np.float32)  # t in [0, 1]
-    return {"coherent": coherent, "incoherent": incoherent, "segments": segments}
+    points = rng.uniform(lo, hi, (n, 3)).astype(np.float32)
+    m = max(1000, int(131_072 * scale))
+    grown = (hi - lo) * 0.05
+    near = rng.uniform(lo - grown, hi + grown, (m, 3)).astype(np.float32)
+    return {"coherent": coherent, "incoherent": incoherent, "segments": segments,
+            "points": points, "near": near, "edges": aimed(v, t, center, size, rng)}
+
+
+def aimed(v: np.ndarray, t: np.ndarray, center, size: float, rng: np.random.Generator):
+    """Rays from random points on a sphere around the mesh aimed at the midpoint of every edge
+    (each once) and at every vertex, direction = target - origin (the target at t = 1)."""
+    e = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    e = np.unique(e, axis=0)
+    v64 = v.astype(np.float64)
+    targets = np.concatenate([(v64[e[:, 0]] + v64[e[:, 1]]) / 2, v64])
+    d = rng.normal(size=targets.shape)
+    origins = center + size * d / np.linalg.norm(d, axis=1, keepdims=True)
+    return np.hstack([origins, targets - origins]).astype(np.float32)
+
+
+def close(tol: float):
+    """Elementwise agreement of two float arrays within tol (inf and nan agree with themselves)."""
+    def same(a, b):
+        a, b = np.asarray(a), np.asarray(b)
+        eq = np.isclose(a, b, rtol=0, atol=tol) | (a == b) | (np.isnan(a) & np.isnan(b))
+        return eq.reshape(len(a), -1).all(axis=1) if eq.ndim > 1 else eq
+    return same
 
 
 def calls(scene, threads: int, numpy_of):
     """The timed calls, each returning the array compared between libraries."""
+    def ids(r):
+        return numpy_of(scene.cast_rays(r, nthreads=threads)["primitive_ids"])
     return {
-        ("cast_rays", "coherent"): lambda r: numpy_of(scene.cast_rays(r, nthreads=threads)["primitive_ids"]),
-        ("cast_rays", "incoherent"): lambda r: numpy_of(scene.cast_rays(r, nthreads=threads)["primitive_ids"]),
+        ("cast_rays", "coherent"): ids,
+        ("cast_rays", "incoherent"): ids,
+        ("cast_rays", "edges"): ids,
         ("count_intersections", "incoherent"): lambda r: numpy_of(scene.count_intersections(r, nthreads=threads)),
+        ("list_intersections", "incoherent"): lambda r: numpy_of(
+            scene.list_intersections(r, nthreads=threads)["ray_splits"]),
         ("test_occlusions", "segments"): lambda r: numpy_of(
             scene.test_occlusions(r, tnear=0.0, tfar=1.0, nthreads=threads)),
+        ("compute_occupancy", "points"): lambda p: numpy_of(scene.compute_occupancy(p, nthreads=threads)),
+        ("compute_signed_distance", "near"): lambda p: numpy_of(
+            scene.compute_signed_distance(p, nthreads=threads)),
+        ("compute_distance", "near"): lambda p: numpy_of(scene.compute_distance(p, nthreads=threads)),
+        ("compute_closest_points", "near"): lambda p: numpy_of(
+            scene.compute_closest_points(p, nthreads=threads)["points"]),
     }
+
+
+def agreement(call: str, a, b, size: float) -> float:
+    """The fraction of items with the same result (see the module docs)."""
+    if call == "list_intersections":  # ray_splits: compare each ray's number of hits
+        a, b = np.diff(a), np.diff(b)
+    if call.startswith("compute_") and call != "compute_occupancy":
+        return float(np.mean(close(1e-4 * size)(a, b)))
+    return float(np.mean(a == b))
 
 
 def timed(fn, rays):
@@ -86,7 +137,7 @@ def bench_mesh(path: Path, args, o3d) -> list:
     print(f"{path.name}: reading", file=sys.stderr)
     v, t = read_obj(path)
     rng = np.random.default_rng(1)
-    rays = workloads(v, args.scale, rng)
+    rays = workloads(v, t, args.scale, rng)
     ours = penumbra.RaycastingScene(nthreads=args.threads)
     ours.add_triangles(v, t)
     start = time.perf_counter()
@@ -101,10 +152,14 @@ def bench_mesh(path: Path, args, o3d) -> list:
         theirs = calls(scene, args.threads, lambda x: x.numpy())
         tensors = {k: o3d.core.Tensor(r) for k, r in rays.items()}
     rows = []
+    size = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
     for key, fn in mine.items():
         call, load = key
+        if args.only and call not in args.only.split(","):
+            continue
         r = rays[load]
-        print(f"{path.name}: {call} {load} ({r.size // 6} rays)", file=sys.stderr)
+        n = r.size // r.shape[-1]
+        print(f"{path.name}: {call} {load} ({n} items)", file=sys.stderr)
         mine_s, theirs_s = [], []
         a = b = same = None
         for _ in range(args.repeat):  # alternate the two libraries
@@ -117,8 +172,8 @@ def bench_mesh(path: Path, args, o3d) -> list:
         if theirs is not None:
             t_o3d = min(theirs_s)
             pairs = float(np.median(np.array(theirs_s) / np.array(mine_s)))
-            same = float(np.mean(a == b))
-        rows.append((path.name, call, load, r.size // 6, t_ours, t_o3d, pairs, same))
+            same = agreement(call, a, b, size)
+        rows.append((path.name, call, load, n, t_ours, t_o3d, pairs, same))
     return rows
 
 
@@ -129,6 +184,7 @@ def main() -> int:
     ap.add_argument("--scale", type=float, default=1.0, help="batch size factor (1: 1024² and 1 M rays)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--no-open3d", action="store_true", help="time penumbra alone")
+    ap.add_argument("--only", default="", help="comma-separated call names to time (default: all)")
     args = ap.parse_args()
     o3d = None
     if not args.no_open3d:
@@ -141,7 +197,7 @@ def main() -> int:
     print(f"threads {args.threads}, scale {args.scale}, best of {args.repeat}, "
           f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
           + (f", Open3D {o3d.__version__}" if o3d else ""))
-    print("| mesh | call | rays | n | penumbra Mrays/s | Open3D Mrays/s | ratio | median ratio | identical |")
+    print("| mesh | call | items | n | penumbra M/s | Open3D M/s | ratio | median ratio | identical |")
     print("|---|---|---|---|---|---|---|---|---|")
     for mesh, call, load_name, n, t_ours, t_o3d, pairs, same in rows:
         theirs = f"{n / t_o3d / 1e6:.2f}" if t_o3d else "-"

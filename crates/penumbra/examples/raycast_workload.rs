@@ -60,7 +60,7 @@ fn main() {
         }
         _ => {
             eprintln!(
-                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|occlusion|none N [THREADS [REPEAT]]"
+                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|occlusion|closest|occupancy|none N [THREADS [REPEAT]]"
             );
             std::process::exit(2);
         }
@@ -114,8 +114,18 @@ fn main() {
                 [a.x, a.y, a.z, d.x, d.y, d.z]
             })
             .collect(),
+        // Query points: in the box grown by 10 % (closest), in the box (occupancy), as rays
+        // with a zero direction.
+        "closest" | "occupancy" => (0..n)
+            .map(|_| {
+                let grow = if workload == "closest" { 0.05 } else { 0.0 };
+                let a = random_in(lo - grow * (hi - lo), hi + grow * (hi - lo));
+                [a.x, a.y, a.z, 0.0, 0.0, 0.0]
+            })
+            .collect(),
         _ => Vec::new(),
     };
+    let points: Vec<[f32; 3]> = rays.iter().map(|r| [r[0], r[1], r[2]]).collect();
     let query = || -> u64 {
         match workload.as_str() {
             "coherent" | "rows" | "incoherent" => {
@@ -140,6 +150,21 @@ fn main() {
                 .sum(),
             "occlusion" => scene
                 .test_occlusions(&rays, 0.0, 1.0, &options)
+                .unwrap()
+                .iter()
+                .map(|&o| o as u64)
+                .sum(),
+            "closest" => scene
+                .compute_closest_points(&points, &options)
+                .unwrap()
+                .points
+                .iter()
+                .flatten()
+                .fold(0, |a: u64, x| {
+                    a.wrapping_mul(31).wrapping_add(x.to_bits() as u64)
+                }),
+            "occupancy" => scene
+                .compute_occupancy(&points, 1, &options)
                 .unwrap()
                 .iter()
                 .map(|&o| o as u64)

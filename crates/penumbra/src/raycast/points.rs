@@ -4,11 +4,16 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::accel::wide::kernels::Nearests;
+use crate::accel::wide::nearest::Nearest;
+use crate::simd::{dispatch, simd_path};
+
 use super::run::{beyond, budget, filled, room, run, QueryOptions, CHUNK};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 
-/// Bytes of [`ClosestPoints`] per point.
-const CLOSEST_BYTES: usize = 12 + 4 + 4 + 8 + 12;
+/// Bytes of [`ClosestPoints`] per point, and of the query's own arrays (the Morton order
+/// and its inverse, the sorted points, the answers in that order).
+const CLOSEST_BYTES: usize = 12 + 4 + 4 + 8 + 12 + 8 + 16 + 12 + size_of::<Option<Nearest>>();
 
 /// Rays of one round of an occupancy vote: the points' rays are made a round at a time,
 /// never all at once (`nsamples` rays of 24 bytes per point).
@@ -49,8 +54,27 @@ impl RaycastingScene {
             primitive_uvs: filled(&pool, options, n, [0.0; 2])?,
             primitive_normals: filled(&pool, options, n, [0.0; 3])?,
         };
+        // The points in Morton order, so that neighbours walk the same nodes one after the
+        // other and each starts from its neighbour's answer; the answers are put back in
+        // the given order at the end.
+        let (order, rank) = morton_order(points, &pool);
+        let sorted: Vec<[f32; 3]> = pool.install(|| order.par_iter().map(|&i| points[i]).collect());
+        let mut found: Vec<Option<Nearest>> = filled(&pool, options, n, None)?;
+        let path = simd_path();
+        let items = (sorted.par_chunks(CHUNK), found.par_chunks_mut(CHUNK)).into_par_iter();
+        run(&pool, options, items, |(points, out)| {
+            dispatch(
+                path,
+                Nearests {
+                    accel,
+                    options,
+                    points,
+                    out,
+                },
+            );
+        })?;
         let items = (
-            points.par_chunks(CHUNK),
+            rank.par_chunks(CHUNK),
             out.points.par_chunks_mut(CHUNK),
             out.geometry_ids.par_chunks_mut(CHUNK),
             out.primitive_ids.par_chunks_mut(CHUNK),
@@ -58,13 +82,9 @@ impl RaycastingScene {
             out.primitive_normals.par_chunks_mut(CHUNK),
         )
             .into_par_iter();
-        run(&pool, options, items, |(queries, pts, g, p, uv, normal)| {
-            for (i, q) in queries.iter().enumerate() {
-                let q = Vec3::from(*q);
-                if !q.is_finite() {
-                    continue;
-                }
-                let Some(near) = accel.nearest(q) else {
+        run(&pool, options, items, |(rank, pts, g, p, uv, normal)| {
+            for (i, &k) in rank.iter().enumerate() {
+                let Some(near) = found[k] else {
                     continue;
                 };
                 pts[i] = near.point.to_array();
@@ -153,6 +173,54 @@ impl RaycastingScene {
         }
         Ok(out)
     }
+}
+
+/// The indices of `points` along a Morton curve through their box (10 bits per axis; the
+/// non-finite ones last), and the inverse: `rank[order[k]] = k`. More than 2³² points keep
+/// their order.
+fn morton_order(points: &[[f32; 3]], pool: &rayon::ThreadPool) -> (Vec<usize>, Vec<usize>) {
+    let (lo, hi) = points
+        .iter()
+        .map(|&p| Vec3::from(p))
+        .filter(|p| p.is_finite())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    // Cells per unit along each axis (0 for a flat extent or no finite point).
+    let scale = (hi - lo).to_array().map(|e| {
+        if e > 0.0 && e.is_finite() {
+            1023.0 / e
+        } else {
+            0.0
+        }
+    });
+    let scale = Vec3::from(scale);
+    // Each axis' 10 bits spread to every third bit.
+    let spread = |x: u32| (0..10).fold(0u64, |code, b| code | (((x as u64 >> b) & 1) << (3 * b)));
+    let key = |(i, p): (usize, &[f32; 3])| {
+        let p = Vec3::from(*p);
+        let code = if p.is_finite() {
+            let c = ((p - lo) * scale)
+                .clamp(Vec3::ZERO, Vec3::splat(1023.0))
+                .as_uvec3();
+            spread(c.x) | spread(c.y) << 1 | spread(c.z) << 2
+        } else {
+            1 << 30
+        };
+        (code << 32) | i as u64
+    };
+    let order: Vec<usize> = if u32::try_from(points.len()).is_ok() {
+        let mut keys: Vec<u64> = pool.install(|| points.par_iter().enumerate().map(key).collect());
+        pool.install(|| keys.par_sort_unstable());
+        keys.iter().map(|&k| k as u32 as usize).collect()
+    } else {
+        (0..points.len()).collect()
+    };
+    let mut rank = vec![0; order.len()];
+    for (k, &i) in order.iter().enumerate() {
+        rank[i] = k;
+    }
+    (order, rank)
 }
 
 /// `|q − p|`, ∞ when there is no closest point for a finite query, NaN for a non-finite one.

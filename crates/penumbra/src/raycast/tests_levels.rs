@@ -8,12 +8,13 @@ use glam::{Mat4, Vec3};
 use super::*;
 use crate::accel::prim::watertight::PreparedRay;
 use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
-use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare};
+use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Nearests};
+use crate::accel::wide::nearest::closest_f64;
 use crate::accel::wide::packets::ClosestHit;
 use crate::math::Transform;
 use crate::pool::test_pool;
 use crate::sampling::Rng;
-use crate::simd::supported_paths;
+use crate::simd::{dispatch, supported_paths};
 
 /// A random placement: scales of 0.3 to 2 (each mirrored half the time), any rotation, within
 /// ±3 of the origin.
@@ -166,5 +167,74 @@ fn bounds_on_t_keep_the_hits_and_crossings_within_them() {
         let plain = scene.cast_rays_rows(&rays, 20, &options).unwrap();
         let bounded = scene.cast_rays_between(&rays, 20, (0.0, f32::INFINITY), &options);
         assert_eq!(plain, bounded.unwrap());
+    }
+}
+
+/// The closest point to `q` of every triangle of `tris` (geometry id, primitive id, corners),
+/// computed as the walk computes it, and the rule for ties: the smallest squared distance,
+/// then geometry id, then primitive id. Returns the ids, the point and its weights.
+fn nearest_of_all(tris: &[(u32, u32, [Vec3; 3])], q: Vec3) -> (u32, u32, Vec3, f32, f32) {
+    let q = q.as_dvec3();
+    let mut best = (f64::INFINITY, u32::MAX, u32::MAX, Vec3::NAN, 0.0, 0.0);
+    for &(g, p, tri) in tris {
+        let (point, b1, b2) = closest_f64(q, tri.map(|c| c.as_dvec3()));
+        let d = (point - q).length_squared();
+        if (d, g, p) < (best.0, best.1, best.2) {
+            best = (d, g, p, point.as_vec3(), b1 as f32, b2 as f32);
+        }
+    }
+    (best.1, best.2, best.3, best.4, best.5)
+}
+
+#[test]
+fn closest_points_are_those_of_testing_every_triangle() {
+    // The walk skips boxes and triangles by lower bounds of their distance in `f32`: they
+    // must never skip the answer, nor one of the triangles tied with it. Query points at
+    // corners and on edges are ties between neighbours; far ones see every box at once.
+    for seed in 0..3 {
+        let (placed, copied) = scenes(seed);
+        let tris: Vec<(u32, u32, [Vec3; 3])> = (0..copied.triangle_count() as u32)
+            .map(|i| {
+                let (g, p) = copied.ids(i);
+                (g, p, copied.corners(i).map(Vec3::from))
+            })
+            .collect();
+        let mut rng = Rng::new(seed, &[7]);
+        let mut points: Vec<[f32; 3]> = Vec::new();
+        for k in 0..600 {
+            let tri = tris[(rng.uniform() * tris.len() as f32) as usize % tris.len()].2;
+            let random = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 8.0 - 4.0;
+            let p = match k % 5 {
+                0 => tri[k % 3],
+                1 => (tri[0] + tri[1]) * 0.5,
+                2 => random * 20.0,
+                _ => random,
+            };
+            points.push(p.to_array());
+        }
+        let options = QueryOptions::default();
+        for scene in [&placed, &copied] {
+            let (accel, _) = scene.prepare(&options).unwrap();
+            for path in supported_paths() {
+                let mut out = vec![None; points.len()];
+                let (accel, options, points) = (&*accel, &options, &points[..]);
+                let out_ = &mut out[..];
+                dispatch(
+                    path,
+                    Nearests {
+                        accel,
+                        options,
+                        points,
+                        out: out_,
+                    },
+                );
+                for (q, near) in points.iter().zip(&out) {
+                    let near = near.expect("a closest point");
+                    let got = (near.geometry, near.primitive, near.point, near.b1, near.b2);
+                    let want = nearest_of_all(&tris, Vec3::from(*q));
+                    assert_eq!(got, want, "query {q:?} on {path:?}");
+                }
+            }
+        }
     }
 }

@@ -14,11 +14,12 @@
 
 use glam::Vec3A;
 
+use super::node::{box_distances, SHRINK};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{
     hit_lane, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
 };
-use crate::simd::Isa;
+use crate::simd::{max, min, Isa};
 
 /// Triangles per group.
 pub(crate) const GROUP: usize = 8;
@@ -92,11 +93,68 @@ impl TriangleGroup {
         self.ids[lane]
     }
 
+    /// The lanes whose triangle may hold a point within squared distance `limit` of `q`, and
+    /// a lower bound of each triangle's squared distance: the larger of the distance to its
+    /// box ([`box_distances`]) and to its plane ([`plane_distances`]). The closest-point
+    /// walk's cheap test before the exact one.
+    #[inline(always)]
+    pub fn nearer<I: Isa>(&self, q: &[f32; 3], pad: f32, limit: f32) -> (u32, [f32; GROUP]) {
+        let [a, b, c] = &self.v;
+        let mut lo = [[0.0f32; GROUP]; 3];
+        let mut hi = [[0.0f32; GROUP]; 3];
+        for axis in 0..3 {
+            for i in 0..GROUP {
+                lo[axis][i] = min(min(a[axis][i], b[axis][i]), c[axis][i]);
+                hi[axis][i] = max(max(a[axis][i], b[axis][i]), c[axis][i]);
+            }
+        }
+        let boxes = box_distances(&lo, &hi, q, pad);
+        let planes = plane_distances(&self.v, q, pad);
+        // A NaN plane bound (a degenerate triangle) leaves the box's.
+        let d: [f32; GROUP] = std::array::from_fn(|i| max(planes[i], boxes[i]));
+        (I::mask(&d.map(|d| -i32::from(d <= limit))), d)
+    }
+
     /// The corners of the triangle in lane `lane`.
     pub fn corners(&self, lane: usize) -> Corners {
         self.v
             .map(|c| Vec3A::new(c[0][lane], c[1][lane], c[2][lane]))
     }
+}
+
+/// `2⁻¹⁸`: the error allowance of [`plane_distances`], in units of `|e₁||e₂||w|` and
+/// `|e₁||e₂|`, above the 12 and 7 units of `2⁻²⁴` its sums and products can lose.
+const PLANE_SLACK: f32 = 1.0 / 262_144.0;
+
+/// A lower bound of the squared distance from `q` to the plane of each triangle of `v`
+/// (`v[corner][axis][lane]`), which no point of the triangle is nearer than; NaN for a
+/// degenerate triangle. With `e₁`, `e₂` the edges from the first corner `a` and `w = q − a`,
+/// the distance is `|n·w| / |n|` for `n = e₁ × e₂`. In `f32`, `n·w` is off by at most
+/// `12·2⁻²⁴ |e₁||e₂||w|` and `|n|` by `7·2⁻²⁴ |e₁||e₂|` (each difference, product and sum
+/// rounds once): the bound takes [`PLANE_SLACK`] of each off the numerator and onto the
+/// denominator, and `2·pad·|n|` off the numerator for a `q` off by `pad` per coordinate.
+#[inline(always)]
+pub(crate) fn plane_distances(v: &[[[f32; GROUP]; 3]; 3], q: &[f32; 3], pad: f32) -> [f32; GROUP] {
+    let [a, b, c] = v;
+    let mut d = [0.0f32; GROUP];
+    for i in 0..GROUP {
+        let e1 = [0, 1, 2].map(|k| b[k][i] - a[k][i]);
+        let e2 = [0, 1, 2].map(|k| c[k][i] - a[k][i]);
+        let w = [0, 1, 2].map(|k| q[k] - a[k][i]);
+        let n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let dot = |x: [f32; 3], y: [f32; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+        let edges = (dot(e1, e1) * dot(e2, e2)).sqrt();
+        let s = dot(n, w).abs();
+        let den = dot(n, n).sqrt() + PLANE_SLACK * edges;
+        let num = s - PLANE_SLACK * edges * dot(w, w).sqrt() - 2.0 * pad * den;
+        let lb = max(num, 0.0) / den;
+        d[i] = lb * lb * SHRINK;
+    }
+    d
 }
 
 impl PreparedRay {

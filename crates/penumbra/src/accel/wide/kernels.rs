@@ -12,6 +12,7 @@
 use glam::Vec3;
 
 use super::levels::{Borders, WideLevels};
+use super::nearest::Nearest;
 use super::tree::{SlotHit, Stack};
 use crate::accel::prim::watertight::PreparedRay;
 use std::borrow::Cow;
@@ -116,6 +117,53 @@ impl<C: Control> Kernel for ClosestPlaced<'_, C> {
             }
         }
     }
+}
+
+/// The closest point of the surface to each finite point of `points`
+/// ([`WideLevels::nearest`]), written to `out` (left alone for the others).
+pub(crate) struct Nearests<'a, C> {
+    pub accel: &'a WideLevels,
+    /// Checked every [`CHECK`] points.
+    pub options: &'a C,
+    pub points: &'a [[f32; 3]],
+    pub out: &'a mut [Option<Nearest>],
+}
+
+impl<C: Control> Kernel for Nearests<'_, C> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<const N: usize, I: Isa>(self) {
+        let mut stack = Stack::default();
+        // The previous point's answer: no surface point is farther than it (see `seed`).
+        let mut last: Option<Vec3> = None;
+        for (points, out) in self.points.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
+            if self.options.cancelled() {
+                return;
+            }
+            for (p, near) in points.iter().zip(out) {
+                let p = Vec3::from(*p);
+                if !p.is_finite() {
+                    continue;
+                }
+                let accel = self.accel;
+                let bound = last.map_or(f64::INFINITY, |q| seed(p, q));
+                *near = accel
+                    .nearest::<I>(p, bound, &mut stack)
+                    .or_else(|| accel.nearest::<I>(p, f64::INFINITY, &mut stack));
+                last = near.map(|n| n.point);
+            }
+        }
+    }
+}
+
+/// A squared distance from `p` within which some triangle lies, when `q` is the closest point
+/// of a triangle to another point (rounded to `f32`: within `2⁻²⁴` of its largest coordinate
+/// per coordinate, and `2⁻²²` covers that and the `f64` arithmetic).
+fn seed(p: Vec3, q: Vec3) -> f64 {
+    let slack = q.abs().max_element() as f64 / 4_194_304.0;
+    let d = (p.as_dvec3() - q.as_dvec3()).length() * (1.0 + 1e-12) + slack;
+    d * d
 }
 
 /// The number of hits of [`WideLevels::each_hit`] from `t = 0` on for each ray of `rays`:

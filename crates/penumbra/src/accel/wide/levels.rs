@@ -60,6 +60,9 @@ struct Placed {
     object_from_world_f64: DAffine3,
     /// A lower bound of the squared smallest stretch of the object-to-world map.
     shrink_sq: f64,
+    /// How far, in object units, the placed corners (rounded to `f32` by the map) may be
+    /// from the exact images of the mesh's: closest-point bounds in object space allow it.
+    pad: f32,
 }
 
 /// The two levels of a ray-casting scene.
@@ -73,6 +76,26 @@ pub(crate) struct WideLevels {
     /// slot.
     top: Vec<BvhNode>,
     top_ids: Vec<u32>,
+}
+
+/// A bound of how far `transform` puts a corner of `mesh` (whose placed box is `world`) from
+/// its exact image: each coordinate of `M·c + t` in `f32` is off by less than `2⁻²⁰` of the
+/// sum of the magnitudes it is made of.
+fn rounding_pad(transform: &Transform, mesh: &crate::accel::Bvh, world: &crate::math::Aabb) -> f64 {
+    let m = transform.world_from_object;
+    let object = mesh.nodes().first().map_or(0.0, |root| {
+        let b = root.bounds();
+        b.max.abs().max(b.min.abs()).max_element()
+    });
+    let linear = [m.x_axis, m.y_axis, m.z_axis]
+        .iter()
+        .map(|c| c.truncate().length_squared())
+        .sum::<f32>()
+        .sqrt();
+    let sizes = world.max.abs().max(world.min.abs()).max_element()
+        + linear * object
+        + m.w_axis.truncate().abs().max_element();
+    sizes as f64 / 1_048_576.0
 }
 
 /// Each tree's part of the surface's border ([`WideBvh::border`]): the own tree's, and each
@@ -99,17 +122,21 @@ impl WideLevels {
         let (top, top_ids) = build::build_tree(boxes.len(), |i| boxes[i], pool);
         let placed = placements
             .into_iter()
-            .map(|placement| {
+            .zip(&boxes)
+            .map(|(placement, world)| {
                 let exact = inverse_f64(&placement.transform);
                 let linear = glam::DMat3::from_mat4(exact);
                 let frobenius_sq = [linear.x_axis, linear.y_axis, linear.z_axis]
                     .iter()
                     .map(|c| c.length_squared())
                     .sum::<f64>();
+                let mesh = meshes[placement.mesh as usize].bvh();
+                let pad = rounding_pad(&placement.transform, mesh, world) * frobenius_sq.sqrt();
                 Placed {
                     object_from_world: inverse(&placement.transform),
                     object_from_world_f64: DAffine3::from_mat4(exact),
                     shrink_sq: (1.0 - 1e-6) / frobenius_sq,
+                    pad: (pad * 1.001) as f32,
                     placement,
                 }
             })
@@ -324,11 +351,14 @@ impl WideLevels {
         unit_normal(&corners).to_array()
     }
 
-    /// The closest point of any triangle to `p` (see `nearest`).
-    pub fn nearest(&self, p: Vec3) -> Option<Nearest> {
+    /// The closest point of any triangle to `p` (see `nearest`) if one is within squared
+    /// distance `bound` (∞: any).
+    #[inline(always)]
+    pub fn nearest<I: Isa>(&self, p: Vec3, bound: f64, stack: &mut Stack) -> Option<Nearest> {
         let pa = p.as_dvec3();
-        let (mut best, mut best_d) = (None, f64::INFINITY);
-        self.own.nearest_within(pa, None, &mut best_d, &mut best);
+        let (mut best, mut best_d) = (None, bound);
+        self.own
+            .nearest_within::<I>(pa, None, (&mut best_d, &mut best), stack);
         if self.top.is_empty() {
             return best;
         }
@@ -345,9 +375,10 @@ impl WideLevels {
                     to_object: &p.object_from_world_f64,
                     to_world: &p.placement.transform,
                     shrink_sq: p.shrink_sq,
+                    pad: p.pad,
                 };
                 let mesh = &self.meshes[p.placement.mesh as usize];
-                mesh.nearest_within(pa, Some(&frame), best_d, &mut best);
+                mesh.nearest_within::<I>(pa, Some(&frame), (best_d, &mut best), stack);
             }
         });
         best

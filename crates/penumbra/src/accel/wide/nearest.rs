@@ -1,7 +1,7 @@
 //! The closest point of a triangle to a point, by Voronoi regions (Ericson, "Real-Time
-//! Collision Detection", 2005, §5.1.5), and of the whole surface, by the binary tree's
-//! nearest-first walk (`accel::traverse::walk_nearest`): the nearer child first, boxes farther
-//! than the best point so far skipped.
+//! Collision Detection", 2005, §5.1.5), and of the whole surface, by the wide tree's
+//! nearest-first walk: the nearest child first, boxes and triangles whose lower bound of the
+//! distance exceeds the best point so far skipped.
 //!
 //! Both compute in `f64`: the region tests multiply four lengths (`d1·d4` is a product of
 //! dot products), which overflow `f32` from coordinates of about 1e9 on, where every point
@@ -10,10 +10,10 @@
 use glam::{DAffine3, DVec3, Vec3};
 
 use super::levels::OWN;
-use super::tree::WideBvh;
-use crate::accel::traverse::walk_nearest;
+use super::tree::{Stack, WideBvh};
 use crate::accel::BvhNode;
 use crate::math::Transform;
+use crate::simd::Isa;
 
 /// The point of the triangle `tri` closest to `p` and its barycentric weights of the second
 /// and third corners. Degenerate triangles give a point of their segment or corner.
@@ -24,7 +24,7 @@ pub(crate) fn closest_on_triangle(p: Vec3, tri: [Vec3; 3]) -> (Vec3, f32, f32) {
 }
 
 /// `closest_on_triangle` in `f64`.
-fn closest_f64(p: DVec3, tri: [DVec3; 3]) -> (DVec3, f64, f64) {
+pub(crate) fn closest_f64(p: DVec3, tri: [DVec3; 3]) -> (DVec3, f64, f64) {
     let [a, b, c] = tri;
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
@@ -93,57 +93,97 @@ pub(crate) struct Frame<'a> {
     pub to_object: &'a DAffine3,
     pub to_world: &'a Transform,
     pub shrink_sq: f64,
+    /// How far the placed corners may be from the exact images of the mesh's, in object
+    /// units: the bounds of the walk in object space are lowered by it.
+    pub pad: f32,
 }
 
 impl WideBvh {
     /// Lowers `best` to the closest point to `p` of this tree's triangles, placed by `frame`
-    /// when given, if one is nearer than `√best_d` (then `best_d` is its squared distance).
-    pub(crate) fn nearest_within(
+    /// when given, if one is as near as `√best_d` (nearer, or as near with smaller ids, when
+    /// `best` is set); then `best_d` is its squared distance.
+    ///
+    /// The walk takes the wide tree nearest box first, skips a box, and then a triangle,
+    /// whose lower bound of the squared distance ([`WideNode::nearer`],
+    /// [`TriangleGroup::nearer`], in `f32` over eight lanes) exceeds the best so far, and
+    /// computes the closest point of the triangles left in `f64`. The bounds only ever err
+    /// low, so every triangle as near as the best is computed, and the answer is that of
+    /// testing every triangle.
+    ///
+    /// [`WideNode::nearer`]: super::node::WideNode::nearer
+    /// [`TriangleGroup::nearer`]: super::group::TriangleGroup::nearer
+    #[inline(always)]
+    pub(crate) fn nearest_within<I: Isa>(
         &self,
         p: DVec3,
         frame: Option<&Frame>,
-        best_d: &mut f64,
-        best: &mut Option<Nearest>,
+        (best_d, best): (&mut f64, &mut Option<Nearest>),
+        stack: &mut Stack,
     ) {
-        let nodes = self.bvh().nodes();
-        if nodes.is_empty() {
-            return;
-        }
         let (q, scale) = frame.map_or((p, 1.0), |f| (f.to_object.transform_point3(p), f.shrink_sq));
-        // A box farther than the best point so far cannot hold a nearer one.
-        let enter = |node: &BvhNode, bound: f64| {
-            let d = box_distance_sq(node, q) * scale;
-            (d <= bound).then_some(d)
+        // In object space `q` is rounded to `f32`, and the placed corners are the map's
+        // rounded images: the bounds allow both.
+        let pad = match frame {
+            None => 0.0,
+            Some(f) => (q.abs().max_element() * PAD) as f32 + f.pad,
         };
-        walk_nearest(nodes, best_d, enter, |slots, best_d| {
-            for i in slots {
-                let corners = self.slot(i).corners().map(|c| {
-                    let c = Vec3::from(c);
-                    frame.map_or(c, |f| f.to_world.point(c)).as_dvec3()
-                });
-                let (point, b1, b2) = closest_f64(p, corners);
-                let d = (point - p).length_squared();
-                let [geometry, primitive] = self.ids(i);
-                let geometry = frame.map_or(geometry, |f| f.geometry);
-                // Among equally near triangles the smallest ids, whatever the order of the
-                // visit (boxes at exactly the best distance are still entered).
-                let tie = |b: &Nearest| (geometry, primitive) < (b.geometry, b.primitive);
-                if d < *best_d || (d == *best_d && best.as_ref().is_some_and(tie)) {
-                    *best_d = d;
-                    *best = Some(Nearest {
-                        point: point.as_vec3(),
-                        b1: b1 as f32,
-                        b2: b2 as f32,
-                        geometry,
-                        primitive,
-                        slot: i as u32,
-                        level: frame.map_or(OWN, |f| f.level),
+        let q32 = q.as_vec3().to_array();
+        // The squared distance in the tree's space past which nothing is nearer than the
+        // best so far, rounded up to `f32` (∞ when it is beyond `f32`'s range).
+        let limit = |best_d: f64| ((best_d / scale) * (1.0 + 1e-6)) as f32;
+        stack.start(self.wide());
+        while let Some((first, count, near)) = stack.pop() {
+            let bound = limit(*best_d);
+            if near > bound {
+                continue;
+            }
+            if count == 0 {
+                let node = &self.wide()[first as usize];
+                let (mask, near) = node.nearer::<I>(&q32, pad, bound);
+                stack.push_children(self, node, mask, &near, true);
+                continue;
+            }
+            for (group, valid) in self.leaf(first, count) {
+                let (mask, near) = group.nearer::<I>(&q32, pad, limit(*best_d));
+                let mut mask = mask & valid;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    // The best may have come nearer since the group's test.
+                    if near[lane] > limit(*best_d) {
+                        continue;
+                    }
+                    let corners = group.corners(lane).map(|c| {
+                        let c = Vec3::from(c);
+                        frame.map_or(c, |f| f.to_world.point(c)).as_dvec3()
                     });
+                    let (point, b1, b2) = closest_f64(p, corners);
+                    let d = (point - p).length_squared();
+                    let [geometry, primitive] = group.ids(lane);
+                    let geometry = frame.map_or(geometry, |f| f.geometry);
+                    // Among equally near triangles the smallest ids, whatever the order of
+                    // the visit (boxes at exactly the best distance are still entered).
+                    let tie = |b: &Nearest| (geometry, primitive) < (b.geometry, b.primitive);
+                    if d < *best_d || (d == *best_d && best.as_ref().is_none_or(tie)) {
+                        *best_d = d;
+                        *best = Some(Nearest {
+                            point: point.as_vec3(),
+                            b1: b1 as f32,
+                            b2: b2 as f32,
+                            geometry,
+                            primitive,
+                            slot: group.first + lane as u32,
+                            level: frame.map_or(OWN, |f| f.level),
+                        });
+                    }
                 }
             }
-        });
+        }
     }
 }
+
+/// `2⁻²³`: a bound of the relative rounding of an `f64` coordinate to `f32`, twice over.
+const PAD: f64 = 1.0 / 8_388_608.0;
 
 /// Squared distance from `p` to the node's box (0 inside).
 #[inline(always)]

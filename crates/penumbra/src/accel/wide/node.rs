@@ -116,6 +116,44 @@ impl WideNode {
     }
 }
 
+/// `1 − 2⁻²⁰`: scales a squared box distance computed in `f32` (at most a few roundings of
+/// `2⁻²⁴` each above the exact one) down to a lower bound of it.
+pub(crate) const SHRINK: f32 = 1.0 - 1.0 / 1_048_576.0;
+
+/// A lower bound of the squared distance from `q` to each of eight boxes given by their
+/// corners `lo[axis][lane]` and `hi[axis][lane]` (0 inside), for the closest-point walks;
+/// `pad` covers how far `q` may be from the true query point (0 when `q` is it). The lanes
+/// are plain loops over `[f32; 8]`, one vector each when inlined into a kernel.
+#[inline(always)]
+pub(crate) fn box_distances(
+    lo: &[[f32; WIDTH]; 3],
+    hi: &[[f32; WIDTH]; 3],
+    q: &[f32; 3],
+    pad: f32,
+) -> [f32; WIDTH] {
+    let mut d = [0.0f32; WIDTH];
+    for i in 0..WIDTH {
+        let gap = [0, 1, 2].map(|a| max(max(lo[a][i] - q[a], q[a] - hi[a][i]) - pad, 0.0));
+        d[i] = (gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]) * SHRINK;
+    }
+    d
+}
+
+impl WideNode {
+    /// The children whose box may hold a point within squared distance `limit` of `q` (bit
+    /// `i` for child `i`), and a lower bound of each child's squared distance
+    /// ([`box_distances`]).
+    #[inline(always)]
+    pub fn nearer<I: Isa>(&self, q: &[f32; 3], pad: f32, limit: f32) -> (u32, [f32; WIDTH]) {
+        let d = box_distances(&self.min, &self.max, q, pad);
+        let mut inside = [0i32; WIDTH];
+        for i in 0..WIDTH {
+            inside[i] = -i32::from((d[i] <= limit) & (self.count[i] != UNUSED));
+        }
+        (I::mask(&inside), d)
+    }
+}
+
 /// Surface area (half of it: enough to compare) of a binary node's box.
 fn half_area(node: &BvhNode) -> f32 {
     let (lo, hi) = (node.min_corner(), node.max_corner());

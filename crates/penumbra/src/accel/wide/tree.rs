@@ -203,11 +203,6 @@ impl WideBvh {
         &self.bvh
     }
 
-    /// Geometry id and primitive id of the triangle in leaf slot `slot`.
-    pub(crate) fn ids(&self, slot: usize) -> [u32; 2] {
-        self.ids[slot]
-    }
-
     /// The corners of every triangle by leaf slot.
     #[inline(always)]
     pub(crate) fn tris(&self) -> &[SoaTriangle] {
