@@ -19,7 +19,7 @@ import ray_env
 ray = ray_env.ray
 
 import penumbra  # noqa: E402
-from penumbra import distributed, views  # noqa: E402
+from penumbra import _view_files, distributed, views  # noqa: E402
 
 from conftest import SCENES, same_bits  # noqa: E402
 
@@ -174,7 +174,7 @@ def test_a_worker_killed_mid_batch_changes_nothing(cluster, tmp_path):
     batch = views.orbit(center=(0, 1, -3), radius=2.6, height=4.2, frames=12, fov=75)
     settings = dict(width=64, height=64, spp=16, light_samples=5)
     killed: list = []
-    killer = threading.Thread(target=kill_a_worker_running, args=("_render_task", killed))
+    killer = threading.Thread(target=kill_a_worker_running, args=("render_task", killed))
     killer.start()
     try:
         summary = distributed.render_views(
@@ -278,7 +278,7 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
         raise OSError(28, "No space left on device", str(path))
 
     # The disk fills while the image is written, after its AOVs: nothing changes.
-    monkeypatch.setattr(distributed, "write_image", full_disk)
+    monkeypatch.setattr(_view_files, "write_image", full_disk)
     with pytest.raises(OSError, match="No space left"):
         distributed.render_views(scene, batch, output=out, width=8, height=6, force=True)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
@@ -286,3 +286,4 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
     with pytest.raises(OSError, match="No space left"):
         distributed.render_views(scene, [dict(batch[0], name="new")], output=out, width=16, height=12)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(before)
+
