@@ -32,6 +32,7 @@ from ._ray_tasks import CACHED_WORLDS, MAX_RETRIES, render_task, ship
 from ._ray_wait import gather
 from ._scene import Scene
 from ._view_files import complete, write_view
+from .record import record
 from .views import (
     RENDER_KEYS,
     ViewError,
@@ -163,6 +164,7 @@ def render_views(
     progress: Any = None,
     on_view: Optional[Callable[[Dict[str, Any]], Any]] = None,
     keep_going: bool = False,
+    meta: bool = False,
 ) -> List[Dict[str, Any]]:
     """Render every view (see :mod:`penumbra.views`: camera names, :class:`penumbra.Camera`
     objects, view dicts, :func:`penumbra.views.orbit`) as one task each and write its image to
@@ -170,8 +172,14 @@ def render_views(
     extension, written atomically by this process; AOVs beside it as ``.aovs.npz``). The
     keyword settings are defaults for views that do not set their own.
 
-    A view whose image exists already is skipped (not rendered again) unless ``force``: an
-    interrupted batch, run again, does only what is missing. Returns one dict per view, in
+    With ``meta``, each image gets its record beside it (``out/front.png`` →
+    ``out/front.meta.json``, see :mod:`penumbra.record`): the layout of ``penumbra render
+    --meta``, with K, the poses, the object ids' entries and the scene's digest; it is
+    renamed into place right after the image, and the old one removed before.
+
+    A view whose image exists already (with its AOVs, and its record with ``meta``) is
+    skipped (not rendered again) unless ``force``: an interrupted batch, run again, does only
+    what is missing. Returns one dict per view, in
     order: ``name``, ``path``, ``skipped``, and for rendered views ``seconds`` (the render's),
     ``rays_per_second``, ``node`` (Ray node id), ``host``, ``peak_memory_bytes`` (the task's
     process's), ``pid`` and ``built`` (whether that task built
@@ -197,7 +205,7 @@ def render_views(
     todo = [
         i
         for i, (v, p) in enumerate(zip(batch, paths))
-        if force or not complete(p, bool(v["aovs"]))
+        if force or not complete(p, bool(v["aovs"]), meta)
     ]
     if on_view is not None:
         skipped = set(range(len(batch))) - set(todo)
@@ -205,6 +213,15 @@ def render_views(
             on_view(summary[i])
     if not todo:
         return summary
+    records: Dict[int, Dict[str, Any]] = {}
+    if meta:
+        # Made before any task starts: a view the record cannot describe fails now.
+        scene_digest = scene.scene_digest
+        for i in todo:
+            try:
+                records[i] = record(scene, batch[i], paths[i], scene_digest=scene_digest)
+            except ValueError as e:
+                raise ViewError(i, batch[i]["name"], str(e)) from None
     digest, boxed = ship(scene)
     task = render_task.options(num_cpus=num_cpus, scheduling_strategy="SPREAD")
     refs = []
@@ -215,7 +232,7 @@ def render_views(
 
     def save(k: int, result: Dict[str, Any]) -> None:
         i = todo[k]
-        write_view(paths[i], result["image"], result["aovs"])
+        write_view(paths[i], result["image"], result["aovs"], records.get(i))
         st = result["stats"]
         summary[i].update(
             skipped=False,
