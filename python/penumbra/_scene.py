@@ -89,6 +89,21 @@ class Scene:
         """The names of the scene's cameras, in file order; the first is the default."""
         return self._core.cameras
 
+    def camera(self, name: Optional[str] = None) -> Camera:
+        """The scene's camera ``name`` (None: the first, the default) as a :class:`Camera`:
+        the camera ``render(camera=name)`` uses, number for number (a camera with keys or a
+        path gives its first frame). Raises ``ValueError`` naming the scene's cameras for a
+        name it lacks."""
+        if name is not None and not isinstance(name, str):
+            raise TypeError(f"Scene.camera: name must be a camera name, not {type(name).__name__}")
+        got = self._core.camera(name)
+        if got is None:
+            raise ValueError(
+                f"unknown camera {name!r} (the scene's cameras: {', '.join(self.cameras)})"
+            )
+        p, l, u, fov = got
+        return Camera(position=p, look_at=l, up=u, fov=fov)
+
     def camera_path(self, name: str) -> Optional[Dict[int, Camera]]:
         """The cameras of the camera ``name`` with keys or a path (``[[cameras.NAME.keys]]``,
         ``path = { type = "orbit", ... }``), by frame, first to last: the cameras the command
@@ -125,6 +140,26 @@ class Scene:
         and one per copy for ``type = "instances"``, so ``object_ids[i][k]`` is copy ``k`` of
         entry ``i``."""
         return [range(start, end) for start, end in self._core.object_ids]
+
+    @property
+    def objects(self) -> List[Dict[str, Any]]:
+        """Each entry of the scene's ``objects``, in file order, as ``penumbra render --meta``
+        records it: ``key`` (``"objects[3]"``), ``type`` (and the file of a mesh:
+        ``"mesh models/bunny.obj"``) and ``ids``, the ``[first, end)`` object ids it added
+        (see :attr:`object_ids`): what the values of an ``object_id`` AOV name."""
+        return [
+            {"key": f"objects[{i}]", "type": kind, "ids": [start, end]}
+            for i, (kind, (start, end)) in enumerate(
+                zip(self._core.object_kinds, self._core.object_ids)
+            )
+        ]
+
+    @property
+    def scene_digest(self) -> str:
+        """16 hex digits identifying the scene by content: 64-bit FNV-1a of the scene text
+        and the bytes of every file its build read (meshes, material libraries, images), the
+        ``scene_digest`` that ``penumbra render --meta`` records for the same file."""
+        return self._core.scene_digest
 
     @property
     def files(self) -> List[str]:

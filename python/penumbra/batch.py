@@ -2,7 +2,7 @@
 
     python -m penumbra.batch JOBS.toml [--address local|auto|HOST:PORT] [--num-cpus N]
                              [--cpus-per-task N] [--force] [--manifest FILE.jsonl]
-                             [--json] [--quiet]
+                             [--meta] [--coco FILE.json] [--json] [--quiet]
 
 A jobs file (TOML; relative paths are relative to its folder)::
 
@@ -35,7 +35,10 @@ A jobs file (TOML; relative paths are relative to its folder)::
 Views whose image exists already are skipped (``--force`` renders them again). With
 ``--manifest FILE.jsonl`` each view's line (task, camera, seed, seconds, peak memory and host
 of its task, outputs, status) is appended to FILE as it ends, as ``penumbra render
---manifest`` writes it. Each view's
+--manifest`` writes it. ``--meta`` writes each image's record beside it (``out/a.png`` →
+``out/a.meta.json``, as ``penumbra render --meta``: see :mod:`penumbra.record`), and ``--coco
+FILE.json`` COCO annotations of every view's ``object_id`` AOV at the end (see
+:mod:`penumbra.coco`; needs pycocotools). Each view's
 line (name, image, time) is printed as soon as it is done, skipped views first, so that an
 interrupted batch has told what it finished: on stdout, or with ``--json`` on stderr while
 stdout gets the whole summary as one JSON object at the end. A mistake names its view (its
@@ -287,6 +290,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         metavar="FILE.jsonl",
         help="append one JSON line per view as it ends, as `penumbra render --manifest` does",
     )
+    parser.add_argument(
+        "--meta",
+        action="store_true",
+        help="write each image's record beside it (OUT.meta.json), as `penumbra render --meta`",
+    )
+    parser.add_argument(
+        "--coco",
+        metavar="FILE.json",
+        help="write COCO annotations (boxes, RLE masks, visible fractions) of every view's "
+        "object_id AOV to FILE.json at the end (needs pycocotools)",
+    )
     args = parser.parse_args(argv)
 
     try:
@@ -306,6 +320,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ValueError as e:  # JobsError and penumbra.SceneError
         print(f"penumbra.batch: {e}", file=sys.stderr)
         return 2
+    if args.coco is not None:
+        from . import coco
+
+        try:
+            coco.check_available()
+        except ImportError as e:
+            print(f"penumbra.batch: --coco: {e}", file=sys.stderr)
+            return 1
+        missing = [i for i, v in enumerate(jobs["views"]) if "object_id" not in v["aovs"]]
+        if missing:
+            i = missing[0]
+            where = describe(args.jobs, jobs["origins"][i], i, jobs["views"][i]["name"])
+            print(
+                f"penumbra.batch: --coco: {where}: has no object_id AOV to annotate (add "
+                f'aovs = ["object_id"] to its view or to [defaults])',
+                file=sys.stderr,
+            )
+            return 2
     try:
         args.manifest_file = open_manifest(args.manifest)
     except OSError as e:
@@ -380,6 +412,7 @@ def _run(
             progress=not args.quiet and sys.stderr.isatty() or None,
             on_view=finished,
             keep_going=True,
+            meta=args.meta,
         )
     except KeyboardInterrupt:
         print("penumbra.batch: interrupted", file=sys.stderr)
@@ -402,7 +435,43 @@ def _run(
         for r in failures:
             print(f"  {r['name']}: {r['error']}", file=sys.stderr)
         return 1, summary
+    if args.coco is not None:
+        try:
+            write_coco(args.coco, scene, jobs["views"], summary)
+            if not args.quiet:
+                print(f"penumbra.batch: wrote {args.coco}", file=sys.stderr)
+        except (OSError, ValueError) as e:
+            print(f"penumbra.batch: --coco {args.coco}: {e}", file=sys.stderr)
+            return 1, summary
     return 0, summary
+
+
+def write_coco(
+    path: str, scene: Any, views: Sequence[Dict[str, Any]], summary: Sequence[Dict[str, Any]]
+) -> None:
+    """Writes the COCO annotations (:func:`penumbra.coco.write_annotations`) of every view
+    of the batch, read back from its ``.aovs.npz``, to ``path``: file names relative to its
+    folder, visible fractions from each view's camera."""
+    import numpy as np
+
+    from . import coco
+    from .views import aov_path
+
+    folder = os.path.dirname(os.path.abspath(path))
+    images = []
+    for v, r in zip(views, summary):
+        with np.load(aov_path(r["path"])) as aovs:
+            if "object_id" not in aovs:
+                raise ValueError(f"{aov_path(r['path'])}: no object_id array")
+            ids = aovs["object_id"]
+        images.append(
+            {
+                "file_name": os.path.relpath(os.path.abspath(r["path"]), folder),
+                "object_id": ids,
+                "camera": v["camera"],
+            }
+        )
+    coco.write_annotations(path, scene, images)
 
 
 if __name__ == "__main__":

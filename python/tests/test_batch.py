@@ -12,9 +12,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import ray_env  # noqa: F401  (sets Ray's environment; skips without Ray)
 
 import penumbra
+import penumbra.coco
+import penumbra.poses
 from penumbra import batch, views
 
 from conftest import SCENES, python_with_sigint
@@ -247,3 +251,56 @@ def test_a_view_that_fails_is_listed_at_the_end_and_the_others_are_done(tmp_path
     lines = {json.loads(line)["task"]: json.loads(line) for line in manifest.read_text().splitlines()}
     assert lines[1]["status"] == "failed" and lines[1]["error"]
     assert all(lines[t]["status"] == "rendered" for t in lines if t != 1)
+
+
+def test_meta_and_coco_write_each_record_and_the_annotations(tmp_path):
+    jobs = example_jobs(
+        tmp_path,
+        **{
+            "spp = 4": 'spp = 1\naovs = ["object_id"]',
+            "width = 256": "width = 24",
+            "height = 256": "height = 18",
+        },
+    )
+    annotations = tmp_path / "coco" / "annotations.json"
+    out = run_batch(jobs, "--num-cpus", 2, "--meta", "--coco", annotations, "--quiet")
+    assert out.returncode == 0, out.stderr
+    spec = batch.read_jobs(str(jobs))
+    scene = penumbra.load(SCENES / "cornell.toml")
+    for v in spec["views"]:
+        image = tmp_path / "out" / f"{v['name']}.png"
+        record = json.loads(image.with_suffix(".meta.json").read_text())
+        camera = v["camera"] if isinstance(v["camera"], penumbra.Camera) else scene.camera(v["camera"])
+        pose = penumbra.poses.camera_pose(camera, 24, 18)
+        assert all(record[k] == m.tolist() for k, m in pose.items()), v["name"]
+        assert record["files"] == [str(image), str(image.with_suffix(".aovs.npz"))]
+        assert record["settings"]["scene_digest"] == scene.scene_digest
+    coco = json.loads(annotations.read_text())
+    assert [i["file_name"] for i in coco["images"]] == [
+        f"../out/{v['name']}.png" for v in spec["views"]
+    ]
+    for k, v in enumerate(spec["views"], 1):
+        with np.load(tmp_path / "out" / f"{v['name']}.aovs.npz") as aovs:
+            ids = aovs["object_id"]
+        mine = sorted((a["object_id"], a["area"]) for a in coco["annotations"] if a["image_id"] == k)
+        assert mine == [(g["object_id"], g["area"]) for g in penumbra.coco.instances(ids)]
+        assert all(0 < a["visible_fraction"] <= 1 for a in coco["annotations"])
+
+
+def test_coco_needs_the_object_id_aov_and_pycocotools(tmp_path):
+    jobs = example_jobs(tmp_path)
+    out = run_batch(jobs, "--coco", tmp_path / "a.json")
+    assert out.returncode == 2, out.stderr
+    assert "--coco: " in out.stderr and "view 'front' (views[0]): has no object_id AOV" in out.stderr
+    # pycocotools hidden by a package of that name that cannot be imported.
+    fake = tmp_path / "fake" / "pycocotools"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('hidden by the test')\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(fake.parent), os.environ.get("PYTHONPATH", "")]))
+    hidden = subprocess.run(
+        [sys.executable, "-m", "penumbra.batch", str(jobs), "--coco", str(tmp_path / "a.json")],
+        capture_output=True, text=True, timeout=120, env=env,
+    )
+    assert hidden.returncode == 1, hidden.stderr
+    assert "pip install pycocotools" in hidden.stderr
+    assert not (tmp_path / "out").exists() and not (tmp_path / "a.json").exists()

@@ -4,6 +4,7 @@ worker killed mid-batch changes nothing; a second run skips what is done."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -19,9 +20,9 @@ import ray_env
 ray = ray_env.ray
 
 import penumbra  # noqa: E402
-from penumbra import distributed, views  # noqa: E402
+from penumbra import _view_files, distributed, poses, views  # noqa: E402
 
-from conftest import SCENES, same_bits  # noqa: E402
+from conftest import SCENES, run_cli, same_bits  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -174,7 +175,7 @@ def test_a_worker_killed_mid_batch_changes_nothing(cluster, tmp_path):
     batch = views.orbit(center=(0, 1, -3), radius=2.6, height=4.2, frames=12, fov=75)
     settings = dict(width=64, height=64, spp=16, light_samples=5)
     killed: list = []
-    killer = threading.Thread(target=kill_a_worker_running, args=("_render_task", killed))
+    killer = threading.Thread(target=kill_a_worker_running, args=("render_task", killed))
     killer.start()
     try:
         summary = distributed.render_views(
@@ -278,7 +279,7 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
         raise OSError(28, "No space left on device", str(path))
 
     # The disk fills while the image is written, after its AOVs: nothing changes.
-    monkeypatch.setattr(distributed, "write_image", full_disk)
+    monkeypatch.setattr(_view_files, "write_image", full_disk)
     with pytest.raises(OSError, match="No space left"):
         distributed.render_views(scene, batch, output=out, width=8, height=6, force=True)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
@@ -286,3 +287,74 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
     with pytest.raises(OSError, match="No space left"):
         distributed.render_views(scene, [dict(batch[0], name="new")], output=out, width=16, height=12)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(before)
+
+
+def test_render_views_writes_the_command_lines_record_beside_each_image(cluster, tmp_path):
+    # Each view's OUT.meta.json decodes to the numbers penumbra.poses computes and to the
+    # record penumbra render --meta writes for the same scene, camera and settings.
+    scene = penumbra.load(SCENES / "cornell.toml")
+    side = penumbra.Camera((2.5, 1.5, 6), (0, 1.2, -1), (0, 1, 0), 35)
+    batch = [
+        {"name": "high", "camera": "high", "aovs": ["object_id"]},
+        {"name": "side", "camera": side},
+        {"name": "default", "width": 10},
+    ]
+    out = str(tmp_path / "py" / "{name}.png")
+    done = distributed.render_views(scene, batch, output=out, width=16, height=12, spp=1, meta=True)
+    assert not any(r["skipped"] for r in done)
+    cli_side = "cameras.side={position = [2.5, 1.5, 6], look_at = [0, 1.2, -1], fov = 35}"
+    for view, camera, extra in (
+        (batch[0], "high", ["--aov", "object_id"]),
+        (batch[1], "side", ["--set", cli_side]),
+        (batch[2], "front", []),
+    ):
+        w = 10 if view["name"] == "default" else 16
+        image = tmp_path / "py" / f"{view['name']}.png"
+        mine = json.loads((tmp_path / "py" / f"{view['name']}.meta.json").read_text())
+        cli_image = tmp_path / "cli" / f"{view['name']}.png"
+        run_cli(
+            "render", SCENES / "cornell.toml", "--camera", camera, "--width", w, "--height", 12,
+            "--spp", 1, "--meta", "--quiet", "-o", cli_image, *extra,
+        )
+        cli = json.loads(cli_image.with_suffix(".meta.json").read_text())
+        pose = poses.camera_pose(side if camera == "side" else scene.camera(camera), w, 12)
+        assert (mine["width"], mine["height"]) == (cli["width"], cli["height"]) == (w, 12)
+        for key, matrix in pose.items():
+            assert mine[key] == matrix.tolist() == cli[key], (view["name"], key)
+        assert mine["image"] == str(image) and mine["view"] == view["name"]
+        assert mine["objects"] == cli["objects"] == scene.objects
+        assert mine["files"] == [str(image)] + (
+            [str(image.with_suffix(".aovs.npz"))] if view.get("aovs") else []
+        )
+        for key in ("penumbra", "frame", "region", "gamma", "format"):
+            assert mine["settings"][key] == cli["settings"][key], (view["name"], key)
+        # The explicit camera is no camera of the file, and the CLI's scene has an override.
+        render, cli_render = mine["settings"]["render"], cli["settings"]["render"]
+        if view["name"] == "side":
+            assert render.startswith("RenderSettings { view: Camera(Camera { position: Vec3(2.5,")
+            assert render.split(", width:")[1] == cli_render.split(", width:")[1]
+            assert mine["settings"]["camera"] is None
+            assert mine["settings"]["scene_digest"] == scene.scene_digest
+            assert cli["settings"]["scene_digest"] != scene.scene_digest
+        else:
+            assert render == cli_render
+            assert mine["settings"]["camera"] == cli["settings"]["camera"] == camera
+            assert mine["settings"]["scene_digest"] == cli["settings"]["scene_digest"]
+        assert mine["settings"]["aovs"] == list(view.get("aovs", []))
+
+    # With meta, a view without its record is not done: only that one renders again.
+    again = distributed.render_views(scene, batch, output=out, width=16, height=12, spp=1, meta=True)
+    assert all(r["skipped"] for r in again)
+    (tmp_path / "py" / "side.meta.json").unlink()
+    again = distributed.render_views(scene, batch, output=out, width=16, height=12, spp=1, meta=True)
+    assert [r["skipped"] for r in again] == [True, False, True]
+    assert (tmp_path / "py" / "side.meta.json").is_file()
+    assert not [p for p in (tmp_path / "py").iterdir() if p.name.startswith(".")]
+
+
+def test_a_view_the_record_cannot_describe_fails_before_any_task(cluster, tmp_path):
+    scene = penumbra.load(SCENES / "cornell.toml")
+    with pytest.raises(ValueError, match=r"views\[0\] \('front'\): .*\.bmp.*record's image"):
+        distributed.render_views(scene, ["front"], output=str(tmp_path / "{name}.bmp"), meta=True)
+    assert not list(tmp_path.iterdir())
+

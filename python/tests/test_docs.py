@@ -11,11 +11,11 @@ from importlib.metadata import version
 import pytest
 
 import penumbra
-from penumbra import _camera, _image, _pack, _raycast, _scene, _tensor, poses, views
+from penumbra import _camera, _image, _pack, _raycast, _scene, _tensor, coco, poses, record, views
 
 from conftest import ROOT
 
-MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, _tensor, views, poses]
+MODULES = [penumbra, _camera, _image, _pack, _raycast, _scene, _tensor, views, poses, record, coco]
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
@@ -58,6 +58,7 @@ def test_the_batch_modules_are_documented():
     from penumbra import batch
 
     assert public_undocumented(views) == [] and public_undocumented(batch) == []
+    assert public_undocumented(record) == [] and public_undocumented(coco) == []
     assert set(penumbra.__all__) >= {"load", "loads", "load_dict", "Scene", "Camera", "SceneError", "RaycastingScene", "INVALID_ID"}
 
 

@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use penumbra::{desc::ObjectDesc, desc::ShapeDesc, Aabb, Light, SceneDesc, World, WorldStats};
+use penumbra::{Aabb, Light, SceneDesc, World, WorldStats};
 use serde_json::{json, Value};
 
 use crate::args::CheckArgs;
@@ -208,18 +208,6 @@ fn triangles_line(s: &WorldStats) -> String {
     )
 }
 
-/// An object's type, and the file for a mesh: `mesh models/bunny.obj`.
-pub fn object_kind(o: &ObjectDesc) -> String {
-    match &o.shape {
-        ShapeDesc::Triangle(_) => "triangle".to_owned(),
-        ShapeDesc::Quad(_) => "quad".to_owned(),
-        ShapeDesc::Cube(_) => "cube".to_owned(),
-        ShapeDesc::Sphere(_) => "sphere".to_owned(),
-        ShapeDesc::Mesh(m) => format!("mesh {}", m.file),
-        ShapeDesc::Instances(d) => format!("instances {}", d.file),
-    }
-}
-
 /// Each `[[objects]]` entry's triangles (as rays see them: every copy counted) and
 /// world-space bounds, in file order; `ids` are the object ids each entry added.
 fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInfo> {
@@ -252,7 +240,7 @@ fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInf
         .enumerate()
         .map(|(i, (o, (triangles, bounds)))| ObjectInfo {
             key: format!("objects[{i}]"),
-            kind: object_kind(o),
+            kind: o.kind(),
             triangles,
             bounds,
         })

@@ -4,15 +4,16 @@
 //! done.
 //!
 //! A task is done when its image and every file its record lists exist and the record's
-//! `settings` are exactly those the task would render with now: the scene's digest (its
-//! text and `--set` overrides), penumbra's version, the camera (its pose to the bit), film,
+//! `settings` are exactly those the task would render with now: the scene's digest (of its
+//! text, `--set` overrides and the files its build read: [`penumbra::SceneFile::digest`]),
+//! penumbra's version, the camera (its pose to the bit), film,
 //! region, sampler, samples, seed, shading, passes and output format. A record is removed
 //! before its image is replaced and written after it, so that an interrupted run never
 //! leaves a record beside an image it does not describe.
 
 use std::path::{Path, PathBuf};
 
-use penumbra::{CameraPose, Override, Scene, SceneFile, StagedFile, View, World};
+use penumbra::{CameraPose, Scene, SceneFile, StagedFile, View, World};
 use serde_json::{json, Value};
 
 use crate::aov::Passes;
@@ -27,33 +28,6 @@ const MAX_RECORD_BYTES: u64 = 1 << 20;
 /// `--aov` files (`out.depth.pfm`).
 pub fn path_of(image: &Path) -> PathBuf {
     image.with_extension("meta.json")
-}
-
-/// A short digest of the scene text, its overrides and the bytes of `files`, every file its
-/// build read (meshes, material libraries, images: [`penumbra::Scene::files`], read again
-/// here; one that cannot be read counts as such): 64-bit FNV-1a, in hex. It tells runs of one
-/// scene apart from runs of an edited one, or of one whose mesh or texture changed.
-pub fn digest(text: &str, overrides: &[Override], files: &[PathBuf]) -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            hash ^= u64::from(b);
-            hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    };
-    eat(text.as_bytes());
-    for o in overrides {
-        eat(b"\0--set\0");
-        eat(o.text().as_bytes());
-    }
-    for path in files {
-        eat(b"\0file\0");
-        match std::fs::read(path) {
-            Ok(bytes) => eat(&bytes),
-            Err(_) => eat(b"\0unreadable\0"),
-        }
-    }
-    format!("{hash:016x}")
 }
 
 /// What a task's image depends on, as its record keeps it.
@@ -142,7 +116,7 @@ fn objects(file: &SceneFile, scene: &Scene) -> Vec<Value> {
         .map(|(i, (o, ids))| {
             json!({
                 "key": format!("objects[{i}]"),
-                "type": crate::check::object_kind(o),
+                "type": o.kind(),
                 "ids": [ids.start, ids.end],
             })
         })

@@ -44,8 +44,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let jobs: Vec<usize> = (0..count)
         .filter(|&i| args.shard.is_none_or(|shard| shard.takes(i)))
         .collect();
-    let digest =
-        (args.resume || args.meta).then(|| record::digest(file.text(), &args.set, &scene.files));
+    let digest = (args.resume || args.meta).then(|| file.digest(&scene.files));
     let load_time = load_start.elapsed();
     interrupt.check()?;
     if args.dry_run {

@@ -61,3 +61,44 @@ pub fn camera_pose(
         p.world_to_camera,
     ))
 }
+
+/// The ray through each pixel's center, as the renderer makes the rays of its one-ray AOVs
+/// (`object_id`, `depth`, ...): a `(height, width, 6)` float32 array of origin and unit
+/// direction, row 0 at the top. Raises `ValueError` as [`camera_pose`] does.
+#[pyfunction]
+pub fn camera_rays<'py>(
+    py: Python<'py>,
+    position: [f32; 3],
+    look_at: [f32; 3],
+    up: [f32; 3],
+    fov: f32,
+    width: u32,
+    height: u32,
+) -> PyResult<Bound<'py, numpy::PyArray3<f32>>> {
+    use numpy::IntoPyArray;
+    if width == 0 || height == 0 {
+        return Err(PyValueError::new_err(format!(
+            "a {width}x{height} film has no pixels"
+        )));
+    }
+    let c = camera(position, look_at, up, fov)?;
+    let pinhole = penumbra::PinholeCamera::new(&c, width, height);
+    let (w, h) = (width as usize, height as usize);
+    let rays = py.detach(|| {
+        let no_memory = || crate::errors::no_memory("camera_rays", "the rays");
+        let len = h.checked_mul(w).and_then(|n| n.checked_mul(6));
+        let mut rows = Vec::new();
+        rows.try_reserve_exact(len.ok_or_else(no_memory)?)
+            .map_err(|_| no_memory())?;
+        for y in 0..h {
+            for x in 0..w {
+                let ray = pinhole.ray(x as f32 + 0.5, y as f32 + 0.5);
+                rows.extend(ray.origin.to_array());
+                rows.extend(ray.direction.to_array());
+            }
+        }
+        numpy::ndarray::Array3::from_shape_vec((h, w, 6), rows)
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    })?;
+    Ok(rays.into_pyarray(py))
+}

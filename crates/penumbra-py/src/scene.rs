@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 
 use crate::errors::scene_error;
 use crate::raycast::{call_error, CoreRaycastingScene};
-use crate::render::{render_scene, Request};
+use crate::render::{render_scene, CameraArgs, Request};
 
 /// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
 /// scene file's default render settings.
@@ -111,10 +111,50 @@ impl CoreScene {
             .map_err(|e| call_error("Scene.raycasting_scene", e))
     }
 
+    /// The settings a render with these keyword arguments (those of `render`) uses, resolved
+    /// against the file's, as the text `penumbra render`'s record keeps them (every f32 to
+    /// the bit). Raises as `render` does for bad settings.
+    #[pyo3(signature = (**kwargs))]
+    fn settings_record(&self, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<String> {
+        let request = Request::from_kwargs(kwargs)?;
+        let settings = request
+            .patch
+            .apply(&self.settings, self.file_samples)
+            .map_err(|e| crate::errors::render_error(penumbra::RenderError::Settings(e)))?;
+        Ok(format!("{settings:?}"))
+    }
+
+    /// The camera `name` (None: the first, the default) as (position, look_at, up, fov);
+    /// `None` for a name the scene lacks. A camera with keys or a path gives its first
+    /// frame's, the camera a render of the name uses.
+    #[pyo3(signature = (name = None))]
+    fn camera(&self, name: Option<&str>) -> Option<CameraArgs> {
+        let camera = match name {
+            Some(name) => self.world.camera(name)?,
+            None => &self.world.cameras().first()?.1,
+        };
+        let [p, l, u] = [camera.position(), camera.look_at(), camera.up()].map(|v| v.to_array());
+        Some((p, l, u, camera.fov_y_deg()))
+    }
+
+    /// The digest of the scene's text and every file its build read, as `penumbra render
+    /// --meta` records it (see `penumbra::SceneFile::digest`).
+    #[getter]
+    fn scene_digest(&self, py: Python<'_>) -> String {
+        py.detach(|| self.file.digest(&self.files))
+    }
+
     /// For each `objects` entry, in file order, its first object id and how many it added.
     #[getter]
     fn object_ids(&self) -> Vec<(u32, u32)> {
         self.objects.iter().map(|r| (r.start, r.end)).collect()
+    }
+
+    /// For each `objects` entry, in file order, its type (and file): `sphere`,
+    /// `mesh models/bunny.obj`.
+    #[getter]
+    fn object_kinds(&self) -> Vec<String> {
+        self.file.desc.objects.iter().map(|o| o.kind()).collect()
     }
 
     /// The files the build read besides the scene file (meshes, MTL libraries, images).

@@ -4,6 +4,7 @@
 
 mod build;
 pub mod desc;
+mod digest;
 mod error;
 mod gltf;
 mod locate;

@@ -45,6 +45,21 @@ pub struct ObjectDesc {
     pub translate: Option<Vec3Desc>,
 }
 
+impl ObjectDesc {
+    /// Its `type`, and the file for a mesh or instances: `sphere`, `mesh models/bunny.obj`,
+    /// as `penumbra check` and records beside images name an entry.
+    pub fn kind(&self) -> String {
+        match &self.shape {
+            ShapeDesc::Triangle(_) => "triangle".to_owned(),
+            ShapeDesc::Quad(_) => "quad".to_owned(),
+            ShapeDesc::Cube(_) => "cube".to_owned(),
+            ShapeDesc::Sphere(_) => "sphere".to_owned(),
+            ShapeDesc::Mesh(m) => format!("mesh {}", m.file),
+            ShapeDesc::Instances(d) => format!("instances {}", d.file),
+        }
+    }
+}
+
 /// The shape of an object, by its `type`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ShapeDesc {
