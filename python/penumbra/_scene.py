@@ -197,7 +197,8 @@ class Scene:
         are rendered), one geometry per object: geometry id = the object's id (its index in
         the file's ``objects``, where every copy of an ``instances`` object counts as one
         object), primitive ids count the object's triangles in order (a copy's: its mesh's).
-        Instanced meshes are copied into it, placed as they are rendered. Its queries use
+        Instanced meshes are placed as they are rendered, each mesh's tree shared by all its
+        placements (nothing is copied). Its queries use
         every core unless they pass ``nthreads``."""
         return RaycastingScene._wrap(self._core.raycasting_scene())
 

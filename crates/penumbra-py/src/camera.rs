@@ -28,6 +28,22 @@ pub fn check_camera(position: [f32; 3], look_at: [f32; 3], up: [f32; 3], fov: f3
     camera(position, look_at, up, fov).map(|_| ())
 }
 
+/// [`camera`], on a film of `width × height` pixels: `ValueError` for an empty one.
+fn film_camera(
+    position: [f32; 3],
+    look_at: [f32; 3],
+    up: [f32; 3],
+    fov: f32,
+    (width, height): (u32, u32),
+) -> PyResult<Camera> {
+    if width == 0 || height == 0 {
+        return Err(PyValueError::new_err(format!(
+            "a {width}x{height} film has no pixels"
+        )));
+    }
+    camera(position, look_at, up, fov)
+}
+
 /// The camera's intrinsics and poses on a `width × height` film (see `penumbra::CameraPose`
 /// and docs/spec.md §10): K, camera_to_world (OpenCV axes), camera_to_world_opengl and
 /// world_to_camera, each a list of rows. Raises `ValueError` as [`check_camera`] does, and
@@ -47,12 +63,7 @@ pub fn camera_pose(
     penumbra::Mat4Rows,
     penumbra::Mat4Rows,
 )> {
-    if width == 0 || height == 0 {
-        return Err(PyValueError::new_err(format!(
-            "a {width}x{height} film has no pixels"
-        )));
-    }
-    let c = camera(position, look_at, up, fov)?;
+    let c = film_camera(position, look_at, up, fov, (width, height))?;
     let p = penumbra::CameraPose::new(&c, width, height, (0, 0));
     Ok((
         p.k,
@@ -76,12 +87,7 @@ pub fn camera_rays<'py>(
     height: u32,
 ) -> PyResult<Bound<'py, numpy::PyArray3<f32>>> {
     use numpy::IntoPyArray;
-    if width == 0 || height == 0 {
-        return Err(PyValueError::new_err(format!(
-            "a {width}x{height} film has no pixels"
-        )));
-    }
-    let c = camera(position, look_at, up, fov)?;
+    let c = film_camera(position, look_at, up, fov, (width, height))?;
     let pinhole = penumbra::PinholeCamera::new(&c, width, height);
     let (w, h) = (width as usize, height as usize);
     let rays = py.detach(|| {

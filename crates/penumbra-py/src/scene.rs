@@ -104,8 +104,8 @@ impl CoreScene {
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
     }
 
-    /// A ray-casting scene of the world's triangles, instances included (copied), geometry
-    /// id = object index.
+    /// A ray-casting scene of the world's triangles, instances placed (their meshes' trees
+    /// shared, not copied), geometry id = object index.
     fn raycasting_scene(&self, py: Python<'_>) -> PyResult<CoreRaycastingScene> {
         py.detach(|| CoreRaycastingScene::from_world(&self.world))
             .map_err(|e| call_error("Scene.raycasting_scene", e))

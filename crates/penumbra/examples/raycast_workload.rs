@@ -60,7 +60,7 @@ fn main() {
         }
         _ => {
             eprintln!(
-                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|occlusion|closest|occupancy|none N [THREADS [REPEAT]]"
+                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|list|occlusion|closest|occupancy|none N [THREADS [REPEAT]]"
             );
             std::process::exit(2);
         }
@@ -99,7 +99,7 @@ fn main() {
             )
             .unwrap()
         }
-        "incoherent" | "count" => (0..n)
+        "incoherent" | "count" | "list" => (0..n)
             .map(|_| {
                 let a = random_in(center - 0.75 * size, center + 0.75 * size);
                 let b = random_in(lo, hi);
@@ -154,6 +154,16 @@ fn main() {
                 .iter()
                 .map(|&o| o as u64)
                 .sum(),
+            "list" => {
+                let list = scene.list_intersections(&rays, &options).unwrap();
+                list.t_hit
+                    .iter()
+                    .zip(&list.primitive_ids)
+                    .fold(0, |a: u64, (t, &p)| {
+                        a.wrapping_mul(31)
+                            .wrapping_add(t.to_bits() as u64 ^ p as u64)
+                    })
+            }
             "closest" => scene
                 .compute_closest_points(&points, &options)
                 .unwrap()
