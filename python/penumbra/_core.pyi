@@ -67,6 +67,9 @@ class CoreScene:
     ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]: ...
 
     def raycasting_scene(self) -> CoreRaycastingScene: ...
+    def surface_attributes(
+        self, geometry_ids: np.ndarray, primitive_ids: np.ndarray, primitive_uvs: np.ndarray
+    ) -> Dict[str, np.ndarray]: ...
 
 class CoreRaycastingScene:
     """Triangle meshes to cast rays against; arrays are C-contiguous (n, k) rows."""

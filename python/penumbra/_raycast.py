@@ -26,7 +26,7 @@ True
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Tuple
+from typing import Any, Dict, Sequence, Tuple
 
 import numpy as np
 
@@ -125,6 +125,22 @@ def _shaped(result: Dict[str, np.ndarray], lead: Tuple[int, ...]) -> Dict[str, T
     return {k: tensor(v.reshape(lead + v.shape[1:])) for k, v in result.items()}
 
 
+#: The surface attributes ``cast_rays`` can add.
+ATTRIBUTES = ("albedo", "shading_normal", "uv", "object_id")
+
+
+def _attributes(call: str, attributes: Any, world: Any) -> Tuple[str, ...]:
+    """The attribute names asked for, checked: known, and a scene that has them."""
+    names = (attributes,) if isinstance(attributes, str) else tuple(attributes)
+    for name in names:
+        if name not in ATTRIBUTES:
+            raise ValueError(f"{call}: unknown attribute {name!r}; expected any of {', '.join(ATTRIBUTES)}")
+    if names and world is None:
+        raise ValueError(f"{call}: attributes need a scene made by penumbra.Scene.raycasting_scene(), "
+                         "which knows the materials")
+    return names
+
+
 def _threads(nthreads: Any, call: str) -> int:
     """Open3D's ``nthreads``: 0 (one per core) to ``MAX_THREADS``."""
     return _args.integer(call, "nthreads", nthreads, 0, _core.MAX_THREADS)
@@ -150,18 +166,22 @@ class RaycastingScene:
     ``.isfinite()``, ``.isinf()`` and ``.isnan()``.
     """
 
-    __slots__ = ("_core",)
+    __slots__ = ("_core", "_world")
 
     #: The geometry and primitive id of a miss: 4294967295.
     INVALID_ID: int = _core.INVALID_ID
 
     def __init__(self, nthreads: int = 0) -> None:
         self._core = _core.CoreRaycastingScene(_threads(nthreads, "RaycastingScene"))
+        self._world: Any = None
 
     @classmethod
-    def _wrap(cls, core: "_core.CoreRaycastingScene") -> "RaycastingScene":
+    def _wrap(cls, core: "_core.CoreRaycastingScene", world: Any = None) -> "RaycastingScene":
+        """A scene around ``core``; ``world``, the core of the :class:`penumbra.Scene` it was
+        made from (``Scene.raycasting_scene()``), answers ``cast_rays``' ``attributes``."""
         scene = cls.__new__(cls)
         scene._core = core
+        scene._world = world
         return scene
 
     def __repr__(self) -> str:
@@ -227,7 +247,12 @@ class RaycastingScene:
         return self._core.add_instance(geometry_id, matrix)
 
     def cast_rays(
-        self, rays: Any, nthreads: int = 0, tnear: float = 0.0, tfar: float = math.inf
+        self,
+        rays: Any,
+        nthreads: int = 0,
+        tnear: float = 0.0,
+        tfar: float = math.inf,
+        attributes: Sequence[str] = (),
     ) -> Dict[str, Tensor]:
         """The closest hit (``tnear <= t <= tfar``; Open3D's ``cast_rays`` has no bounds and
         takes t >= 0, penumbra's defaults) of each ray: a dict of :class:`Tensor` arrays, ``t_hit``
@@ -238,12 +263,27 @@ class RaycastingScene:
         normal e1 x e2 of the triangle hit (not flipped toward the ray; zero on a miss).
 
         Rays shaped (height, width, 6), as ``create_rays_pinhole`` makes them, are traced as
-        an image: square packets of neighbouring rays, the same results, faster."""
+        an image: square packets of neighbouring rays, the same results, faster.
+
+        ``attributes`` (penumbra's extension, for a scene made by
+        :meth:`penumbra.Scene.raycasting_scene`) adds what the renderer sees at each hit, for
+        sensor models such as LiDAR intensity: any of ``albedo`` (..., 3), the diffuse
+        reflectance k_d times the texture and vertex colour; ``shading_normal`` (..., 3), the
+        interpolated vertex normal of a smooth triangle, else the geometric one, as the mesh
+        orients it; ``uv`` (..., 2), the texture coordinates; ``object_id`` (...) uint32, the
+        object's id (``geometry_ids``). All zero (``INVALID_ID``) on a miss."""
         call = "cast_rays"
+        wanted = _attributes(call, attributes, self._world)
         r, lead = _rows(rays, 6, call, "rays")
         row_length = lead[-1] if len(lead) >= 2 else 0
         near, far = _real(call, "tnear", tnear), _real(call, "tfar", tfar)
         hits = self._core.cast_rays(r, _threads(nthreads, call), row_length, near, far)
+        if wanted:
+            g, p = hits["geometry_ids"], hits["primitive_ids"]
+            found = self._world.surface_attributes(
+                g.reshape(-1, 1), p.reshape(-1, 1), hits["primitive_uvs"])
+            found["object_id"] = g
+            hits.update({k: found[k] for k in wanted})
         return _shaped(hits, lead)
 
     def test_occlusions(

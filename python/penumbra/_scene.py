@@ -198,9 +198,10 @@ class Scene:
         the file's ``objects``, where every copy of an ``instances`` object counts as one
         object), primitive ids count the object's triangles in order (a copy's: its mesh's).
         Instanced meshes are placed as they are rendered, each mesh's tree shared by all its
-        placements (nothing is copied). Its queries use
+        placements (nothing is copied). Its ``cast_rays`` also gives the surface's
+        ``attributes`` (albedo, shading normal, uv, object id). Its queries use
         every core unless they pass ``nthreads``."""
-        return RaycastingScene._wrap(self._core.raycasting_scene())
+        return RaycastingScene._wrap(self._core.raycasting_scene(), self._core)
 
     def render(
         self,

@@ -128,7 +128,7 @@ impl CoreRaycastingScene {
 }
 
 /// The rows of an (n, N) C-contiguous array.
-fn rows<'a, T: Element, const N: usize>(
+pub(crate) fn rows<'a, T: Element, const N: usize>(
     array: &'a PyReadonlyArray2<'_, T>,
     what: &str,
 ) -> PyResult<&'a [[T; N]]> {
@@ -150,7 +150,10 @@ fn vec1<T: Element>(py: Python<'_>, v: Vec<T>) -> Bound<'_, PyAny> {
 }
 
 /// A vector of rows as an (n, N) array.
-fn vec2<T: Element, const N: usize>(py: Python<'_>, v: Vec<[T; N]>) -> PyResult<Bound<'_, PyAny>> {
+pub(crate) fn vec2<T: Element, const N: usize>(
+    py: Python<'_>,
+    v: Vec<[T; N]>,
+) -> PyResult<Bound<'_, PyAny>> {
     let n = v.len();
     Ok(Array2::from_shape_vec((n, N), v.into_flattened())
         .map_err(|e| PyValueError::new_err(e.to_string()))?

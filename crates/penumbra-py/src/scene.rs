@@ -4,13 +4,14 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use penumbra::{RenderSettings, SceneFile, SceneFormat, World};
+use numpy::PyReadonlyArray2;
+use penumbra::{ObjectIndex, RenderSettings, SceneFile, SceneFormat, World};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::scene_error;
-use crate::raycast::{call_error, CoreRaycastingScene};
+use crate::raycast::{call_error, rows, vec2, CoreRaycastingScene};
 use crate::render::{render_scene, CameraArgs, Request};
 
 /// A built scene: the world (geometry and BVH, materials, textures, lights, cameras) and the
@@ -109,6 +110,49 @@ impl CoreScene {
     fn raycasting_scene(&self, py: Python<'_>) -> PyResult<CoreRaycastingScene> {
         py.detach(|| CoreRaycastingScene::from_world(&self.world))
             .map_err(|e| call_error("Scene.raycasting_scene", e))
+    }
+
+    /// The surface attributes (`albedo`, `shading_normal`, `uv`: (n, 3), (n, 3), (n, 2)
+    /// float32) of ray-casting hits on this scene's triangles, given as `raycasting_scene()`
+    /// names them: (n, 1) geometry ids (object ids), (n, 1) primitive ids and (n, 2)
+    /// barycentric weights. Zero where the scene has no such triangle (a miss, or a geometry
+    /// added to the ray-casting scene later).
+    fn surface_attributes<'py>(
+        &self,
+        py: Python<'py>,
+        geometry_ids: PyReadonlyArray2<'py, u32>,
+        primitive_ids: PyReadonlyArray2<'py, u32>,
+        primitive_uvs: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let g = rows::<u32, 1>(&geometry_ids, "geometry_ids")?;
+        let p = rows::<u32, 1>(&primitive_ids, "primitive_ids")?;
+        let b = rows::<f32, 2>(&primitive_uvs, "primitive_uvs")?;
+        if g.len() != p.len() || g.len() != b.len() {
+            return Err(PyValueError::new_err(format!(
+                "surface_attributes: {}, {} and {} ids and weights",
+                g.len(),
+                p.len(),
+                b.len()
+            )));
+        }
+        let world = &self.world;
+        let (albedo, normal, uv) = py.detach(|| {
+            let index = ObjectIndex::new(world);
+            let mut out = (Vec::new(), Vec::new(), Vec::new());
+            for ((g, p), b) in g.iter().zip(p).zip(b) {
+                let a = world.surface_attributes(&index, g[0], p[0], *b);
+                out.0.push(a.map_or([0.0; 3], |a| a.albedo.to_array()));
+                out.1
+                    .push(a.map_or([0.0; 3], |a| a.shading_normal.to_array()));
+                out.2.push(a.map_or([0.0; 2], |a| a.uv.to_array()));
+            }
+            out
+        });
+        let d = PyDict::new(py);
+        d.set_item("albedo", vec2(py, albedo)?)?;
+        d.set_item("shading_normal", vec2(py, normal)?)?;
+        d.set_item("uv", vec2(py, uv)?)?;
+        Ok(d)
     }
 
     /// The settings a render with these keyword arguments (those of `render`) uses, resolved

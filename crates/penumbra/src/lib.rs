@@ -126,8 +126,8 @@ pub use staged::{commit_all, StagedFile};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use texture_file::decode_texture_image;
 pub use world::{
-    flatten_instances, World, WorldBuilder, WorldError, WorldStats, DEFAULT_MATERIAL,
-    FLATTEN_TRIANGLES, MAX_INSTANCES, MAX_TRIANGLES,
+    flatten_instances, ObjectIndex, SurfaceAttributes, World, WorldBuilder, WorldError, WorldStats,
+    DEFAULT_MATERIAL, FLATTEN_TRIANGLES, MAX_INSTANCES, MAX_TRIANGLES,
 };
 
 // The README's Rust snippets are compiled (and, unless `no_run`, run) as doc-tests.

@@ -43,7 +43,7 @@ use crate::geometry::Surface;
 use crate::integrator::CAMERA_T_MIN;
 use crate::math::{Ray, Rgb};
 use crate::names::{parse_name, UnknownName};
-use crate::world::World;
+use crate::world::{ObjectIndex, World};
 
 /// The id of "nothing hit" in [`AovPixel::object_id`] and [`AovPixel::primitive_id`].
 pub const NO_ID: u32 = u32::MAX;
@@ -217,23 +217,18 @@ fn collect<T>(len: usize, values: impl Iterator<Item = T>) -> Result<Vec<T>, Try
     Ok(v)
 }
 
-/// What a render needs to compute AOVs: the first triangle of every object, to number
+/// What a render needs to compute AOVs: where every object's triangles are, to number
 /// triangles within their object.
 pub(crate) struct AovContext {
-    first_triangle: Vec<u32>,
+    objects: ObjectIndex,
 }
 
 impl AovContext {
-    /// Indexes the objects of `world` (its own triangles: each object's are contiguous, and
-    /// in object order).
+    /// Indexes the objects of `world`.
     pub(crate) fn new(world: &World) -> Self {
-        let mut first_triangle = Vec::new();
-        for (i, tri) in world.geometry().triangles.iter().enumerate() {
-            if tri.object as usize >= first_triangle.len() {
-                first_triangle.resize(tri.object as usize + 1, i as u32);
-            }
+        Self {
+            objects: ObjectIndex::new(world),
         }
-        Self { first_triangle }
     }
 
     /// The geometric AOVs of pixel `(x, y)` from the ray through its center; albedo zero.
@@ -246,11 +241,7 @@ impl AovContext {
         // An instance's triangles are numbered within its mesh already.
         let first = match hit.instance {
             Some(_) => 0,
-            None => self
-                .first_triangle
-                .get(surface.object as usize)
-                .copied()
-                .unwrap_or(0),
+            None => self.objects.first_triangle(surface.object),
         };
         AovPixel {
             // The camera's rays have unit directions, so t is the distance.
@@ -268,17 +259,6 @@ impl AovContext {
 /// The shading normal turned as the integrator turns it (see [`Surface::facing`]).
 pub(crate) fn facing_normal(ray: &Ray, surface: &Surface) -> Vec3 {
     surface.facing(ray.direction).1
-}
-
-/// The diffuse reflectance at `surface`: the material's k_d times its texture and the vertex
-/// colour, as shading uses it.
-pub(crate) fn albedo(world: &World, surface: &Surface) -> Rgb {
-    let material = &world.materials()[surface.material as usize];
-    let tex = match material.texture {
-        Some(t) => world.textures()[t as usize].eval(surface.uv),
-        None => Vec3::ONE,
-    };
-    tex * surface.color * material.diffuse
 }
 
 #[cfg(test)]
@@ -318,7 +298,7 @@ mod tests {
         let ray = camera.ray(0.5, 0.5);
         let hit = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY).unwrap();
         let s = world.surface(&hit);
-        assert_eq!(albedo(&world, &s), Rgb::new(0.5, 0.25, 1.0));
+        assert_eq!(world.albedo(&s), Rgb::new(0.5, 0.25, 1.0));
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
 
-use super::aov::{self, AovContext, AovPixel};
+use super::aov::{AovContext, AovPixel};
 use super::RenderSettings;
 use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
@@ -187,7 +187,7 @@ impl Job<'_> {
             for (i, hit) in hits.iter().enumerate().skip(pixel * spp).take(spp) {
                 if hit.is_some() {
                     if self.aovs.is_some() {
-                        albedo += aov::albedo(self.world, &surfaces[next]);
+                        albedo += self.world.albedo(&surfaces[next]);
                     }
                     let (c, rays) = shaded[next];
                     sum += c;

@@ -33,9 +33,11 @@ use crate::math::{Aabb, Ray};
 use crate::texture::Texture;
 
 mod builder;
+mod objects;
 mod placed;
 
 pub use builder::{flatten_instances, WorldBuilder, FLATTEN_TRIANGLES, MAX_INSTANCES};
+pub use objects::{ObjectIndex, SurfaceAttributes};
 pub(crate) use placed::Placed;
 
 /// Most triangles in a world: about 100 bytes each with the BVH, so 2^27 need some 13 GiB.
