@@ -6,7 +6,9 @@
 #   tools/test.sh -k aov       # extra arguments go to pytest
 #
 # Needs the Rust toolchain and Python 3.9+ with pip; the first run downloads maturin, numpy,
-# pytest, tqdm, Ray, trimesh and a Jupyter kernel (nbclient, ipykernel) from PyPI into a virtual environment under target/ (kept between runs;
+# pytest, tqdm, Ray, trimesh, pycocotools (COCO's RLE masks, which penumbra.coco uses when it is
+# there) and a Jupyter kernel (nbclient, ipykernel) from PyPI into a virtual environment under
+# target/ (kept between runs;
 # PENUMBRA_TEST_VENV picks another place). The extension is built with cargo's dev profile
 # (opt-level 2), not LTO'd release: pyo3's macros turn on syn features that serde's derive
 # shares, so its build compiles the library once more, and at opt-level 2 that is quick;
@@ -36,7 +38,7 @@ py="$venv/bin/python"
 # nbclient and ipykernel run the example notebook in a real kernel.
 "$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm "ray>=2.9" \
     "tomli>=1.1; python_version < '3.11'" "trimesh==4.5.3" "pillow>=9" \
-    "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29"
+    "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29" "pycocotools>=2.0.8"
 
 profile="${PENUMBRA_PY_PROFILE:-dev}"
 PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile $profile" \

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import ray_env  # noqa: F401  (sets Ray's environment; skips without Ray)
 
@@ -254,6 +255,7 @@ def test_a_view_that_fails_is_listed_at_the_end_and_the_others_are_done(tmp_path
 
 
 def test_meta_and_coco_write_each_record_and_the_annotations(tmp_path):
+    pytest.importorskip("pycocotools")  # tools/test.sh installs it
     jobs = example_jobs(
         tmp_path,
         **{
@@ -288,6 +290,7 @@ def test_meta_and_coco_write_each_record_and_the_annotations(tmp_path):
 
 
 def test_coco_needs_the_object_id_aov_and_pycocotools(tmp_path):
+    pytest.importorskip("pycocotools")  # without it, the batch stops at its absence first
     jobs = example_jobs(tmp_path)
     out = run_batch(jobs, "--coco", tmp_path / "a.json")
     assert out.returncode == 2, out.stderr
