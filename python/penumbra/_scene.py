@@ -155,6 +155,13 @@ class Scene:
         ]
 
     @property
+    def gamma(self) -> Optional[float]:
+        """The file's ``film.gamma``: 8-bit images (PNG, JPEG) encode ``c ** (1 / gamma)``;
+        None for the sRGB curve. ``penumbra.write_image(path, image, gamma=scene.gamma)``
+        writes the bytes ``penumbra render`` writes, as ``render_views`` does."""
+        return self._core.gamma
+
+    @property
     def scene_digest(self) -> str:
         """16 hex digits identifying the scene by content: 64-bit FNV-1a of the scene text
         and the bytes of every file its build read (meshes, material libraries, images), the

@@ -34,8 +34,10 @@ def write_view(
     image: np.ndarray,
     aovs: Mapping[str, np.ndarray],
     record: Optional[Mapping[str, Any]] = None,
+    gamma: Optional[float] = None,
 ) -> None:
-    """Writes a view's image to ``path``, its AOVs (if any) and its ``record`` (if given)
+    """Writes a view's image to ``path`` (8-bit formats with ``gamma``, the scene's
+    ``film.gamma``, as the command line does), its AOVs (if any) and its ``record`` (if given)
     beside it, together or not at all, as the command line writes an image, its AOV files and
     its record: each file is written whole under a temporary name in its folder first (where a
     full disk fails), and only then are they renamed into place, the image after its AOVs and
@@ -58,7 +60,7 @@ def write_view(
         # The same extension, which names the image's format.
         tmp = os.path.join(folder, f".{name}{tag}{os.path.splitext(name)[1]}")
         staged.append((tmp, path))
-        write_image(tmp, image)
+        write_image(tmp, image, gamma)
         if record is not None:
             final = record_path(path)
             staged.append((stage_record(final, record), final))

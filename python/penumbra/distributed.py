@@ -232,7 +232,7 @@ def render_views(
 
     def save(k: int, result: Dict[str, Any]) -> None:
         i = todo[k]
-        write_view(paths[i], result["image"], result["aovs"], records.get(i))
+        write_view(paths[i], result["image"], result["aovs"], records.get(i), scene.gamma)
         st = result["stats"]
         summary[i].update(
             skipped=False,

@@ -6,7 +6,7 @@ conventions of K and the poses):
   the command line's for the same file), ``camera`` (the scene camera's name; None for an
   explicit camera), ``frame`` (None: a view has no frame), ``render`` (the resolved render
   settings as the command line's record writes them, every number to the bit), ``region``
-  (None), ``aovs`` (the AOV names), ``gamma`` (None: images are written with the sRGB curve)
+  (None), ``aovs`` (the AOV names), ``gamma`` (the scene's ``film.gamma``; None: the sRGB curve)
   and ``format`` (``png``, ``jpg``, ``exr`` or ``pfm``);
 - ``image``, ``files`` (the image, then its ``.aovs.npz`` when the view has AOVs), ``width``,
   ``height``;
@@ -103,7 +103,7 @@ def record(
             "render": render,
             "region": None,
             "aovs": list(v["aovs"]),
-            "gamma": None,
+            "gamma": scene.gamma,
             "format": FORMATS[ext],
         },
         "image": image,

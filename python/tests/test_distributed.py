@@ -358,3 +358,29 @@ def test_a_view_the_record_cannot_describe_fails_before_any_task(cluster, tmp_pa
         distributed.render_views(scene, ["front"], output=str(tmp_path / "{name}.bmp"), meta=True)
     assert not list(tmp_path.iterdir())
 
+
+
+def test_render_views_writes_the_scenes_gamma_as_the_command_line_does(cluster, tmp_path):
+    # film.gamma changes the 8-bit encoding: the batch's PNG is the CLI's, byte for byte, and
+    # both records say which gamma.
+    text = (SCENES / "cornell.toml").read_text().replace("[film]\n", "[film]\ngamma = 1.8\n", 1)
+    path = tmp_path / "gamma.toml"
+    path.write_text(text)
+    scene = penumbra.load(path)
+    assert scene.gamma == pytest.approx(1.8)
+    out = str(tmp_path / "py" / "{name}.png")
+    distributed.render_views(scene, [{"name": "front"}], output=out, width=16, height=12,
+                             spp=1, meta=True)
+    cli_image = tmp_path / "cli" / "front.png"
+    run_cli("render", path, "--width", 16, "--height", 12, "--spp", 1, "--meta", "--quiet",
+            "-o", cli_image)
+    mine = (tmp_path / "py" / "front.png").read_bytes()
+    assert mine == cli_image.read_bytes()
+    # The sRGB curve gives other bytes: the test sees the gamma.
+    image = scene.render(width=16, height=12, spp=1)
+    srgb = tmp_path / "srgb.png"
+    penumbra.write_image(srgb, image)
+    assert srgb.read_bytes() != mine
+    record = json.loads((tmp_path / "py" / "front.meta.json").read_text())
+    cli = json.loads(cli_image.with_suffix(".meta.json").read_text())
+    assert record["settings"]["gamma"] == cli["settings"]["gamma"] == pytest.approx(1.8)

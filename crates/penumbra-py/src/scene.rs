@@ -22,6 +22,8 @@ pub struct CoreScene {
     settings: RenderSettings,
     /// The file's `render.samples`, the sample count a sampler change falls back to.
     file_samples: Option<u32>,
+    /// The file's `film.gamma` (`None`: 8-bit images take the sRGB curve).
+    gamma: Option<f32>,
     load_seconds: f64,
     /// The parsed file and the files its build read: what a pack of the scene holds.
     pub(crate) file: SceneFile,
@@ -49,6 +51,7 @@ pub(crate) fn build(
         world: scene.world,
         settings: scene.settings,
         file_samples: file.samples(),
+        gamma: scene.gamma,
         load_seconds: scene.load_time.as_secs_f64(),
         file,
         files: scene.files,
@@ -183,6 +186,12 @@ impl CoreScene {
 
     /// The digest of the scene's text and every file its build read, as `penumbra render
     /// --meta` records it (see `penumbra::SceneFile::digest`).
+    /// The file's `film.gamma`: 8-bit images encode `c^(1/gamma)`; `None` for the sRGB curve.
+    #[getter]
+    fn gamma(&self) -> Option<f32> {
+        self.gamma
+    }
+
     #[getter]
     fn scene_digest(&self, py: Python<'_>) -> String {
         py.detach(|| self.file.digest(&self.files))
