@@ -280,9 +280,10 @@ class RaycastingScene:
         hits = self._core.cast_rays(r, _threads(nthreads, call), row_length, near, far)
         if wanted:
             g, p = hits["geometry_ids"], hits["primitive_ids"]
-            found = self._world.surface_attributes(
-                g.reshape(-1, 1), p.reshape(-1, 1), hits["primitive_uvs"])
-            found["object_id"] = g
+            found = {"object_id": g}
+            if set(wanted) - {"object_id"}:  # the surface's own, looked up in the scene
+                found.update(self._world.surface_attributes(
+                    g.reshape(-1, 1), p.reshape(-1, 1), hits["primitive_uvs"]))
             hits.update({k: found[k] for k in wanted})
         return _shaped(hits, lead)
 

@@ -2,7 +2,7 @@
 //! [`CoreScene`] that holds the built world (shared, never rebuilt) and the file's settings.
 
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use numpy::PyReadonlyArray2;
 use penumbra::{ObjectIndex, RenderSettings, SceneFile, SceneFormat, World};
@@ -30,6 +30,9 @@ pub struct CoreScene {
     pub(crate) files: Vec<PathBuf>,
     /// For each `objects` entry, the object ids it added.
     objects: Vec<std::ops::Range<u32>>,
+    /// Where each object's triangles are, for `surface_attributes`: made by its first call,
+    /// not once per call (a walk over every triangle).
+    object_index: OnceLock<ObjectIndex>,
     /// The cameras with keys or a path, by name.
     paths: Vec<(String, penumbra::CameraPath)>,
 }
@@ -57,6 +60,7 @@ pub(crate) fn build(
         files: scene.files,
         objects: scene.objects,
         paths: scene.paths,
+        object_index: OnceLock::new(),
     })
 }
 
@@ -140,10 +144,10 @@ impl CoreScene {
         }
         let world = &self.world;
         let (albedo, normal, uv) = py.detach(|| {
-            let index = ObjectIndex::new(world);
+            let index = self.object_index.get_or_init(|| ObjectIndex::new(world));
             let mut out = (Vec::new(), Vec::new(), Vec::new());
             for ((g, p), b) in g.iter().zip(p).zip(b) {
-                let a = world.surface_attributes(&index, g[0], p[0], *b);
+                let a = world.surface_attributes(index, g[0], p[0], *b);
                 out.0.push(a.map_or([0.0; 3], |a| a.albedo.to_array()));
                 out.1
                     .push(a.map_or([0.0; 3], |a| a.shading_normal.to_array()));
