@@ -109,6 +109,7 @@ pub(crate) use cutouts::{AlphaTests, Parts};
 pub use instances::Instances;
 pub use levels::Levels;
 pub use segments::{Pairs, Segments};
+pub use shaft::MIN_ENDS as SHAFT_MIN_ENDS;
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at

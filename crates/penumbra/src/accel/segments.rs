@@ -153,7 +153,11 @@ impl Kernel for OccludePairs<'_> {
         if bvh.nodes.is_empty() || m == 0 || n == 0 {
             return;
         }
-        match Shaft::new(bvh, origins, ends).gather(bvh) {
+        let gathered = match n >= shaft::MIN_ENDS {
+            true => Shaft::new(bvh, origins, ends).gather(bvh),
+            false => None,
+        };
+        match gathered {
             Some(candidates) if candidates.as_slice().is_empty() => return,
             Some(candidates) => {
                 let pairs = Pairs { origins, ends };

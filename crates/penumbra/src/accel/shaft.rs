@@ -27,6 +27,15 @@ use crate::simd::{max, min, Isa};
 /// the tree.
 pub(super) const MAX_CANDIDATES: usize = 32;
 
+/// Fewest ends for which a batch's segments are worth a shaft. One walk of the tree gathers
+/// a shaft's triangles for every segment, where the packets walk it once per end: with few
+/// ends the gathering costs about what it saves, and a shaft too wide to use (over
+/// [`MAX_CANDIDATES`]) is pure cost. Without a shaft, against with one (1024², 2 threads):
+/// 0.75× the time under three point lights (3 ends), 0.92× under one 3×3 light
+/// (scenes/bench/small_light.toml), 0.98× in the seed's room at 2×2 and 1.03× at 3×3; at 5×5
+/// (25 ends) the shaft saves 13 % there.
+pub const MIN_ENDS: usize = 16;
+
 /// Axes the shaft is measured along: x, y, z, and three across its direction.
 const AXES: usize = 6;
 

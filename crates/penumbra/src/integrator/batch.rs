@@ -21,7 +21,8 @@
 //! answer as [`crate::accel::Bvh::occluded`] would), and each point's light is summed in light
 //! and sample order: the image does not depend on how the rays were grouped.
 
-use super::{Integrator, Point, Scratch, SHADOW_T_MAX};
+use super::across::Across;
+use super::{FixedEnds, Integrator, Point, Scratch, SHADOW_T_MAX};
 use crate::accel::{Pairs, Segments};
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
@@ -61,6 +62,8 @@ pub(crate) struct BatchScratch {
     /// Each point's gathered light samples.
     points: Vec<Scratch>,
     prepared: Vec<Point>,
+    /// The samples of points whose lights are all fixed.
+    across: Across,
     bundle: Bundle,
 }
 
@@ -105,8 +108,18 @@ impl Kernel for ShadeBatch<'_, '_> {
         let BatchScratch {
             points,
             prepared,
+            across,
             bundle,
         } = scratch;
+        if let (true, Some(ends)) = (integrator.across, &integrator.fixed_ends) {
+            across.gather(integrator, rays, surfaces);
+            let masks = (&across.dark[..], &across.behind[..]);
+            bundle.pairs(integrator, &across.points, masks, ends);
+            out.extend(
+                (0..count).map(|i| (across.radiance(i, &bundle.blocked), across.points[i].traced)),
+            );
+            return;
+        }
         if points.len() < count {
             points.resize_with(count, Scratch::default);
         }
@@ -127,8 +140,9 @@ impl Kernel for ShadeBatch<'_, '_> {
         }
         let (blocked, stride) = match &integrator.fixed_ends {
             Some(ends) => {
-                let ends = ends.each_ref().map(|axis| &axis[..]);
-                bundle.pairs(integrator, points, prepared, ends);
+                // The across buffers, reused here for the points' masks.
+                transpose(points, &mut across.dark, &mut across.behind);
+                bundle.pairs(integrator, prepared, (&across.dark, &across.behind), ends);
                 (&bundle.blocked, count)
             }
             None => {
@@ -152,66 +166,41 @@ impl Kernel for ShadeBatch<'_, '_> {
 }
 
 impl Bundle {
-    /// Traces the points' shadow rays toward light samples `ends` that every point shares, as
-    /// [`crate::accel::Pairs`]: the points' origins are written once, not once per sample.
-    /// Slot `j · points.len() + i` of `blocked` is point `i`'s sample `j`.
+    /// Traces the shadow rays of `points` toward light samples `ends` that every point
+    /// shares, as [`crate::accel::Pairs`]: the points' origins are written once, not once per
+    /// sample. Slot `j · points.len() + i` of `blocked`, of `dark` (samples that cannot
+    /// contribute) and of `behind` (samples behind the surface) is point `i`'s sample `j`.
     fn pairs(
         &mut self,
         integrator: &Integrator,
-        points: &[Scratch],
-        prepared: &[Point],
-        ends: [&[f32]; 3],
+        points: &[Point],
+        (dark, behind): (&[bool], &[bool]),
+        ends: &FixedEnds,
     ) {
-        let (count, samples) = (points.len(), ends[0].len());
-        let slots = samples * count;
-        self.blocked.clear();
-        self.blocked.resize(slots, true);
         // Samples behind the surface wait for the second pass, from the other side.
-        let mut any_behind = false;
-        for (i, point) in points.iter().enumerate() {
-            let (was, behind) = (&point.blocked[..samples], &point.behind[..samples]);
-            for j in 0..samples {
-                self.blocked[j * count + i] = was[j] | behind[j];
-                any_behind |= !was[j] & behind[j];
-            }
-        }
-        let accel = integrator.world.accel();
+        self.blocked.clear();
+        self.blocked
+            .extend(dark.iter().zip(behind).map(|(&d, &h)| d | h));
+        let any_behind = dark.iter().zip(behind).any(|(&d, &h)| !d & h);
         let side = |origins: &mut [Vec<f32>; 3], at: fn(&Point) -> glam::Vec3| {
             for (a, axis) in origins.iter_mut().enumerate() {
                 axis.clear();
-                axis.extend(prepared.iter().map(|p| at(p)[a]));
+                axis.extend(points.iter().map(|p| at(p)[a]));
             }
         };
         side(&mut self.origin, |p| p.front);
-        accel.occlude_pairs_on(
-            integrator.path,
-            pairs(&self.origin, ends),
-            SHADOW_T_MAX,
-            &mut self.blocked,
-        );
+        occlude_runs(integrator, &self.origin, ends, &mut self.blocked);
         if !any_behind {
             return;
         }
         side(&mut self.end, |p| p.back);
         self.back.clear();
-        self.back.resize(slots, true);
-        for (i, point) in points.iter().enumerate() {
-            let (was, behind) = (&point.blocked[..samples], &point.behind[..samples]);
-            for j in 0..samples {
-                self.back[j * count + i] = was[j] | !behind[j];
-            }
-        }
-        accel.occlude_pairs_on(
-            integrator.path,
-            pairs(&self.end, ends),
-            SHADOW_T_MAX,
-            &mut self.back,
-        );
-        for (i, point) in points.iter().enumerate() {
-            for (j, &behind) in point.behind[..samples].iter().enumerate() {
-                if behind {
-                    self.blocked[j * count + i] = self.back[j * count + i];
-                }
+        self.back
+            .extend(dark.iter().zip(behind).map(|(&d, &h)| d | !h));
+        occlude_runs(integrator, &self.end, ends, &mut self.back);
+        for ((b, &back), &h) in self.blocked.iter_mut().zip(&self.back).zip(behind) {
+            if h {
+                *b = back;
             }
         }
     }
@@ -261,11 +250,36 @@ impl Bundle {
     }
 }
 
-/// The segments from `origins` to `ends`.
-fn pairs<'a>(origins: &'a [Vec<f32>; 3], ends: [&'a [f32]; 3]) -> Pairs<'a> {
-    Pairs {
-        origins: origins.each_ref().map(|axis| &axis[..]),
-        ends,
+/// Point `i`'s gathered sample `j` (whether it cannot contribute, whether it lies behind the
+/// surface) in slot `j · points.len() + i` of `dark` and `behind`.
+fn transpose(points: &[Scratch], dark: &mut Vec<bool>, behind: &mut Vec<bool>) {
+    let (count, samples) = (points.len(), points.first().map_or(0, |p| p.blocked.len()));
+    dark.resize(samples * count, true);
+    behind.resize(samples * count, false);
+    for (i, point) in points.iter().enumerate() {
+        for (j, (&d, &h)) in point.blocked.iter().zip(&point.behind).enumerate() {
+            (dark[j * count + i], behind[j * count + i]) = (d, h);
+        }
+    }
+}
+
+/// Blocks slot `j · origins.len() + i` of `blocked` when something occludes the segment from
+/// origin `i` to sample `j`, run by run of `ends` (see [`FixedEnds`]).
+fn occlude_runs(
+    integrator: &Integrator,
+    origins: &[Vec<f32>; 3],
+    ends: &FixedEnds,
+    blocked: &mut [bool],
+) {
+    let accel = integrator.world.accel();
+    let m = origins[0].len();
+    for run in &ends.runs {
+        let pairs = Pairs {
+            origins: origins.each_ref().map(|axis| &axis[..]),
+            ends: ends.axes.each_ref().map(|axis| &axis[run.clone()]),
+        };
+        let slots = &mut blocked[run.start * m..run.end * m];
+        accel.occlude_pairs_on(integrator.path, pairs, SHADOW_T_MAX, slots);
     }
 }
 
@@ -308,8 +322,8 @@ mod tests {
     use crate::math::Transform;
     use crate::world::{World, WorldBuilder};
 
-    /// A floor under a sphere, both shiny, an area light (`jitter`ed or not) and a point light
-    /// above, and an area light low beside the floor, partly below its plane.
+    /// A floor under a sphere, both shiny, an area light (`jitter`ed or not), a point light and
+    /// a 4×4 area light above, and an area light low beside the floor, partly below its plane.
     fn world(jitter: bool) -> World {
         let mut b = WorldBuilder::new();
         let m = b
@@ -357,6 +371,15 @@ mod tests {
             position: Vec3::new(-2.0, 2.5, 1.0),
             intensity: Vec3::splat(0.5),
         }));
+        // Enough samples for a shaft of its own: the bundles trace it apart from the others.
+        b.add_light(Light::Area(AreaLight {
+            center: Vec3::new(-1.0, 3.5, -1.0),
+            u: Vec3::new(1.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 0.0, 1.0),
+            radiance: Vec3::splat(0.5),
+            n: 4,
+            jitter: false,
+        }));
         b.build(1)
     }
 
@@ -389,10 +412,14 @@ mod tests {
                 ambient: Vec3::splat(0.1),
                 light_samples: None,
             };
-            let mut shaded = [Vec::new(), Vec::new()];
-            for (bundles, out) in [true, false].into_iter().zip(&mut shaded) {
+            // Fans, bundles gathered point by point, and bundles gathered across points
+            // (fixed lights only).
+            let mut shaded = [Vec::new(), Vec::new(), Vec::new()];
+            let ways = [(false, false), (true, false), (true, true)];
+            for ((bundles, across), out) in ways.into_iter().zip(&mut shaded) {
                 let mut integrator = Integrator::new(world, settings);
                 integrator.bundles = bundles;
+                integrator.across = across && integrator.fixed_ends.is_some();
                 let mut rngs: Vec<Rng> =
                     (0..rays.len() as u64).map(|i| Rng::new(7, &[i])).collect();
                 let mut scratch = BatchScratch::default();
@@ -409,6 +436,7 @@ mod tests {
                 }
             }
             assert_eq!(shaded[0], shaded[1], "{light_model:?}");
+            assert_eq!(shaded[0], shaded[2], "{light_model:?}");
             let traced: u64 = shaded[0].iter().map(|s| s.1).sum();
             let lit = shaded[0].iter().filter(|s| s.0.x > 0.1 + 1e-3).count();
             assert!(

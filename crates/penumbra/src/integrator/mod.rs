@@ -9,14 +9,17 @@
 //! (see `batch` for how they are grouped), and sums each point's unoccluded samples in light
 //! and sample order.
 
+mod across;
 mod batch;
 mod model;
 mod plan;
 
 use std::f32::consts::PI;
+use std::ops::Range;
 
 use glam::Vec3;
 
+use crate::accel::SHAFT_MIN_ENDS;
 use crate::geometry::Surface;
 use crate::math::{Ray, Rgb};
 use crate::sampling::Rng;
@@ -97,6 +100,15 @@ pub(crate) struct Scratch {
     back: Vec<bool>,
 }
 
+/// A shading point as its lights see it.
+struct Seen {
+    /// The point.
+    x: Vec3,
+    /// The geometric normal, on the viewer's side.
+    n_geom: Vec3,
+    lobe: Lobe,
+}
+
 /// A shading point between [`Integrator::prepare`] and its shadow rays.
 struct Point {
     /// The ambient term.
@@ -134,11 +146,14 @@ pub(crate) struct Integrator<'w> {
     world: &'w World,
     settings: ShadingSettings,
     lights: Vec<LightPlan>,
+    /// The number of light samples (shadow rays) per point.
+    samples: u64,
     /// Whether points bundle their shadow rays (see `batch`).
     bundles: bool,
-    /// Every light sample by axis, in light and sample order, when every point has the same
-    /// ones (no jittered light).
-    fixed_ends: Option<[Vec<f32>; 3]>,
+    /// Every light sample, when every point has the same ones (no jittered light).
+    fixed_ends: Option<FixedEnds>,
+    /// Whether batches gather their samples across points (see `across`).
+    across: bool,
     /// The centre and radius of a sphere around the scene's geometry: shadow rays toward an
     /// environment end outside it.
     sphere: (Vec3, f32),
@@ -156,6 +171,8 @@ impl<'w> Integrator<'w> {
             .collect();
         let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
         let fixed_ends = fixed_ends(&lights);
+        let bundles = batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count());
+        let across = bundles && fixed_ends.is_some() && across::pays(samples, lights.len());
         let bounds = world.bounds();
         let sphere = match bounds.is_empty() {
             true => (Vec3::ZERO, 1.0),
@@ -168,9 +185,11 @@ impl<'w> Integrator<'w> {
             sphere,
             world,
             settings,
-            bundles: batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count()),
+            bundles,
+            across,
             fixed_ends,
             lights,
+            samples,
             path: simd_path(),
         }
     }
@@ -190,8 +209,20 @@ impl<'w> Integrator<'w> {
     /// rays and the ambient term.
     #[inline(always)]
     fn prepare(&self, ray: &Ray, surface: &Surface, rng: &mut Rng, scratch: &mut Scratch) -> Point {
+        let (seen, mut point) = self.look(ray, surface);
+        match self.settings.light_model {
+            LightModel::Phong => self.gather::<Seed>(&seen, rng, scratch),
+            LightModel::Physical => self.gather::<Physical>(&seen, rng, scratch),
+        }
+        point.traced = scratch.blocked.iter().filter(|&&b| !b).count() as u64;
+        point
+    }
+
+    /// What shading a point needs of its surface and material, and the point's ambient term
+    /// and shadow-ray origins (no shadow rays counted yet).
+    #[inline(always)]
+    fn look(&self, ray: &Ray, surface: &Surface) -> (Seen, Point) {
         let world = self.world;
-        let x = surface.position;
         let (n_geom, n) = surface.facing(ray.direction);
         let material = &world.materials()[surface.material as usize];
         let tex = match material.texture {
@@ -214,30 +245,22 @@ impl<'w> Integrator<'w> {
                 Shading::BlinnPhong => (p + 8.0) / (8.0 * PI),
             },
         };
-
-        match self.settings.light_model {
-            LightModel::Phong => self.gather::<Seed>(x, n_geom, &lobe, rng, scratch),
-            LightModel::Physical => self.gather::<Physical>(x, n_geom, &lobe, rng, scratch),
-        }
+        let x = surface.position;
         let offset = SHADOW_OFFSET * n_geom.abs().dot(surface.error);
-        Point {
+        let point = Point {
             ambient: tex * material.ambient * self.settings.ambient,
             front: x + offset * n_geom,
             back: x + offset * (-n_geom),
-            traced: scratch.blocked.iter().filter(|&&b| !b).count() as u64,
-        }
+            traced: 0,
+        };
+        (Seen { x, n_geom, lobe }, point)
     }
 
     /// Fills `scratch` with every sample of every light, in light and sample order.
     #[inline(always)]
-    fn gather<M: Model>(
-        &self,
-        x: Vec3,
-        n_geom: Vec3,
-        lobe: &Lobe,
-        rng: &mut Rng,
-        scratch: &mut Scratch,
-    ) {
+    fn gather<M: Model>(&self, seen: &Seen, rng: &mut Rng, scratch: &mut Scratch) {
+        let Seen { x, n_geom, lobe } = seen;
+        let (x, n_geom) = (*x, *n_geom);
         scratch.ends.clear();
         // Pairs take the fixed samples from the plan; only fans and segments read `ends`.
         let ends = !(self.bundles && self.fixed_ends.is_some());
@@ -374,15 +397,35 @@ impl<'w> Integrator<'w> {
     }
 }
 
-/// Every sample of `lights` by axis, in light and sample order, if none is jittered.
-fn fixed_ends(lights: &[LightPlan]) -> Option<[Vec<f32>; 3]> {
-    let mut ends: [Vec<f32>; 3] = Default::default();
+/// Every light sample of a render whose points all have the same ones.
+struct FixedEnds {
+    /// The samples by axis, in light and sample order.
+    axes: [Vec<f32>; 3],
+    /// The runs of samples whose shadow rays are traced together (indices into `axes`): a
+    /// light with enough samples for a shaft of its own ([`SHAFT_MIN_ENDS`]) alone, lights
+    /// with fewer together, in runs too short for a shaft. A shaft around one light is far
+    /// narrower than one around several, so it holds few triangles more often.
+    runs: Vec<Range<usize>>,
+}
+
+/// Every sample of `lights`, if none is jittered.
+fn fixed_ends(lights: &[LightPlan]) -> Option<FixedEnds> {
+    let mut ends = FixedEnds {
+        axes: Default::default(),
+        runs: Vec::with_capacity(lights.len()),
+    };
     for light in lights {
         let Source::Fixed(points) = &light.source else {
             return None;
         };
-        for (axis, from) in ends.iter_mut().zip([&points.x, &points.y, &points.z]) {
+        let (start, n) = (ends.axes[0].len(), points.len());
+        for (axis, from) in ends.axes.iter_mut().zip([&points.x, &points.y, &points.z]) {
             axis.extend_from_slice(from);
+        }
+        let end = start + n;
+        match ends.runs.last_mut() {
+            Some(run) if n < SHAFT_MIN_ENDS && run.len() + n < SHAFT_MIN_ENDS => run.end = end,
+            _ => ends.runs.push(start..end),
         }
     }
     Some(ends)

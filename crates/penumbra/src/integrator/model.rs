@@ -63,9 +63,37 @@ pub(super) struct Lanes<'a> {
 /// vectorizes; each lane computes exactly `e · reflect(cos, spec)` with glam's scalar `Vec3`
 /// arithmetic (the same products and sums in the same order).
 pub(super) trait Model {
+    /// What [`Model::sample`] needs of a light and a material, the same for all their samples.
+    type Terms;
+
+    /// The terms of the samples of `plan` seen from a point with material `lobe`.
+    fn terms(plan: &LightPlan, lobe: &Lobe) -> Self::Terms;
+
+    /// One sample with terms `t`: unit direction `l` toward it, squared distance `d2`, cosine
+    /// `c = n·l` and specular lobe value `s`. Returns the light it sends toward the viewer if
+    /// nothing blocks it, by channel, and whether it cannot contribute at all.
+    fn sample(t: &Self::Terms, l: Vec3, d2: f32, c: f32, s: f32) -> (Rgb, bool);
+
     /// Fills `out` for the samples of `plan` in the directions `dirs`, with specular lobe
-    /// values `spec`.
-    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes);
+    /// values `spec`: [`Model::sample`] for each.
+    #[inline(always)]
+    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
+        let n = out.r.len();
+        let (cos, spec, d2) = (&dirs.cos[..n], &spec[..n], &dirs.d2[..n]);
+        let (lx, ly, lz) = (&dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
+        let (r, g, b, blocked) = (
+            out.r,
+            &mut out.g[..n],
+            &mut out.b[..n],
+            &mut out.blocked[..n],
+        );
+        let terms = Self::terms(plan, lobe);
+        for i in 0..n {
+            let l = Vec3::new(lx[i], ly[i], lz[i]);
+            let (e, dark) = Self::sample(&terms, l, d2[i], cos[i], spec[i]);
+            (r[i], g[i], b[i], blocked[i]) = (e.x, e.y, e.z, dark);
+        }
+    }
 
     /// Fills `out` for directional samples: each `(direction, e)` of `samples` brings the
     /// plan's weight × `e` (for an environment: 1/N² × radiance / density) from its direction,
@@ -85,27 +113,24 @@ pub(super) trait Model {
 pub(super) struct Seed;
 
 impl Model for Seed {
+    /// The weight, k_d, k_s and whether the light sends nothing.
+    type Terms = (Rgb, Rgb, Rgb, bool);
+
     #[inline(always)]
-    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
-        let n = out.r.len();
-        let (w, kd, ks) = (plan.weight, lobe.kd, lobe.ks);
-        let dark = w == Vec3::ZERO;
-        let (cos, spec) = (&dirs.cos[..n], &spec[..n]);
-        let (r, g, b, blocked) = (
-            out.r,
-            &mut out.g[..n],
-            &mut out.b[..n],
-            &mut out.blocked[..n],
+    fn terms(plan: &LightPlan, lobe: &Lobe) -> Self::Terms {
+        (plan.weight, lobe.kd, lobe.ks, plan.weight == Vec3::ZERO)
+    }
+
+    #[inline(always)]
+    fn sample(&(w, kd, ks, dark): &Self::Terms, _: Vec3, _: f32, c: f32, s: f32) -> (Rgb, bool) {
+        let e = Vec3::new(
+            w.x * (kd.x * c + ks.x * s),
+            w.y * (kd.y * c + ks.y * s),
+            w.z * (kd.z * c + ks.z * s),
         );
-        for i in 0..n {
-            let (c, s) = (cos[i], spec[i]);
-            r[i] = w.x * (kd.x * c + ks.x * s);
-            g[i] = w.y * (kd.y * c + ks.y * s);
-            b[i] = w.z * (kd.z * c + ks.z * s);
-            // Below the surface, or NaN for a sample on the shaded point: no light.
-            let lit = c > 0.0;
-            blocked[i] = !lit | dark;
-        }
+        // Below the surface, or NaN for a sample on the shaded point: no light.
+        let lit = c > 0.0;
+        (e, !lit | dark)
     }
 
     #[inline(always)]
@@ -137,45 +162,66 @@ impl Model for Seed {
 /// (Blinn-Phong: (p+8)/8π).
 pub(super) struct Physical;
 
+/// [`Physical`]'s terms of a light and a material.
+pub(super) struct PhysicalTerms {
+    w: Rgb,
+    ks: Rgb,
+    norm: f32,
+    kd_pi: Rgb,
+    /// Whether the light is one-sided, and its normal.
+    facing: bool,
+    nl: Vec3,
+}
+
 impl Model for Physical {
+    type Terms = PhysicalTerms;
+
     #[inline(always)]
-    fn contribute(plan: &LightPlan, lobe: &Lobe, dirs: &Directions, spec: &[f32], out: Lanes) {
-        let n = out.r.len();
-        let (w, kd, ks, norm) = (plan.weight, lobe.kd, lobe.ks, lobe.specular_norm);
-        let (cos, spec, d2) = (&dirs.cos[..n], &spec[..n], &dirs.d2[..n]);
-        let (lx, ly, lz) = (&dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
-        let (r, g, b, blocked) = (
-            out.r,
-            &mut out.g[..n],
-            &mut out.b[..n],
-            &mut out.blocked[..n],
-        );
+    fn terms(plan: &LightPlan, lobe: &Lobe) -> PhysicalTerms {
         // One-sided area lights: the emitter's cosine; point lights: none (1, always lit).
         let (facing, nl) = match plan.facing {
             Some(nl) => (true, nl),
             None => (false, Vec3::ZERO),
         };
-        let kd_pi = kd * (1.0 / PI);
-        for i in 0..n {
-            let (c, s) = (cos[i], spec[i]);
-            // e = weight·(cos_light / d²), or weight / d² for a point light.
-            let cos_light = -(nl.x * lx[i] + nl.y * ly[i] + nl.z * lz[i]);
-            let q = cos_light / d2[i];
-            let (ex, ey, ez) = if facing {
-                (w.x * q, w.y * q, w.z * q)
-            } else {
-                (w.x / d2[i], w.y / d2[i], w.z / d2[i])
-            };
-            let sn = norm * s;
-            r[i] = ex * ((kd_pi.x + ks.x * sn) * c);
-            g[i] = ey * ((kd_pi.y + ks.y * sn) * c);
-            b[i] = ez * ((kd_pi.z + ks.z * sn) * c);
-            let emits = !facing | (cos_light > 0.0);
-            let dark = (ex == 0.0) & (ey == 0.0) & (ez == 0.0);
-            // NaN cosines (a sample on the shaded point) count as no light.
-            let lit = c > 0.0;
-            blocked[i] = !lit | !emits | dark;
+        PhysicalTerms {
+            w: plan.weight,
+            ks: lobe.ks,
+            norm: lobe.specular_norm,
+            kd_pi: lobe.kd * (1.0 / PI),
+            facing,
+            nl,
         }
+    }
+
+    #[inline(always)]
+    fn sample(t: &PhysicalTerms, l: Vec3, d2: f32, c: f32, s: f32) -> (Rgb, bool) {
+        let PhysicalTerms {
+            w,
+            ks,
+            norm,
+            kd_pi,
+            facing,
+            nl,
+        } = *t;
+        // e = weight·(cos_light / d²), or weight / d² for a point light.
+        let cos_light = -(nl.x * l.x + nl.y * l.y + nl.z * l.z);
+        let q = cos_light / d2;
+        let (ex, ey, ez) = if facing {
+            (w.x * q, w.y * q, w.z * q)
+        } else {
+            (w.x / d2, w.y / d2, w.z / d2)
+        };
+        let sn = norm * s;
+        let e = Vec3::new(
+            ex * ((kd_pi.x + ks.x * sn) * c),
+            ey * ((kd_pi.y + ks.y * sn) * c),
+            ez * ((kd_pi.z + ks.z * sn) * c),
+        );
+        let emits = !facing | (cos_light > 0.0);
+        let dark = (ex == 0.0) & (ey == 0.0) & (ez == 0.0);
+        // NaN cosines (a sample on the shaded point) count as no light.
+        let lit = c > 0.0;
+        (e, !lit | !emits | dark)
     }
 
     #[inline(always)]

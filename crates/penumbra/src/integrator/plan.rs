@@ -76,9 +76,8 @@ pub(super) struct Directions {
 }
 
 impl Directions {
-    /// The directions from `x` to every point of `points`, and their cosines with `n`. The
-    /// lanes are independent, so the loop vectorizes; each lane computes exactly what
-    /// `to = y − x; d2 = to·to; l = to / √d2; cos = n·l` does with glam's scalar `Vec3`.
+    /// The directions from `x` to every point of `points`, and their cosines with `n`
+    /// ([`toward`] each). The lanes are independent, so the loop vectorizes.
     #[inline(always)]
     pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
         let count = points.len();
@@ -99,17 +98,23 @@ impl Directions {
         );
         let (d2s, coss) = (&mut self.d2[..count], &mut self.cos[..count]);
         for i in 0..count {
-            let (tx, ty, tz) = (px[i] - x.x, py[i] - x.y, pz[i] - x.z);
-            let d2 = tx * tx + ty * ty + tz * tz;
-            let s = d2.sqrt();
-            let (ux, uy, uz) = (tx / s, ty / s, tz / s);
-            lx[i] = ux;
-            ly[i] = uy;
-            lz[i] = uz;
-            d2s[i] = d2;
-            coss[i] = n.x * ux + n.y * uy + n.z * uz;
+            let (l, d2, cos) = toward(x, n, [px[i], py[i], pz[i]]);
+            (lx[i], ly[i], lz[i]) = (l.x, l.y, l.z);
+            (d2s[i], coss[i]) = (d2, cos);
         }
     }
+}
+
+/// The unit direction from `x` toward `y`, the squared distance and the cosine with `n`:
+/// exactly what `to = y − x; d2 = to·to; l = to / √d2; cos = n·l` gives with glam's scalar
+/// `Vec3`, written by coordinate so that loops over many points vectorize.
+#[inline(always)]
+pub(super) fn toward(x: Vec3, n: Vec3, y: [f32; 3]) -> (Vec3, f32, f32) {
+    let (tx, ty, tz) = (y[0] - x.x, y[1] - x.y, y[2] - x.z);
+    let d2 = tx * tx + ty * ty + tz * tz;
+    let s = d2.sqrt();
+    let (ux, uy, uz) = (tx / s, ty / s, tz / s);
+    (Vec3::new(ux, uy, uz), d2, n.x * ux + n.y * uy + n.z * uz)
 }
 
 /// How `light` is sampled and weighted in a render with `settings`.
