@@ -178,10 +178,7 @@ impl Bundle {
         ends: &FixedEnds,
     ) {
         // Samples behind the surface wait for the second pass, from the other side.
-        self.blocked.clear();
-        self.blocked
-            .extend(dark.iter().zip(behind).map(|(&d, &h)| d | h));
-        let any_behind = dark.iter().zip(behind).any(|(&d, &h)| !d & h);
+        let any_behind = masks(&mut self.blocked, dark, behind, false);
         let side = |origins: &mut [Vec<f32>; 3], at: fn(&Point) -> glam::Vec3| {
             for (a, axis) in origins.iter_mut().enumerate() {
                 axis.clear();
@@ -194,14 +191,12 @@ impl Bundle {
             return;
         }
         side(&mut self.end, |p| p.back);
-        self.back.clear();
-        self.back
-            .extend(dark.iter().zip(behind).map(|(&d, &h)| d | !h));
+        masks(&mut self.back, dark, behind, true);
         occlude_runs(integrator, &self.end, ends, &mut self.back);
-        for ((b, &back), &h) in self.blocked.iter_mut().zip(&self.back).zip(behind) {
-            if h {
-                *b = back;
-            }
+        let n = dark.len();
+        let (blocked, back, behind) = (&mut self.blocked[..n], &self.back[..n], &behind[..n]);
+        for i in 0..n {
+            blocked[i] = if behind[i] { back[i] } else { blocked[i] };
         }
     }
 
@@ -250,15 +245,38 @@ impl Bundle {
     }
 }
 
+/// Sets `mask` to the slots one side's shadow rays skip: those of samples that cannot
+/// contribute, or that lie on the other side (behind the surface, or in front of it when
+/// `back`). Returns whether any slot is left to the back side. Indexed loops over slices of
+/// one length, so that they vectorize.
+#[allow(clippy::needless_range_loop)]
+fn masks(mask: &mut Vec<bool>, dark: &[bool], behind: &[bool], back: bool) -> bool {
+    let n = dark.len();
+    mask.resize(n, true);
+    let (mask, behind) = (&mut mask[..n], &behind[..n]);
+    let mut any_behind = false;
+    for i in 0..n {
+        mask[i] = dark[i] | (behind[i] != back);
+        any_behind |= !dark[i] & behind[i];
+    }
+    any_behind
+}
+
 /// Point `i`'s gathered sample `j` (whether it cannot contribute, whether it lies behind the
 /// surface) in slot `j · points.len() + i` of `dark` and `behind`.
 fn transpose(points: &[Scratch], dark: &mut Vec<bool>, behind: &mut Vec<bool>) {
     let (count, samples) = (points.len(), points.first().map_or(0, |p| p.blocked.len()));
     dark.resize(samples * count, true);
     behind.resize(samples * count, false);
-    for (i, point) in points.iter().enumerate() {
-        for (j, (&d, &h)) in point.blocked.iter().zip(&point.behind).enumerate() {
-            (dark[j * count + i], behind[j * count + i]) = (d, h);
+    if count == 0 {
+        return;
+    }
+    let rows = dark
+        .chunks_exact_mut(count)
+        .zip(behind.chunks_exact_mut(count));
+    for (j, (dark, behind)) in rows.enumerate() {
+        for (i, point) in points.iter().enumerate() {
+            (dark[i], behind[i]) = (point.blocked[j], point.behind[j]);
         }
     }
 }
