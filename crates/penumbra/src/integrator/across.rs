@@ -16,7 +16,9 @@ use super::model::{Model, Physical, Seed};
 use super::plan::{toward, Source};
 use super::{Integrator, LightModel, Point, Seen};
 use crate::geometry::Surface;
-use crate::math::{Ray, Rgb};
+use glam::Vec3;
+
+use crate::math::Rgb;
 
 /// Lights with fewer samples than this on average gather across points. Gathering point by
 /// point runs each light's loop over its samples as vectors, which pays once a light has a
@@ -50,13 +52,18 @@ pub(super) struct Across {
 
 impl Across {
     /// Gathers every sample of `integrator`'s lights (all fixed) at the surfaces hit by
-    /// `rays`: each point's ambient term and shadow-ray origins in `points`, its samples'
+    /// camera rays along `directions`: each point's ambient term and shadow-ray origins in `points`, its samples'
     /// terms in the slots.
-    pub(super) fn gather(&mut self, integrator: &Integrator, rays: &[Ray], surfaces: &[Surface]) {
+    pub(super) fn gather(
+        &mut self,
+        integrator: &Integrator,
+        directions: &[Vec3],
+        surfaces: &[Surface],
+    ) {
         self.seen.clear();
         self.points.clear();
-        for (ray, surface) in rays.iter().zip(surfaces) {
-            let (seen, point) = integrator.look(ray, surface);
+        for (&direction, surface) in directions.iter().zip(surfaces) {
+            let (seen, point) = integrator.look(direction, surface);
             self.seen.push(seen);
             self.points.push(point);
         }

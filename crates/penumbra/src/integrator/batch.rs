@@ -21,11 +21,13 @@
 //! answer as [`crate::accel::Bvh::occluded`] would), and each point's light is summed in light
 //! and sample order: the image does not depend on how the rays were grouped.
 
+use glam::Vec3;
+
 use super::across::Across;
 use super::{FixedEnds, Integrator, Point, Scratch, SHADOW_T_MAX};
 use crate::accel::{Pairs, Segments};
 use crate::geometry::Surface;
-use crate::math::{Ray, Rgb};
+use crate::math::Rgb;
 use crate::sampling::Rng;
 use crate::simd::{dispatch, Isa, Kernel};
 
@@ -84,7 +86,8 @@ struct Bundle {
 /// [`Integrator::shade_batch`] as a [`Kernel`], to be compiled per instruction set.
 struct ShadeBatch<'a, 'w> {
     integrator: &'a Integrator<'w>,
-    rays: &'a [Ray],
+    /// The camera rays' directions.
+    directions: &'a [Vec3],
     surfaces: &'a [Surface],
     rngs: &'a mut [Rng],
     scratch: &'a mut BatchScratch,
@@ -98,13 +101,13 @@ impl Kernel for ShadeBatch<'_, '_> {
     fn run<const N: usize, I: Isa>(self) {
         let ShadeBatch {
             integrator,
-            rays,
+            directions,
             surfaces,
             rngs,
             scratch,
             out,
         } = self;
-        let count = rays.len();
+        let count = directions.len();
         let BatchScratch {
             points,
             prepared,
@@ -112,7 +115,7 @@ impl Kernel for ShadeBatch<'_, '_> {
             bundle,
         } = scratch;
         if let (true, Some(ends)) = (integrator.across, &integrator.fixed_ends) {
-            across.gather(integrator, rays, surfaces);
+            across.gather(integrator, directions, surfaces);
             let masks = (&across.dark[..], &across.behind[..]);
             bundle.pairs(integrator, &across.points, masks, ends);
             out.extend(
@@ -126,7 +129,8 @@ impl Kernel for ShadeBatch<'_, '_> {
         let points = &mut points[..count];
         prepared.clear();
         for (i, point) in points.iter_mut().enumerate() {
-            prepared.push(integrator.prepare(&rays[i], &surfaces[i], &mut rngs[i], point));
+            let (d, surface) = (directions[i], &surfaces[i]);
+            prepared.push(integrator.prepare(d, surface, &mut rngs[i], point));
         }
         // Every point has the same lights, hence as many samples.
         let samples = points.first().map_or(0, |p| p.blocked.len());
@@ -309,16 +313,16 @@ impl Integrator<'_> {
     /// adjacent pixels) make it faster.
     pub(crate) fn shade_batch(
         &self,
-        rays: &[Ray],
+        directions: &[Vec3],
         surfaces: &[Surface],
         rngs: &mut [Rng],
         scratch: &mut BatchScratch,
         out: &mut Vec<(Rgb, u64)>,
     ) {
-        assert!(rays.len() == surfaces.len() && rays.len() == rngs.len());
+        assert!(directions.len() == surfaces.len() && directions.len() == rngs.len());
         let kernel = ShadeBatch {
             integrator: self,
-            rays,
+            directions,
             surfaces,
             rngs,
             scratch,
@@ -330,14 +334,12 @@ impl Integrator<'_> {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
     use super::*;
     use crate::geometry::{sphere, Mesh};
     use crate::integrator::{LightModel, Shading, ShadingSettings};
     use crate::light::{AreaLight, Light, PointLight};
     use crate::material::Material;
-    use crate::math::Transform;
+    use crate::math::{Ray, Transform};
     use crate::world::{World, WorldBuilder};
 
     /// A floor under a sphere, both shiny, an area light (`jitter`ed or not), a point light and
@@ -421,8 +423,10 @@ mod tests {
             .filter_map(|r| world.intersect(r, 1e-4, f32::INFINITY).map(|h| (*r, h)))
             .collect();
         assert!(hits.len() > 30, "{} hits", hits.len());
-        let (rays, surfaces): (Vec<Ray>, Vec<Surface>) =
-            hits.iter().map(|(r, h)| (*r, world.surface(h))).unzip();
+        let (rays, surfaces): (Vec<Vec3>, Vec<Surface>) = hits
+            .iter()
+            .map(|(r, h)| (r.direction, world.surface(h)))
+            .unzip();
         for light_model in [LightModel::Phong, LightModel::Physical] {
             let settings = ShadingSettings {
                 shading: Shading::Phong,

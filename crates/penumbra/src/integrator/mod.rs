@@ -21,7 +21,7 @@ use glam::Vec3;
 
 use crate::accel::SHAFT_MIN_ENDS;
 use crate::geometry::Surface;
-use crate::math::{Ray, Rgb};
+use crate::math::Rgb;
 use crate::sampling::Rng;
 use crate::simd::{simd_path, SimdPath};
 use crate::world::World;
@@ -204,12 +204,18 @@ impl<'w> Integrator<'w> {
         }
     }
 
-    /// Everything of shading a point but its shadow rays: the light samples gathered
-    /// in `scratch` (those that cannot contribute already blocked), the origins of the shadow
-    /// rays and the ambient term.
+    /// Everything of shading a point seen along `direction` but its shadow rays: the light
+    /// samples gathered in `scratch` (those that cannot contribute already blocked), the
+    /// origins of the shadow rays and the ambient term.
     #[inline(always)]
-    fn prepare(&self, ray: &Ray, surface: &Surface, rng: &mut Rng, scratch: &mut Scratch) -> Point {
-        let (seen, mut point) = self.look(ray, surface);
+    fn prepare(
+        &self,
+        direction: Vec3,
+        surface: &Surface,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) -> Point {
+        let (seen, mut point) = self.look(direction, surface);
         match self.settings.light_model {
             LightModel::Phong => self.gather::<Seed>(&seen, rng, scratch),
             LightModel::Physical => self.gather::<Physical>(&seen, rng, scratch),
@@ -218,12 +224,12 @@ impl<'w> Integrator<'w> {
         point
     }
 
-    /// What shading a point needs of its surface and material, and the point's ambient term
-    /// and shadow-ray origins (no shadow rays counted yet).
+    /// What shading a point seen along `direction` needs of its surface and material, and the
+    /// point's ambient term and shadow-ray origins (no shadow rays counted yet).
     #[inline(always)]
-    fn look(&self, ray: &Ray, surface: &Surface) -> (Seen, Point) {
+    fn look(&self, direction: Vec3, surface: &Surface) -> (Seen, Point) {
         let world = self.world;
-        let (n_geom, n) = surface.facing(ray.direction);
+        let (n_geom, n) = surface.facing(direction);
         let material = &world.materials()[surface.material as usize];
         let tex = match material.texture {
             Some(t) => world.textures()[t as usize].eval(surface.uv),
@@ -235,7 +241,7 @@ impl<'w> Integrator<'w> {
         let p = material.shininess;
         let lobe = Lobe {
             n,
-            view: -ray.direction.normalize(),
+            view: -direction.normalize(),
             kd: tex * material.diffuse,
             ks: material.specular,
             p,

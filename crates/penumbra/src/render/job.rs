@@ -13,7 +13,7 @@ use crate::geometry::Hit;
 use crate::geometry::Surface;
 use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
 use crate::light::{EnvironmentLight, Light};
-use crate::math::{Ray, Rgb};
+use crate::math::Rgb;
 use crate::sampling::{jittered_offset, Rng};
 use crate::world::World;
 
@@ -58,8 +58,9 @@ pub(super) struct Buffers {
     dirs: Vec<Vec3>,
     rngs: Vec<Rng>,
     hits: Vec<Option<Hit>>,
-    /// The rays that hit, their surfaces and generators, and what shading them gave.
-    rays: Vec<Ray>,
+    /// The directions of the rays that hit, their surfaces and generators, and what shading
+    /// them gave.
+    hit_dirs: Vec<Vec3>,
     surfaces: Vec<Surface>,
     hit_rngs: Vec<Rng>,
     shaded: Vec<(Rgb, u64)>,
@@ -123,7 +124,7 @@ impl Job<'_> {
             dirs,
             rngs,
             hits,
-            rays,
+            hit_dirs,
             surfaces,
             hit_rngs,
             shaded,
@@ -151,12 +152,12 @@ impl Job<'_> {
             .accel()
             .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
 
-        rays.clear();
+        hit_dirs.clear();
         surfaces.clear();
         hit_rngs.clear();
         for ((hit, &dir), rng) in hits.iter().zip(dirs.iter()).zip(rngs.iter()) {
             if let Some(hit) = hit {
-                rays.push(Ray::new(eye, dir));
+                hit_dirs.push(dir);
                 surfaces.push(self.world.surface(hit));
                 hit_rngs.push(rng.clone());
             }
@@ -165,13 +166,13 @@ impl Job<'_> {
         // cancelled render stops before the next few points are shaded, within milliseconds.
         shaded.clear();
         let step = self.integrator.batch_points();
-        for start in (0..rays.len()).step_by(step) {
+        for start in (0..hit_dirs.len()).step_by(step) {
             if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 return None;
             }
-            let end = (start + step).min(rays.len());
+            let end = (start + step).min(hit_dirs.len());
             self.integrator.shade_batch(
-                &rays[start..end],
+                &hit_dirs[start..end],
                 &surfaces[start..end],
                 &mut hit_rngs[start..end],
                 scratch,
