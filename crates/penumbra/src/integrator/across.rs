@@ -13,7 +13,7 @@
 //! not depend on which way the samples were gathered.
 
 use super::model::{Model, Physical, Seed};
-use super::plan::{toward, Source};
+use super::plan::{toward, Directions, Source};
 use super::{Integrator, LightModel, Point, Seen};
 use crate::geometry::Surface;
 use glam::Vec3;
@@ -48,12 +48,25 @@ pub(super) struct Across {
     pub(super) dark: Vec<bool>,
     /// Whether a sample lies behind the surface: its shadow ray leaves from the other side.
     pub(super) behind: Vec<bool>,
+    /// Each point's position, shading normal and geometric normal, by axis, and the
+    /// directions from every point toward one sample.
+    frames: Frames,
+    row: Directions,
+}
+
+/// Points' positions, shading normals and geometric normals, by axis.
+#[derive(Default)]
+struct Frames {
+    x: [Vec<f32>; 3],
+    n: [Vec<f32>; 3],
+    n_geom: [Vec<f32>; 3],
 }
 
 impl Across {
     /// Gathers every sample of `integrator`'s lights (all fixed) at the surfaces hit by
-    /// camera rays along `directions`: each point's ambient term and shadow-ray origins in `points`, its samples'
-    /// terms in the slots.
+    /// camera rays along `directions`: each point's ambient term and shadow-ray origins in
+    /// `points`, its samples' terms in the slots.
+    #[inline(always)]
     pub(super) fn gather(
         &mut self,
         integrator: &Integrator,
@@ -66,6 +79,17 @@ impl Across {
             let (seen, point) = integrator.look(direction, surface);
             self.seen.push(seen);
             self.points.push(point);
+        }
+        let frames = &mut self.frames;
+        for a in 0..3 {
+            let seen = &self.seen;
+            let axis = |v: &mut Vec<f32>, of: fn(&Seen) -> Vec3| {
+                v.clear();
+                v.extend(seen.iter().map(|s| of(s)[a]));
+            };
+            axis(&mut frames.x[a], |s| s.x);
+            axis(&mut frames.n[a], |s| s.lobe.n);
+            axis(&mut frames.n_geom[a], |s| s.n_geom);
         }
         match integrator.settings.light_model {
             LightModel::Phong => self.samples::<Seed>(integrator),
@@ -84,6 +108,7 @@ impl Across {
     }
 
     /// The slots of every sample, light by light.
+    #[inline(always)]
     fn samples<M: Model>(&mut self, integrator: &Integrator) {
         let count = self.seen.len();
         let slots = integrator.samples as usize * count;
@@ -106,9 +131,12 @@ impl Across {
                     &mut self.b[row.clone()],
                 );
                 let (dark, behind) = (&mut self.dark[row.clone()], &mut self.behind[row]);
+                self.frames.toward(y, &mut self.row, behind);
+                let dirs = &self.row;
                 for (i, seen) in self.seen.iter().enumerate() {
                     let lobe = &seen.lobe;
-                    let (l, d2, cos) = toward(seen.x, lobe.n, y);
+                    let l = Vec3::new(dirs.lx[i], dirs.ly[i], dirs.lz[i]);
+                    let (d2, cos) = (dirs.d2[i], dirs.cos[i]);
                     // powf only where the sample can contribute.
                     let spec = if cos > 0.0 {
                         lobe.specular(l, cos)
@@ -117,8 +145,6 @@ impl Across {
                     };
                     let (e, off) = M::sample(&M::terms(plan, lobe), l, d2, cos, spec);
                     (r[i], g[i], b[i], dark[i]) = (e.x, e.y, e.z, off);
-                    let n = seen.n_geom;
-                    behind[i] = n.x * l.x + n.y * l.y + n.z * l.z < 0.0;
                 }
                 slot += count;
             }
@@ -127,6 +153,7 @@ impl Across {
 
     /// Point `i`'s ambient term plus every sample's light that `blocked` (by slot) lets
     /// through, in light and sample order.
+    #[inline(always)]
     pub(super) fn radiance(&self, i: usize, blocked: &[bool]) -> Rgb {
         let count = self.points.len();
         let mut radiance = self.points[i].ambient;
@@ -136,5 +163,32 @@ impl Across {
             }
         }
         radiance
+    }
+}
+
+impl Frames {
+    /// The directions from every point toward `y` ([`toward`] each) in `dirs`, and whether
+    /// `y` lies behind each point's surface in `behind`: one loop over the points' lanes,
+    /// which vectorizes (the square roots and divisions of many points at once).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn toward(&self, y: [f32; 3], dirs: &mut Directions, behind: &mut [bool]) {
+        let count = behind.len();
+        dirs.resize(count);
+        let [x0, x1, x2] = self.x.each_ref().map(|v| &v[..count]);
+        let [n0, n1, n2] = self.n.each_ref().map(|v| &v[..count]);
+        let [g0, g1, g2] = self.n_geom.each_ref().map(|v| &v[..count]);
+        let (lx, ly, lz) = (
+            &mut dirs.lx[..count],
+            &mut dirs.ly[..count],
+            &mut dirs.lz[..count],
+        );
+        let (d2s, coss) = (&mut dirs.d2[..count], &mut dirs.cos[..count]);
+        for i in 0..count {
+            let x = Vec3::new(x0[i], x1[i], x2[i]);
+            let (l, d2, cos) = toward(x, Vec3::new(n0[i], n1[i], n2[i]), y);
+            (lx[i], ly[i], lz[i], d2s[i], coss[i]) = (l.x, l.y, l.z, d2, cos);
+            behind[i] = g0[i] * l.x + g1[i] * l.y + g2[i] * l.z < 0.0;
+        }
     }
 }

@@ -76,11 +76,8 @@ pub(super) struct Directions {
 }
 
 impl Directions {
-    /// The directions from `x` to every point of `points`, and their cosines with `n`
-    /// ([`toward`] each). The lanes are independent, so the loop vectorizes.
-    #[inline(always)]
-    pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
-        let count = points.len();
+    /// Sets every field to `count` lanes.
+    pub(super) fn resize(&mut self, count: usize) {
         for v in [
             &mut self.lx,
             &mut self.ly,
@@ -90,6 +87,14 @@ impl Directions {
         ] {
             v.resize(count, 0.0);
         }
+    }
+
+    /// The directions from `x` to every point of `points`, and their cosines with `n`
+    /// ([`toward`] each). The lanes are independent, so the loop vectorizes.
+    #[inline(always)]
+    pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
+        let count = points.len();
+        self.resize(count);
         let (px, py, pz) = (&points.x[..count], &points.y[..count], &points.z[..count]);
         let (lx, ly, lz) = (
             &mut self.lx[..count],
