@@ -268,6 +268,7 @@ fn masks(mask: &mut Vec<bool>, dark: &[bool], behind: &[bool], back: bool) -> bo
 
 /// Point `i`'s gathered sample `j` (whether it cannot contribute, whether it lies behind the
 /// surface) in slot `j · points.len() + i` of `dark` and `behind`.
+#[inline(always)]
 fn transpose(points: &[Scratch], dark: &mut Vec<bool>, behind: &mut Vec<bool>) {
     let (count, samples) = (points.len(), points.first().map_or(0, |p| p.blocked.len()));
     dark.resize(samples * count, true);
