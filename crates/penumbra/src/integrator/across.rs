@@ -174,16 +174,10 @@ impl Frames {
     #[inline(always)]
     fn toward(&self, y: [f32; 3], dirs: &mut Directions, behind: &mut [bool]) {
         let count = behind.len();
-        dirs.resize(count);
+        let [lx, ly, lz, d2s, coss] = dirs.lanes(count);
         let [x0, x1, x2] = self.x.each_ref().map(|v| &v[..count]);
         let [n0, n1, n2] = self.n.each_ref().map(|v| &v[..count]);
         let [g0, g1, g2] = self.n_geom.each_ref().map(|v| &v[..count]);
-        let (lx, ly, lz) = (
-            &mut dirs.lx[..count],
-            &mut dirs.ly[..count],
-            &mut dirs.lz[..count],
-        );
-        let (d2s, coss) = (&mut dirs.d2[..count], &mut dirs.cos[..count]);
         for i in 0..count {
             let x = Vec3::new(x0[i], x1[i], x2[i]);
             let (l, d2, cos) = toward(x, Vec3::new(n0[i], n1[i], n2[i]), y);

@@ -76,17 +76,19 @@ pub(super) struct Directions {
 }
 
 impl Directions {
-    /// Sets every field to `count` lanes.
-    pub(super) fn resize(&mut self, count: usize) {
-        for v in [
+    /// Every field set to `count` lanes, as slices: `[lx, ly, lz, d2, cos]`.
+    pub(super) fn lanes(&mut self, count: usize) -> [&mut [f32]; 5] {
+        let fields = [
             &mut self.lx,
             &mut self.ly,
             &mut self.lz,
             &mut self.d2,
             &mut self.cos,
-        ] {
+        ];
+        fields.map(|v| {
             v.resize(count, 0.0);
-        }
+            &mut v[..]
+        })
     }
 
     /// The directions from `x` to every point of `points`, and their cosines with `n`
@@ -94,14 +96,8 @@ impl Directions {
     #[inline(always)]
     pub(super) fn compute(&mut self, x: Vec3, n: Vec3, points: &Points) {
         let count = points.len();
-        self.resize(count);
+        let [lx, ly, lz, d2s, coss] = self.lanes(count);
         let (px, py, pz) = (&points.x[..count], &points.y[..count], &points.z[..count]);
-        let (lx, ly, lz) = (
-            &mut self.lx[..count],
-            &mut self.ly[..count],
-            &mut self.lz[..count],
-        );
-        let (d2s, coss) = (&mut self.d2[..count], &mut self.cos[..count]);
         for i in 0..count {
             let (l, d2, cos) = toward(x, n, [px[i], py[i], pz[i]]);
             (lx[i], ly[i], lz[i]) = (l.x, l.y, l.z);
