@@ -15,11 +15,9 @@ mod model;
 mod plan;
 
 use std::f32::consts::PI;
-use std::ops::Range;
 
 use glam::Vec3;
 
-use crate::accel::SHAFT_MIN_ENDS;
 use crate::geometry::Surface;
 use crate::math::Rgb;
 use crate::sampling::Rng;
@@ -27,7 +25,7 @@ use crate::simd::{simd_path, SimdPath};
 use crate::world::World;
 pub(crate) use batch::BatchScratch;
 use model::{Lanes, Lobe, Model, Physical, Seed};
-use plan::{plan, Directions, LightPlan, Points, Source};
+use plan::{fixed_ends, plan, Directions, FixedEnds, LightPlan, Points, Source};
 
 /// The specular lobe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
@@ -401,38 +399,4 @@ impl<'w> Integrator<'w> {
             s.blocked[i] = if s.behind[i] { s.back[i] } else { s.front[i] };
         }
     }
-}
-
-/// Every light sample of a render whose points all have the same ones.
-struct FixedEnds {
-    /// The samples by axis, in light and sample order.
-    axes: [Vec<f32>; 3],
-    /// The runs of samples whose shadow rays are traced together (indices into `axes`): a
-    /// light with enough samples for a shaft of its own ([`SHAFT_MIN_ENDS`]) alone, lights
-    /// with fewer together, in runs too short for a shaft. A shaft around one light is far
-    /// narrower than one around several, so it holds few triangles more often.
-    runs: Vec<Range<usize>>,
-}
-
-/// Every sample of `lights`, if none is jittered.
-fn fixed_ends(lights: &[LightPlan]) -> Option<FixedEnds> {
-    let mut ends = FixedEnds {
-        axes: Default::default(),
-        runs: Vec::with_capacity(lights.len()),
-    };
-    for light in lights {
-        let Source::Fixed(points) = &light.source else {
-            return None;
-        };
-        let (start, n) = (ends.axes[0].len(), points.len());
-        for (axis, from) in ends.axes.iter_mut().zip([&points.x, &points.y, &points.z]) {
-            axis.extend_from_slice(from);
-        }
-        let end = start + n;
-        match ends.runs.last_mut() {
-            Some(run) if n < SHAFT_MIN_ENDS && run.len() + n < SHAFT_MIN_ENDS => run.end = end,
-            _ => ends.runs.push(start..end),
-        }
-    }
-    Some(ends)
 }

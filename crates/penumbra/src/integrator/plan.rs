@@ -2,9 +2,12 @@
 //! sample points, fixed grids computed once per render, stored by coordinate so that the
 //! per-sample directions of a shading point are computed many lanes at a time.
 
+use std::ops::Range;
+
 use glam::Vec3;
 
 use super::ShadingSettings;
+use crate::accel::SHAFT_MIN_ENDS;
 use crate::light::{AreaLight, DirectionalLight, EnvironmentLight, Light, SpotLight};
 use crate::math::Rgb;
 use crate::sampling::Rng;
@@ -200,5 +203,95 @@ pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) ->
                 physical,
             },
         },
+    }
+}
+
+/// Every light sample of a render whose points all have the same ones.
+pub(super) struct FixedEnds {
+    /// The samples by axis, in light and sample order.
+    pub(super) axes: [Vec<f32>; 3],
+    /// The runs of samples whose shadow rays are traced together (indices into `axes`): a
+    /// light with enough samples for a shaft of its own ([`SHAFT_MIN_ENDS`]) alone, lights
+    /// with fewer together, in runs too short for a shaft. A shaft around one light is far
+    /// narrower than one around several, so it holds few triangles more often.
+    pub(super) runs: Vec<Range<usize>>,
+}
+
+/// Every sample of `lights`, if none is jittered.
+pub(super) fn fixed_ends(lights: &[LightPlan]) -> Option<FixedEnds> {
+    let mut ends = FixedEnds {
+        axes: Default::default(),
+        runs: Vec::with_capacity(lights.len()),
+    };
+    for light in lights {
+        let Source::Fixed(points) = &light.source else {
+            return None;
+        };
+        let (start, n) = (ends.axes[0].len(), points.len());
+        for (axis, from) in ends.axes.iter_mut().zip([&points.x, &points.y, &points.z]) {
+            axis.extend_from_slice(from);
+        }
+        let end = start + n;
+        match ends.runs.last_mut() {
+            Some(run) if n < SHAFT_MIN_ENDS && run.len() + n < SHAFT_MIN_ENDS => run.end = end,
+            _ => ends.runs.push(start..end),
+        }
+    }
+    Some(ends)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::{LightModel, Shading};
+    use crate::light::PointLight;
+
+    /// A point light, or a fixed `n`×`n` grid.
+    fn light(n: u32) -> Light {
+        match n {
+            0 => Light::Point(PointLight {
+                position: Vec3::Y,
+                intensity: Vec3::ONE,
+            }),
+            _ => Light::Area(AreaLight {
+                center: Vec3::Y,
+                u: Vec3::X,
+                v: Vec3::Z,
+                radiance: Vec3::ONE,
+                n,
+                jitter: false,
+            }),
+        }
+    }
+
+    #[test]
+    fn lights_with_a_shaft_of_their_own_are_traced_apart_and_the_others_together() {
+        let settings = ShadingSettings {
+            shading: Shading::Phong,
+            light_model: LightModel::Phong,
+            ambient: Vec3::ZERO,
+            light_samples: None,
+        };
+        let runs = |grids: &[u32]| {
+            let plans: Vec<_> = grids
+                .iter()
+                .map(|&n| plan(&light(n), &settings, false))
+                .collect();
+            fixed_ends(&plans).unwrap().runs
+        };
+        assert_eq!(runs(&[0, 0, 0]), vec![(0..3)]);
+        assert_eq!(runs(&[5]), vec![(0..25)]);
+        // A point, a 4×4 grid (a shaft), a point and a 3×3 grid together, then a 3×3 grid
+        // that would make that run 19 long.
+        assert_eq!(runs(&[0, 4, 0, 3, 3]), [0..1, 1..17, 17..27, 27..36]);
+        // Jittered lights have no fixed samples.
+        let Light::Area(grid) = light(2) else {
+            unreachable!()
+        };
+        let jittered = Light::Area(AreaLight {
+            jitter: true,
+            ..grid
+        });
+        assert!(fixed_ends(&[plan(&jittered, &settings, false)]).is_none());
     }
 }
