@@ -4,20 +4,21 @@
 //! Gathering point by point (`Integrator::gather`) runs one short loop per light at each
 //! point: with a few point lights those loops hold one sample each, and a point's shading
 //! becomes a chain of dependent square roots and divisions with bookkeeping between them.
-//! Across the points, every sample's loop runs over the batch's independent points, whose
-//! chains overlap, and the answers land where the bundled shadow rays read and write them:
-//! slot `j · points + i` is point `i`'s sample `j`.
+//! Across the points, the directions to each sample are one vector loop over the batch's
+//! points (kept by axis), the rest of each sample's terms a loop whose points' chains
+//! overlap, and the answers land where the bundled shadow rays read and write them: slot
+//! `j · points + i` is point `i`'s sample `j`.
 //!
 //! Each slot holds exactly what gathering at its point gives (the same functions,
 //! [`toward`], `Lobe::specular` and [`Model::sample`], on the same values), so the image does
 //! not depend on which way the samples were gathered.
 
+use glam::Vec3;
+
 use super::model::{Model, Physical, Seed};
 use super::plan::{toward, Directions, Source};
 use super::{Integrator, LightModel, Point, Seen};
 use crate::geometry::Surface;
-use glam::Vec3;
-
 use crate::math::Rgb;
 
 /// Lights with fewer samples than this on average gather across points. Gathering point by
