@@ -157,13 +157,12 @@ impl Across {
     #[inline(always)]
     pub(super) fn radiance(&self, i: usize, blocked: &[bool]) -> Rgb {
         let count = self.points.len();
-        let mut radiance = self.points[i].ambient;
-        for slot in (i..blocked.len()).step_by(count) {
-            if !blocked[slot] {
-                radiance += Rgb::new(self.r[slot], self.g[slot], self.b[slot]);
-            }
-        }
-        radiance
+        let slots = blocked.len();
+        let (r, g, b) = (&self.r[..slots], &self.g[..slots], &self.b[..slots]);
+        self.points[i].sum(slots / count, |j| {
+            let slot = j * count + i;
+            (!blocked[slot]).then(|| Rgb::new(r[slot], g[slot], b[slot]))
+        })
     }
 }
 

@@ -129,10 +129,19 @@ impl Point {
     /// [`Point::radiance`] with sample `i` blocked when `blocked(i)`.
     #[inline(always)]
     fn radiance_where(&self, s: &Scratch, blocked: impl Fn(usize) -> bool) -> Rgb {
+        self.sum(s.r.len(), |i| {
+            (!blocked(i)).then(|| Vec3::new(s.r[i], s.g[i], s.b[i]))
+        })
+    }
+
+    /// The ambient term plus the light of each of `samples` samples that `light(j)` lets
+    /// through, in light and sample order: the one order every way of shading sums in.
+    #[inline(always)]
+    fn sum(&self, samples: usize, light: impl Fn(usize) -> Option<Rgb>) -> Rgb {
         let mut radiance = self.ambient;
-        for i in 0..s.r.len() {
-            if !blocked(i) {
-                radiance += Vec3::new(s.r[i], s.g[i], s.b[i]);
+        for j in 0..samples {
+            if let Some(e) = light(j) {
+                radiance += e;
             }
         }
         radiance
