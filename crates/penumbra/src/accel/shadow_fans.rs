@@ -8,10 +8,10 @@
 //! `segments`, whose lanes have origins of their own.
 //!
 //! Exactness: every lane runs the Möller–Trumbore test of `prim::moller_trumbore`, the scalar
-//! test's own functions, operation for operation (the same products, sums and comparisons in the same order, no
-//! fused multiply-add), so a lane is occluded exactly when [`Bvh::occluded`] says so. The box
-//! tests only prune: like the scalar slab test they are conservative on the padded boxes, so
-//! which boxes are visited does not change any answer.
+//! test's own functions, operation for operation (the same products, sums and comparisons in
+//! the same order, no fused multiply-add), and the slab test the scalar walk runs, and a lane
+//! meets the triangles of the leaves its own segment enters and no others ([`walk`]). So a
+//! lane is occluded exactly when [`Bvh::occluded`] says so, whatever the packet's width.
 
 use std::marker::PhantomData;
 
@@ -136,6 +136,13 @@ pub(super) trait ShadowLanes<const N: usize> {
 /// on the stack with the lanes that entered it. A lane leaves at its first occluder; the walk
 /// stops when no lane is left. With `PREFETCH` (deep trees), each visit starts loading what
 /// lies below the two children it tests.
+///
+/// Each node is visited with the lanes that entered it and every box above it, and a leaf's
+/// triangles are tested for those lanes only: a lane meets exactly the triangles that
+/// [`Bvh::occluded`] tests for its ray, whatever the other lanes of its packet. That matters
+/// for a segment lying in a triangle's plane, which Möller–Trumbore may report hit at a point
+/// far outside the triangle's box: a lane tested for every active lane would find that hit
+/// when a neighbour brought it into the leaf, and packets of 4, 8 or 16 lanes would disagree.
 #[inline(always)]
 pub(super) fn walk<const N: usize, const PREFETCH: bool>(
     bvh: &Bvh,
@@ -145,17 +152,22 @@ pub(super) fn walk<const N: usize, const PREFETCH: bool>(
     let mut stack = [(0u32, 0u32); STACK_SIZE];
     let mut sp = 0;
     let mut node = &bvh.nodes[0];
-    if rays.enter(node).0 & active == 0 {
+    // The lanes that entered `node` and every box above it.
+    let mut entered = rays.enter(node).0 & active;
+    if entered == 0 {
         return active;
     }
     'nodes: loop {
         if node.is_leaf() {
             let first = node.first as usize;
             for tri in &bvh.tris[first..first + node.count as usize] {
-                active &= !rays.blocks(tri, active);
-                if active == 0 {
-                    break 'nodes;
+                active &= !rays.blocks(tri, active & entered);
+                if active & entered == 0 {
+                    break;
                 }
+            }
+            if active == 0 {
+                break 'nodes;
             }
         } else {
             let (l, r) = (
@@ -167,23 +179,24 @@ pub(super) fn walk<const N: usize, const PREFETCH: bool>(
                 prefetch_below(bvh, r);
             }
             let ((ml, nl), (mr, nr)) = (rays.enter(l), rays.enter(r));
-            let (ml, mr) = (ml & active, mr & active);
+            let live = active & entered;
+            let (ml, mr) = (ml & live, mr & live);
             if ml != 0 && mr != 0 {
-                let lane = active.trailing_zeros() as usize;
-                let (near, far, far_mask) = if nl[lane] <= nr[lane] {
-                    (l, node.first + 1, mr)
+                let lane = live.trailing_zeros() as usize;
+                let (near, near_mask, far, far_mask) = if nl[lane] <= nr[lane] {
+                    (l, ml, node.first + 1, mr)
                 } else {
-                    (r, node.first, ml)
+                    (r, mr, node.first, ml)
                 };
                 stack[sp] = (far, far_mask);
                 sp += 1;
-                node = near;
+                (node, entered) = (near, near_mask);
                 continue;
             } else if ml != 0 {
-                node = l;
+                (node, entered) = (l, ml);
                 continue;
             } else if mr != 0 {
-                node = r;
+                (node, entered) = (r, mr);
                 continue;
             }
         }
@@ -195,7 +208,7 @@ pub(super) fn walk<const N: usize, const PREFETCH: bool>(
             sp -= 1;
             let (index, mask) = stack[sp];
             if mask & active != 0 {
-                node = &bvh.nodes[index as usize];
+                (node, entered) = (&bvh.nodes[index as usize], mask);
                 break;
             }
         }

@@ -11,10 +11,13 @@
 //! goes back to walking the tree packet by packet.
 //!
 //! Exactness: the gathering only prunes, with a margin far above the rounding of the
-//! projections. A packet tests every candidate with the same lane test as the walk, which
-//! itself tests a leaf's triangles for every live lane, entered or not: a lane is occluded
-//! exactly when some triangle's test says so, whichever triangles are tested besides the ones
-//! its segment passes through.
+//! projections. A packet tests every candidate for every pair with the same lane test as the
+//! walk, including candidates whose boxes a pair's segment misses. Testing such a triangle
+//! changes an answer only for a segment lying in its plane, which Möller–Trumbore may report
+//! hit far outside the triangle (`tests/verdict.rs`): there a shaft's answer may differ from
+//! the walk's. Whether a batch takes a shaft depends on the batch alone, never on the SIMD path
+//! or the thread count, and a shaft's tests do not depend on the packet width, so every path
+//! gives the same answers.
 
 use glam::Vec3;
 

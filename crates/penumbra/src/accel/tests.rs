@@ -12,6 +12,9 @@ use crate::simd::supported_paths;
 mod edges;
 mod props;
 mod reference;
+mod verdict;
+
+use verdict::Verdict;
 
 /// The `t_max` of shadow segments: short of the end point, so a surface there is not a blocker.
 const T_MAX: f32 = 1.0 - 1e-4;
@@ -150,29 +153,32 @@ fn segments<'a>(o: &'a [Vec<f32>; 3], e: &'a [Vec<f32>; 3]) -> Segments<'a> {
 
 /// `occluded_from` gives the brute-force occlusion of every segment, overwriting the mask;
 /// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
-/// blocks exactly the others that brute force finds occluded (packets of every fill, with
+/// blocks exactly the others that [`Bvh::occluded`] finds occluded (packets of every fill, with
 /// some lanes blocked from the start); so do `occlude_segments` on the same segments and on
 /// them reversed, and `occlude_pairs` from the origin to the ends and from the ends to a few
-/// points.
+/// points. [`Bvh::occluded`] itself agrees with brute force's [`Verdict`].
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
-    let expected: Vec<bool> = ends
-        .iter()
-        .map(|&end| {
-            let ray = Ray::new(origin, end - origin);
-            let occluded = occluded_brute_force(g, &ray, 0.0, t_max);
-            assert_eq!(occluded, bvh.occluded(&ray, 0.0, t_max));
-            occluded
-        })
-        .collect();
+    let occluded = |from: Vec3, to: Vec3| {
+        let ray = Ray::new(from, to - from);
+        let occluded = bvh.occluded(&ray, 0.0, t_max);
+        let verdict = Verdict::of(g, &ray, 0.0, t_max);
+        assert!(
+            verdict.admits(occluded),
+            "{ray:?}: {occluded}, brute force {verdict:?}"
+        );
+        (verdict, occluded)
+    };
+    let (verdicts, expected): (Vec<Verdict>, Vec<bool>) =
+        ends.iter().map(|&end| occluded(origin, end)).unzip();
     // The same segments reversed: origins of their own, one shared end.
-    let reversed: Vec<bool> = ends
-        .iter()
-        .map(|&end| occluded_brute_force(g, &Ray::new(end, origin - end), 0.0, t_max))
-        .collect();
+    let reversed: Vec<bool> = ends.iter().map(|&end| occluded(end, origin).1).collect();
     let shared = vec![origin; ends.len()];
     let mut mask: Vec<bool> = (0..ends.len()).map(|i| i % 2 == 0).collect();
     bvh.occluded_from(origin, ends, t_max, &mut mask);
-    assert_eq!(mask, expected, "occluded_from from {origin}");
+    let clear = vec![false; ends.len()];
+    assert_admitted(&mask, &clear, &verdicts, |i| {
+        format!("occluded_from, segment {i}")
+    });
     for path in supported_paths() {
         for pre_blocked in [0, 3, 7] {
             // Every `pre_blocked`-th segment starts blocked (none for 0).
@@ -202,8 +208,9 @@ fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t
     }
 }
 
-/// `occlude_pairs` on every SIMD path blocks exactly the segments from each of `origins` to
-/// each of `ends` that brute force finds occluded, and leaves blocked ones blocked.
+/// `occlude_pairs` on every SIMD path leaves blocked pairs blocked and blocks the others as
+/// [`Bvh::occluded`] does; with a shaft (from [`SHAFT_MIN_ENDS`] ends), which tests triangles
+/// whose boxes a segment misses, as brute force's [`Verdict`] allows, the same on every path.
 fn assert_pairs_agree(g: &Geometry, bvh: &Bvh, origins: &[Vec3], ends: &[Vec3], t_max: f32) {
     let (from, to) = (by_axis(origins), by_axis(ends));
     let pairs = Pairs {
@@ -211,15 +218,49 @@ fn assert_pairs_agree(g: &Geometry, bvh: &Bvh, origins: &[Vec3], ends: &[Vec3], 
         ends: to.each_ref().map(|axis| &axis[..]),
     };
     let m = origins.len();
-    for path in supported_paths() {
-        let start: Vec<bool> = (0..m * ends.len()).map(|k| k % 5 == 3).collect();
+    let pair = |k: usize| (origins[k % m], ends[k / m]);
+    let rays: Vec<Ray> = (0..m * ends.len())
+        .map(|k| {
+            let (o, e) = pair(k);
+            Ray::new(o, e - o)
+        })
+        .collect();
+    let verdicts: Vec<Verdict> = rays.iter().map(|r| Verdict::of(g, r, 0.0, t_max)).collect();
+    let walked: Vec<bool> = rays.iter().map(|r| bvh.occluded(r, 0.0, t_max)).collect();
+    let start: Vec<bool> = (0..m * ends.len()).map(|k| k % 5 == 3).collect();
+    let mut answers = supported_paths().into_iter().map(|path| {
         let mut blocked = start.clone();
         bvh.occlude_pairs_on(path, pairs, t_max, &mut blocked);
-        for (k, &b) in blocked.iter().enumerate() {
-            let (o, e) = (origins[k % m], ends[k / m]);
-            let occluded = occluded_brute_force(g, &Ray::new(o, e - o), 0.0, t_max);
-            assert_eq!(b, start[k] || occluded, "{path:?}: pair {o} → {e}");
+        let why = |k: usize| format!("{path:?}: pair {:?}", pair(k));
+        assert_admitted(&blocked, &start, &verdicts, why);
+        if ends.len() < SHAFT_MIN_ENDS {
+            for (k, &b) in blocked.iter().enumerate() {
+                assert_eq!(b, start[k] || walked[k], "{}", why(k));
+            }
         }
+        (path, blocked)
+    });
+    let (_, first) = answers.next().expect("the portable path");
+    for (path, answer) in answers {
+        assert_eq!(answer, first, "{path:?} and the first path differ");
+    }
+}
+
+/// Every segment blocked at the `start` stays blocked, and every other's answer in `got`
+/// agrees with its verdict.
+fn assert_admitted(
+    got: &[bool],
+    start: &[bool],
+    verdicts: &[Verdict],
+    why: impl Fn(usize) -> String,
+) {
+    for (i, ((&got, &start), verdict)) in got.iter().zip(start).zip(verdicts).enumerate() {
+        let right = if start { got } else { verdict.admits(got) };
+        assert!(
+            right,
+            "{}: {got}, brute force {verdict:?}, blocked from the start: {start}",
+            why(i)
+        );
     }
 }
 
