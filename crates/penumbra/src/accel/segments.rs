@@ -11,8 +11,8 @@
 //! Exactness: every lane runs the Möller–Trumbore test of `prim::moller_trumbore`, the scalar
 //! test's own functions, operation for operation, its own `tvec`, `qvec` and `t` numerator
 //! included, on the triangles of the leaves its own segment enters (the walk of
-//! [`super::shadow_fans`]), so a lane is occluded exactly when [`Bvh::occluded`] says so. A
-//! batch with a shaft tests its candidates instead (see [`super::shaft`]).
+//! [`super::shadow_fans`]), so a lane is occluded exactly when [`Bvh::occluded`] says so; as
+//! is a segment of a batch with a shaft (see [`super::shaft`]).
 
 use std::marker::PhantomData;
 

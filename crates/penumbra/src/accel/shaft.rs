@@ -12,16 +12,16 @@
 //!
 //! Exactness: the gathering only prunes, with a margin far above the rounding of the
 //! projections. A packet tests every candidate for every pair with the same lane test as the
-//! walk, including candidates whose boxes a pair's segment misses. Testing such a triangle
-//! changes an answer only for a segment lying in its plane, which Möller–Trumbore may report
-//! hit far outside the triangle (`tests/verdict.rs`): there a shaft's answer may differ from
-//! the walk's. Whether a batch takes a shaft depends on the batch alone, never on the SIMD path
-//! or the thread count, and a shaft's tests do not depend on the packet width, so every path
-//! gives the same answers.
+//! walk, and keeps a hit only when the pair's segment enters the triangle's leaf, the one box
+//! test the walk would have needed to test that triangle. Without it, a segment lying in a
+//! candidate's plane could be reported hit far outside the triangle (Möller–Trumbore divides
+//! two rounding errors there; `tests/verdict.rs`), and a render's answer would depend on which
+//! points share its batch. With it, a segment is occluded exactly when [`Bvh::occluded`] says
+//! so.
 
 use glam::Vec3;
 
-use super::lanes::lane;
+use super::lanes::{self, lane};
 use super::prim::moller_trumbore::{origin_terms, solve};
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
@@ -49,15 +49,15 @@ pub(super) struct Shaft {
     hi: [f32; AXES],
 }
 
-/// The triangles (leaf-order indices) a shaft holds.
+/// The triangles a shaft holds: each one's leaf-order index and the index of its leaf.
 pub(super) struct Candidates {
-    index: [u32; MAX_CANDIDATES],
+    index: [(u32, u32); MAX_CANDIDATES],
     len: usize,
 }
 
 impl Candidates {
-    /// The candidates' leaf-order indices.
-    pub(super) fn as_slice(&self) -> &[u32] {
+    /// The candidates: each one's leaf-order index and its leaf's node index.
+    pub(super) fn as_slice(&self) -> &[(u32, u32)] {
         &self.index[..self.len]
     }
 }
@@ -134,7 +134,7 @@ impl Shaft {
     #[inline(always)]
     pub(super) fn gather(&self, bvh: &Bvh) -> Option<Candidates> {
         let mut found = Candidates {
-            index: [0; MAX_CANDIDATES],
+            index: [(0, 0); MAX_CANDIDATES],
             len: 0,
         };
         let mut stack = [0u32; STACK_SIZE];
@@ -155,7 +155,7 @@ impl Shaft {
                         if found.len == MAX_CANDIDATES {
                             return None;
                         }
-                        found.index[found.len] = k as u32;
+                        found.index[found.len] = (k as u32, index);
                         found.len += 1;
                     }
                 }
@@ -210,19 +210,21 @@ fn bounds(points: [&[f32]; 3]) -> (Vec3, Vec3) {
 const ENDS_PER_PASS: usize = 64;
 
 /// Marks slot `j · m + i` of `blocked` (for `m` origins) when segment `(j, i)` of `pairs` is
-/// not blocked yet and one of the triangles `candidates` (leaf-order indices: a shaft's)
-/// meets it for `t` in `(0, t_max)`, `N` origins at a time.
+/// not blocked yet and one of the triangles `candidates` (a shaft's) meets it for `t` in
+/// `(0, t_max)` and the segment enters the triangle's leaf, `N` origins at a time.
 ///
 /// Each lane runs `geometry::intersect_triangle`'s operations in its order (see
 /// [`segments`](super::segments)' `triangle`); the terms that do not depend on the segment's
 /// end (`tvec`, `qvec` and the `t` numerator) are computed once per triangle and origin, not
-/// once per end: the same values, so the same answers.
+/// once per end: the same values, so the same answers. A lane hit is kept only when the
+/// segment enters the leaf's box (the walk's slab test, run only when some lane is hit), as the
+/// walk tests a triangle only for such segments.
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 pub(super) fn occlude_pairs<const N: usize, I: Isa>(
     bvh: &Bvh,
-    candidates: &[u32],
+    candidates: &[(u32, u32)],
     Pairs { origins, ends }: Pairs,
     t_max: f32,
     blocked: &mut [bool],
@@ -251,13 +253,16 @@ pub(super) fn occlude_pairs<const N: usize, I: Isa>(
             if !live {
                 continue;
             }
-            for &k in candidates {
-                let tri = &bvh.tris[k as usize];
+            for &(k, leaf) in candidates {
+                let (tri, leaf) = (&bvh.tris[k as usize], &bvh.nodes[leaf as usize]);
                 let fixed = Fixed::new(tri, &o);
                 for (mask, j) in active.iter_mut().zip(ends_here.clone()) {
                     if *mask != 0 {
                         let end = [ends[0][j], ends[1][j], ends[2][j]];
-                        *mask &= !fixed.hits::<I>(tri, &o, end, t_max, *mask);
+                        let hit = fixed.hits::<I>(tri, &o, end, t_max, *mask);
+                        if hit != 0 {
+                            *mask &= !entering::<N, I>(leaf, &o, end, t_max, hit);
+                        }
                     }
                 }
             }
@@ -268,6 +273,28 @@ pub(super) fn occlude_pairs<const N: usize, I: Isa>(
             }
         }
     }
+}
+
+/// The lanes of `lanes` whose segment from `o` to `end` enters `leaf`'s box within
+/// `(0, t_max)`: the walk's slab test ([`lanes::slab`]), which answers as the scalar walk's.
+// Lane loops index several arrays by lane; that is what vectorizes.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn entering<const N: usize, I: Isa>(
+    leaf: &BvhNode,
+    o: &[[f32; N]; 3],
+    end: [f32; 3],
+    t_max: f32,
+    lanes: u32,
+) -> u32 {
+    let mut inv = [[0.0f32; N]; 3];
+    for a in 0..3 {
+        for i in 0..N {
+            inv[a][i] = 1.0 / (end[a] - o[a][i]);
+        }
+    }
+    let rel = |a: usize, i: usize| (leaf.min[a] - o[a][i], leaf.max[a] - o[a][i]);
+    lanes::slab::<N, I>(rel, &inv, 0.0, &[t_max; N], 1.0).0 & lanes
 }
 
 /// One triangle's Möller–Trumbore terms that depend on the origin alone, by lane: `tvec =

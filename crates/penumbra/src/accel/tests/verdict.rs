@@ -77,3 +77,37 @@ fn a_hit_outside_the_triangles_box_leaves_the_verdict_open() {
         Verdict::Clear
     );
 }
+
+/// The same segment among 16 from one point to samples across the whole light: the batch
+/// takes a shaft, which holds the light's other triangle, and its lanes test that triangle for
+/// every segment. Each answer is still [`Bvh::occluded`]'s, the one above included.
+#[test]
+fn a_shaft_keeps_only_the_hits_the_walk_would_find() {
+    let (corner, u, v) = (
+        Vec3::new(-3.9226649, -2.4733906, 5.6919756),
+        Vec3::new(-0.36001608, -0.60710675, -2.9584782),
+        Vec3::new(0.700488, 1.4405535, 2.3873572),
+    );
+    let g = soup(&parallelogram(corner, u, v)[1..]);
+    let bvh = build_checked(&g);
+    let at = |a: f32, b: f32| corner + a * u + b * v;
+    let origin = at(0.83423954, 0.07173311);
+    let mut ends = vec![at(0.70886075, 0.6030608)];
+    ends.extend((0..15).map(|k| at((k % 4) as f32 / 4.0 + 0.1, (k / 4) as f32 / 4.0 + 0.1)));
+    assert!(ends.len() >= SHAFT_MIN_ENDS);
+    let expected: Vec<bool> = ends
+        .iter()
+        .map(|&e| bvh.occluded(&Ray::new(origin, e - origin), 0.0, T_MAX))
+        .collect();
+    assert!(!expected[0]);
+    let (from, to) = (by_axis(&[origin]), by_axis(&ends));
+    let pairs = Pairs {
+        origins: from.each_ref().map(|axis| &axis[..]),
+        ends: to.each_ref().map(|axis| &axis[..]),
+    };
+    for path in supported_paths() {
+        let mut blocked = vec![false; ends.len()];
+        bvh.occlude_pairs_on(path, pairs, T_MAX, &mut blocked);
+        assert_eq!(blocked, expected, "{path:?}");
+    }
+}
