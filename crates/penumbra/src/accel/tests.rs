@@ -151,6 +151,19 @@ fn segments<'a>(o: &'a [Vec<f32>; 3], e: &'a [Vec<f32>; 3]) -> Segments<'a> {
     }
 }
 
+/// [`Bvh::occluded`] on the segment from `from` to `to`, checked against brute force's
+/// [`Verdict`].
+fn occluded_as_verdict_allows(g: &Geometry, bvh: &Bvh, from: Vec3, to: Vec3, t_max: f32) -> bool {
+    let ray = Ray::new(from, to - from);
+    let occluded = bvh.occluded(&ray, 0.0, t_max);
+    let verdict = Verdict::of(g, &ray, 0.0, t_max);
+    assert!(
+        verdict.admits(occluded),
+        "{ray:?}: {occluded}, brute force {verdict:?}"
+    );
+    occluded
+}
+
 /// `occluded_from` gives [`Bvh::occluded`]'s answer for every segment, overwriting the mask;
 /// `occlude_from` on every SIMD path this machine supports leaves blocked segments blocked and
 /// blocks exactly the others that [`Bvh::occluded`] finds occluded (packets of every fill, with
@@ -158,16 +171,7 @@ fn segments<'a>(o: &'a [Vec<f32>; 3], e: &'a [Vec<f32>; 3]) -> Segments<'a> {
 /// them reversed, and `occlude_pairs` from the origin to the ends and from the ends to a few
 /// points. [`Bvh::occluded`] itself agrees with brute force's [`Verdict`].
 fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t_max: f32) {
-    let occluded = |from: Vec3, to: Vec3| {
-        let ray = Ray::new(from, to - from);
-        let occluded = bvh.occluded(&ray, 0.0, t_max);
-        let verdict = Verdict::of(g, &ray, 0.0, t_max);
-        assert!(
-            verdict.admits(occluded),
-            "{ray:?}: {occluded}, brute force {verdict:?}"
-        );
-        occluded
-    };
+    let occluded = |from: Vec3, to: Vec3| occluded_as_verdict_allows(g, bvh, from, to, t_max);
     let expected: Vec<bool> = ends.iter().map(|&end| occluded(origin, end)).collect();
     // The same segments reversed: origins of their own, one shared end.
     let reversed: Vec<bool> = ends.iter().map(|&end| occluded(end, origin)).collect();
@@ -218,14 +222,7 @@ fn assert_pairs_agree(g: &Geometry, bvh: &Bvh, origins: &[Vec3], ends: &[Vec3], 
     let expected: Vec<bool> = (0..m * ends.len())
         .map(|k| {
             let (o, e) = pair(k);
-            let ray = Ray::new(o, e - o);
-            let occluded = bvh.occluded(&ray, 0.0, t_max);
-            let verdict = Verdict::of(g, &ray, 0.0, t_max);
-            assert!(
-                verdict.admits(occluded),
-                "{ray:?}: {occluded}, brute force {verdict:?}"
-            );
-            occluded
+            occluded_as_verdict_allows(g, bvh, o, e, t_max)
         })
         .collect();
     for path in supported_paths() {

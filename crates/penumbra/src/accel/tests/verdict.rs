@@ -50,11 +50,9 @@ impl Verdict {
     }
 }
 
-/// The segment of the property test's failure: between two samples of a light, it lies in the
-/// light's plane, inside one of its triangles, and Möller–Trumbore reports a hit on the other
-/// far outside that triangle's box. Brute force calls it blocked, the BVH clear.
-#[test]
-fn a_hit_outside_the_triangles_box_leaves_the_verdict_open() {
+/// The second triangle of the light the property test failed on, its tree, and the point at
+/// `(a, b)` of the light's parallelogram (the triangle covers `b ≥ a`).
+fn light_triangle() -> (Geometry, Bvh, impl Fn(f32, f32) -> Vec3) {
     let (corner, u, v) = (
         Vec3::new(-3.9226649, -2.4733906, 5.6919756),
         Vec3::new(-0.36001608, -0.60710675, -2.9584782),
@@ -62,14 +60,22 @@ fn a_hit_outside_the_triangles_box_leaves_the_verdict_open() {
     );
     let g = soup(&parallelogram(corner, u, v)[1..]);
     let bvh = build_checked(&g);
-    let at = |a: f32, b: f32| corner + a * u + b * v;
+    (g, bvh, move |a: f32, b: f32| corner + a * u + b * v)
+}
+
+/// The segment of the property test's failure: between two samples of a light, it lies in the
+/// light's plane, inside one of its triangles, and Möller–Trumbore reports a hit on the other
+/// far outside that triangle's box. Brute force calls it blocked, the BVH clear.
+#[test]
+fn a_hit_outside_the_triangles_box_leaves_the_verdict_open() {
+    let (g, bvh, at) = light_triangle();
     let (o, e) = (at(0.83423954, 0.07173311), at(0.70886075, 0.6030608));
     let ray = Ray::new(o, e - o);
     assert!(occluded_brute_force(&g, &ray, 0.0, T_MAX));
     assert_eq!(Verdict::of(&g, &ray, 0.0, T_MAX), Verdict::Open);
     assert!(!bvh.occluded(&ray, 0.0, T_MAX));
     // A segment through the light's plane, across it, is firmly blocked.
-    let n = u.cross(v);
+    let n = (at(1.0, 0.0) - at(0.0, 0.0)).cross(at(0.0, 1.0) - at(0.0, 0.0));
     let through = Ray::new(at(0.25, 0.5) + n, -2.0 * n);
     assert_eq!(Verdict::of(&g, &through, 0.0, T_MAX), Verdict::Blocked);
     assert_eq!(
@@ -83,14 +89,7 @@ fn a_hit_outside_the_triangles_box_leaves_the_verdict_open() {
 /// every segment. Each answer is still [`Bvh::occluded`]'s, the one above included.
 #[test]
 fn a_shaft_keeps_only_the_hits_the_walk_would_find() {
-    let (corner, u, v) = (
-        Vec3::new(-3.9226649, -2.4733906, 5.6919756),
-        Vec3::new(-0.36001608, -0.60710675, -2.9584782),
-        Vec3::new(0.700488, 1.4405535, 2.3873572),
-    );
-    let g = soup(&parallelogram(corner, u, v)[1..]);
-    let bvh = build_checked(&g);
-    let at = |a: f32, b: f32| corner + a * u + b * v;
+    let (g, bvh, at) = light_triangle();
     let origin = at(0.83423954, 0.07173311);
     let mut ends = vec![at(0.70886075, 0.6030608)];
     ends.extend((0..15).map(|k| at((k % 4) as f32 / 4.0 + 0.1, (k / 4) as f32 / 4.0 + 0.1)));
@@ -99,6 +98,8 @@ fn a_shaft_keeps_only_the_hits_the_walk_would_find() {
         .iter()
         .map(|&e| bvh.occluded(&Ray::new(origin, e - origin), 0.0, T_MAX))
         .collect();
+    let first = Ray::new(origin, ends[0] - origin);
+    assert_eq!(Verdict::of(&g, &first, 0.0, T_MAX), Verdict::Open);
     assert!(!expected[0]);
     let (from, to) = (by_axis(&[origin]), by_axis(&ends));
     let pairs = Pairs {
