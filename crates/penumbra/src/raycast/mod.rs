@@ -47,6 +47,7 @@
 
 mod instances;
 mod lazy;
+mod order;
 mod pinhole;
 mod points;
 mod queries;

@@ -4,10 +4,13 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::accel::wide::kernels::Nearests;
+use crate::accel::wide::kernels::{counts, Nearests};
 use crate::accel::wide::nearest::Nearest;
 use crate::simd::{dispatch, simd_path};
 
+use super::lazy;
+use super::order::{across_order, morton_order};
+use super::queries::ALL;
 use super::run::{beyond, budget, filled, room, run, QueryOptions, CHUNK};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 
@@ -15,9 +18,9 @@ use super::{RaycastError, RaycastingScene, INVALID_ID};
 /// and its inverse, the sorted points, the answers in that order).
 const CLOSEST_BYTES: usize = 12 + 4 + 4 + 8 + 12 + 8 + 16 + 12 + size_of::<Option<Nearest>>();
 
-/// Rays of one round of an occupancy vote: the points' rays are made a round at a time,
-/// never all at once (`nsamples` rays of 24 bytes per point).
-const VOTE_RAYS: usize = 64 * CHUNK;
+/// Bytes of an occupancy query's own arrays per point: the cell keys, the order, the odd
+/// counts and the result.
+const OCCUPANCY_BYTES: usize = 4 + 8 + 1 + 4;
 
 /// The closest surface point to each query point
 /// ([`RaycastingScene::compute_closest_points`]).
@@ -151,76 +154,44 @@ impl RaycastingScene {
             let what = "query point";
             return Err(RaycastError::Beyond { what, index });
         }
+        let (accel, pool) = self.prepare(options)?;
+        let border = &lazy::borders(&accel, &pool, options)?;
+        let accel = &*accel;
+        let n = points.len();
+        budget(&[(n, OCCUPANCY_BYTES)], "the result")?;
+        // The points by cells across the rays: the vote directions are all within 0.1 % of
+        // (1, 1, 1), so runs of points in this order cast nearly the same line, and go as
+        // packets of parallel rays (the counting kernel finds them).
+        let order = across_order(points, &pool);
         let dirs = vote_directions(nsamples);
-        let mut out = room(points.len(), "the result")?;
-        let mut rays = Vec::new();
-        for points in points.chunks((VOTE_RAYS / dirs.len()).max(1)) {
-            rays.clear();
-            rays.extend(
-                points
-                    .iter()
-                    .flat_map(|p| dirs.iter().map(|d| [p[0], p[1], p[2], d[0], d[1], d[2]])),
-            );
-            let counts = self.count_intersections(&rays, options)?;
-            out.extend(counts.chunks(dirs.len()).map(|c| {
-                let odd = c.iter().filter(|&&n| n % 2 == 1).count();
-                if 2 * odd > c.len() {
-                    1.0
-                } else {
-                    0.0
+        // Per point (in that order), the rays that cross the surface an odd number of times.
+        let mut odd: Vec<u8> = filled(&pool, options, n, 0)?;
+        let path = simd_path();
+        let items = order.par_chunks(CHUNK).zip(odd.par_chunks_mut(CHUNK));
+        run(&pool, options, items, |(order, odd)| {
+            let mut rays = [[0.0f32; 6]; CHUNK];
+            let mut crossings = [0i32; CHUNK];
+            let (rays, crossings) = (&mut rays[..order.len()], &mut crossings[..order.len()]);
+            for d in &dirs {
+                for (ray, &i) in rays.iter_mut().zip(order) {
+                    let p = points[i];
+                    *ray = [p[0], p[1], p[2], d[0], d[1], d[2]];
                 }
-            }));
+                crossings.fill(0);
+                counts(path, (accel, options), (border, ALL), rays, crossings);
+                for (odd, count) in odd.iter_mut().zip(&*crossings) {
+                    *odd += (count % 2 == 1) as u8;
+                }
+            }
+        })?;
+        let mut out: Vec<f32> = filled(&pool, options, n, 0.0)?;
+        for (&i, &odd) in order.iter().zip(&odd) {
+            if 2 * u32::from(odd) > nsamples {
+                out[i] = 1.0;
+            }
         }
         Ok(out)
     }
-}
-
-/// The indices of `points` along a Morton curve through their box (10 bits per axis; the
-/// non-finite ones last), and the inverse: `rank[order[k]] = k`. More than 2³² points keep
-/// their order.
-fn morton_order(points: &[[f32; 3]], pool: &rayon::ThreadPool) -> (Vec<usize>, Vec<usize>) {
-    let (lo, hi) = points
-        .iter()
-        .map(|&p| Vec3::from(p))
-        .filter(|p| p.is_finite())
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
-    // Cells per unit along each axis (0 for a flat extent or no finite point).
-    let scale = (hi - lo).to_array().map(|e| {
-        if e > 0.0 && e.is_finite() {
-            1023.0 / e
-        } else {
-            0.0
-        }
-    });
-    let scale = Vec3::from(scale);
-    // Each axis' 10 bits spread to every third bit.
-    let spread = |x: u32| (0..10).fold(0u64, |code, b| code | (((x as u64 >> b) & 1) << (3 * b)));
-    let key = |(i, p): (usize, &[f32; 3])| {
-        let p = Vec3::from(*p);
-        let code = if p.is_finite() {
-            let c = ((p - lo) * scale)
-                .clamp(Vec3::ZERO, Vec3::splat(1023.0))
-                .as_uvec3();
-            spread(c.x) | spread(c.y) << 1 | spread(c.z) << 2
-        } else {
-            1 << 30
-        };
-        (code << 32) | i as u64
-    };
-    let order: Vec<usize> = if u32::try_from(points.len()).is_ok() {
-        let mut keys: Vec<u64> = pool.install(|| points.par_iter().enumerate().map(key).collect());
-        pool.install(|| keys.par_sort_unstable());
-        keys.iter().map(|&k| k as u32 as usize).collect()
-    } else {
-        (0..points.len()).collect()
-    };
-    let mut rank = vec![0; order.len()];
-    for (k, &i) in order.iter().enumerate() {
-        rank[i] = k;
-    }
-    (order, rank)
 }
 
 /// `|q − p|`, ∞ when there is no closest point for a finite query, NaN for a non-finite one.

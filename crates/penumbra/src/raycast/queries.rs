@@ -13,7 +13,7 @@ use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Lis
 use crate::simd::{dispatch, simd_path};
 
 /// The range of `t` of Open3D's `cast_rays` and `count_intersections`.
-const ALL: (f32, f32) = (0.0, f32::INFINITY);
+pub(super) const ALL: (f32, f32) = (0.0, f32::INFINITY);
 
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets
 /// (16 rays with AVX-512, 8 without) are then 4 × 4 or 4 × 2 neighbouring rays.

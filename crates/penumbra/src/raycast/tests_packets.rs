@@ -175,3 +175,83 @@ fn tile_order_visits_each_ray_of_a_band_once() {
         );
     }
 }
+
+/// Counts `rays` in one kernel run on `path` (runs of parallel rays go as packets).
+fn counted(scene: &RaycastingScene, rays: &[[f32; 6]], path: SimdPath) -> Vec<i32> {
+    use crate::accel::wide::kernels::counts;
+    let options = QueryOptions::default();
+    let (accel, pool) = scene.prepare(&options).unwrap();
+    let border = super::lazy::borders(&accel, &pool, &options).unwrap();
+    let mut out = vec![0; rays.len()];
+    let range = (0.0, f32::INFINITY);
+    counts(path, (&*accel, &options), (&border, range), rays, &mut out);
+    out
+}
+
+#[test]
+fn packets_of_parallel_rays_count_as_single_rays() {
+    for mesh in [subdivided_cube(3, Mat3::IDENTITY), icosphere(1)] {
+        let mut scene = RaycastingScene::new();
+        scene.add_triangles(&mesh.0, &mesh.1).unwrap();
+        let points: Vec<Vec3> = targets(&mesh).iter().map(|t| t.point).collect();
+        // Occupancy's first vote direction (through vertices and edges exactly where the
+        // mesh is axis-aligned) and a skewed one.
+        for d in [Vec3::ONE, Vec3::new(1.0003, 0.9995, 1.0001)] {
+            let ray = |p: Vec3, s: f32| {
+                let o = p - s * d;
+                [o.x, o.y, o.z, d.x, d.y, d.z]
+            };
+            let mut rays = Vec::new();
+            // Sixteen rays on the line through each point (every lane enters the same nodes:
+            // the triangle-by-triangle test), from outside, inside and beyond the mesh.
+            let starts = (0..16).map(|k| k as f32 * 0.25 - 1.5);
+            for &p in &points {
+                rays.extend(starts.clone().map(|s| ray(p, s)));
+            }
+            // The points one after the other (a lane or two per leaf: lane by lane).
+            rays.extend(points.iter().map(|&p| ray(p, 3.0)));
+            // One ray alone: the single-ray walk.
+            let want: Vec<i32> = rays
+                .iter()
+                .map(|r| counted(&scene, std::slice::from_ref(r), SimdPath::Portable)[0])
+                .collect();
+            for path in supported_paths() {
+                let got = counted(&scene, &rays, path);
+                for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(g, w, "ray {i} {:?} on {path:?}", rays[i]);
+                }
+            }
+            assert!(want.iter().filter(|&&n| n > 0).count() > rays.len() / 2);
+        }
+    }
+}
+
+#[test]
+fn occupancy_is_the_parity_of_each_points_count_in_any_order() {
+    let mesh = icosphere(2);
+    let mut scene = RaycastingScene::new();
+    scene.add_triangles(&mesh.0, &mesh.1).unwrap();
+    let options = QueryOptions::default();
+    // A shuffled grid around the sphere, its vertices, and points that are not finite.
+    let mut points: Vec<[f32; 3]> = (0..4096)
+        .map(|i| {
+            let k = (i * 2654435761u64 as usize) % 4096;
+            let c = |j: usize| (k >> (4 * j) & 15) as f32 / 7.5 - 1.0;
+            [c(0), c(1), c(2)]
+        })
+        .collect();
+    points.extend(mesh.0.iter().copied());
+    points.insert(100, [f32::NAN, 0.0, 0.0]);
+    points.insert(7, [0.0, f32::INFINITY, 0.0]);
+    let rays: Vec<[f32; 6]> = points
+        .iter()
+        .map(|p| [p[0], p[1], p[2], 1.0, 1.0, 1.0])
+        .collect();
+    let counts = scene.count_intersections(&rays, &options).unwrap();
+    let occupancy = scene.compute_occupancy(&points, 1, &options).unwrap();
+    for (i, (n, o)) in counts.iter().zip(&occupancy).enumerate() {
+        assert_eq!(*o, (n % 2) as f32, "point {i} {:?}", points[i]);
+    }
+    let inside = occupancy.iter().filter(|&&o| o == 1.0).count();
+    assert!(inside > 1000 && inside < 3000, "{inside} inside");
+}

@@ -17,7 +17,7 @@ use super::tree::{SlotHit, Stack};
 use crate::accel::prim::watertight::PreparedRay;
 use std::borrow::Cow;
 
-use super::packets::CastPackets;
+use super::packets::{count_parallel, CastPackets};
 use crate::simd::{dispatch, Isa, Kernel, SimdPath};
 
 /// Rays between two looks at the cancel flag: a ray through a dense region can take
@@ -186,22 +186,35 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
 
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
+        let (accel, border, range) = (self.accel, self.border, self.range);
         let mut stack = Stack::default();
-        for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
-            if self.options.cancelled() {
-                return;
+        let mut packet_stack = Vec::new();
+        // Runs of `N` parallel rays go as packets through the own tree (without cut-outs).
+        let packets = !PLACED && accel.own_alpha().is_none();
+        for (rays, out) in self.rays.chunks(N).zip(self.out.chunks_mut(N)) {
+            if packets {
+                if self.options.cancelled() {
+                    return;
+                }
+                let own = (range, border.own);
+                if count_parallel::<N, I>(accel.own(), rays, own, &mut packet_stack, out) {
+                    continue;
+                }
             }
-            for (ray, count) in rays.iter().zip(out) {
-                let mut n = 0i32;
-                let tally = &mut |_| n = n.saturating_add(1);
-                let (accel, border) = (self.accel, self.border);
-                let range = self.range;
-                if PLACED {
-                    accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
-                    *count = count.saturating_add(n);
-                } else if let Some(r) = prepare(ray) {
-                    accel.each_hit_own::<I>(&r, range, border, &mut stack, tally);
-                    *count = n;
+            for (rays, out) in rays.chunks(CHECK).zip(out.chunks_mut(CHECK)) {
+                if self.options.cancelled() {
+                    return;
+                }
+                for (ray, count) in rays.iter().zip(out) {
+                    let mut n = 0i32;
+                    let tally = &mut |_| n = n.saturating_add(1);
+                    if PLACED {
+                        accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
+                        *count = count.saturating_add(n);
+                    } else if let Some(r) = prepare(ray) {
+                        accel.each_hit_own::<I>(&r, range, border, &mut stack, tally);
+                        *count = n;
+                    }
                 }
             }
         }

@@ -5,7 +5,8 @@
 //! - `group`: a leaf's triangles, eight by coordinate, and the watertight test on all eight;
 //! - `tree`: [`WideBvh`] (the binary tree, the wide view, triangles and ids in leaf order) and
 //!   its one single-ray walk, which the closest-, any- and every-hit queries share;
-//! - `packets`: closest-hit packets of neighbouring rays (`cast_rays` on pinhole images);
+//! - `packets`: packets of neighbouring rays through one walk: closest hits (`cast_rays` on
+//!   pinhole images) and crossing counts of parallel rays (occupancy's votes);
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
 //! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
 //! - `levels`: the scene's own tree and placed meshes' trees under a top-level tree, which

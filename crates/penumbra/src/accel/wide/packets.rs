@@ -1,6 +1,8 @@
-//! Closest-hit packets for `cast_rays`: `N` neighbouring rays (the pixels of a pinhole image
-//! come in row order) traced together through the wide tree, one lane each, compiled per
-//! instruction set by `crate::simd` (8 lanes for AVX2 and the baseline, 16 for AVX-512).
+//! Packets: `N` neighbouring rays traced together through the wide tree, one lane each,
+//! compiled per instruction set by `crate::simd` (8 lanes for AVX2 and the baseline, 16 for
+//! AVX-512). One walk serves two queries ([`Hits`]): the closest hits of `cast_rays` (the
+//! pixels of a pinhole image come in row order) and the crossing counts of parallel rays
+//! (`count_parallel`: occupancy's votes, all along one direction, children in any order).
 //!
 //! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
 //! and share the watertight test's axis permutation (then every lane runs the same
@@ -12,13 +14,15 @@
 //! edge function rounds to zero goes to `hit` itself, for its `f64` re-test), and the rule for
 //! the closest hit is the same total order (the smallest `t`, then the smallest geometry and
 //! primitive id). So a lane's answer is the single-ray query's, whatever the order of the
-//! visit.
+//! visit. A count packet tests under the single-ray count's rule ([`EdgeRule::Owned`], with
+//! the tree's border), and every leaf a lane's ray enters is visited once for it: the same
+//! crossings, counted once each.
 //!
 //! A scene with cut-out triangles (ray casting from a world with cut-out materials) traces
 //! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
-//! the own tree, one ray at a time (`kernels::ClosestPlaced`).
+//! the own tree, one ray at a time (`kernels::ClosestPlaced`, `kernels::Counts`).
 
-use super::kernels::Control;
+use super::kernels::{prepare, Control};
 use super::levels::WideLevels;
 use super::node::WIDTH;
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
@@ -78,6 +82,38 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
     }
 }
 
+/// Counts the crossings of `rays` with `t` in `range` as one packet, as
+/// `WideBvh::each_hit` counts them (`border`: the tree's), into `out`, when the rays are `N`
+/// valid rays with one direction (an occupancy vote's rays: parallel lines, neighbours when
+/// their origins are sorted across them); false, and `out` untouched, otherwise. The caller
+/// tests cut-out triangles alone.
+#[inline(always)]
+pub(crate) fn count_parallel<const N: usize, I: Isa>(
+    accel: &WideBvh,
+    rays: &[[f32; 6]],
+    (range, border): ((f32, f32), &[Boundary]),
+    stack: &mut Vec<(u32, u32, u32)>,
+    out: &mut [i32],
+) -> bool {
+    let direction = |r: &[f32; 6]| [r[3], r[4], r[5]].map(f32::to_bits);
+    if rays.len() != N || rays.iter().any(|r| direction(r) != direction(&rays[0])) {
+        return false;
+    }
+    let prepared: [Option<PreparedRay>; N] = std::array::from_fn(|i| prepare(&rays[i]));
+    let Some(lanes) = lanes::<N>(&prepared) else {
+        return false;
+    };
+    let mut tally = Tally {
+        t_min: range.0,
+        t_max: [range.1; N],
+        border,
+        count: [0; N],
+    };
+    walk::<N, I, _>(accel, &lanes, stack, &mut tally);
+    out.copy_from_slice(&tally.count);
+    true
+}
+
 /// `N` rays by lane, in the watertight test's permuted axes (shared by all lanes).
 struct Lanes<'a, const N: usize> {
     /// The rays themselves (all `Some`), for the one-triangle test of a lane on an edge.
@@ -128,6 +164,20 @@ fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<'_, N>> {
     Some(lanes)
 }
 
+/// What a packet walk does with its lanes' hits: keeps each lane's closest ([`Best`]) or
+/// counts every crossing ([`Tally`]). One walk and one triangle test serve both.
+trait Hits<const N: usize> {
+    /// Whether children are visited nearest first (for the first lane).
+    const SORTED: bool;
+    /// Hits with `t` in `[t_min, t_max[i]]` count for lane `i`.
+    fn t_min(&self) -> f32;
+    fn t_max(&self) -> &[f32; N];
+    /// The rule for rays on an edge or vertex, and the border [`EdgeRule::Owned`] needs.
+    fn rule(&self) -> (EdgeRule, &[Boundary]);
+    /// Takes lane `i`'s hit `c` of leaf slot `slot`.
+    fn keep(&mut self, accel: &WideBvh, i: usize, c: Crossing, slot: u32);
+}
+
 /// The closest hits so far, by lane: `slot` is the leaf slot (valid where `hit`).
 struct Best<const N: usize> {
     t: [f32; N],
@@ -135,6 +185,15 @@ struct Best<const N: usize> {
     b2: [f32; N],
     slot: [u32; N],
     hit: u32,
+}
+
+/// Every crossing with `t` in `range`, counted by lane, one per crossing of the surface
+/// ([`EdgeRule::Owned`] with the tree's border): `WideBvh::each_hit`'s count.
+struct Tally<'a, const N: usize> {
+    t_min: f32,
+    t_max: [f32; N],
+    border: &'a [Boundary],
+    count: [i32; N],
 }
 
 /// Traces the packet and writes each lane's closest hit to `hits`.
@@ -152,6 +211,28 @@ fn trace<const N: usize, I: Isa>(
         slot: [0; N],
         hit: 0,
     };
+    walk::<N, I, _>(accel, lanes, stack, &mut best);
+    for (i, hit) in hits.iter_mut().enumerate() {
+        *hit = (best.hit >> i & 1 == 1).then(|| {
+            let crossing = Crossing {
+                t: best.t[i],
+                b1: best.b1[i],
+                b2: best.b2[i],
+            };
+            accel.slot_hit(best.slot[i] as usize, crossing)
+        });
+    }
+}
+
+/// The packet walk: visits the leaves each lane's ray enters (the lanes that enter a node
+/// go on with it), and gives every hit of a lane to `hits`.
+#[inline(always)]
+fn walk<const N: usize, I: Isa, H: Hits<N>>(
+    accel: &WideBvh,
+    lanes: &Lanes<'_, N>,
+    stack: &mut Vec<(u32, u32, u32)>,
+    hits: &mut H,
+) {
     let all = if N == 32 { u32::MAX } else { (1 << N) - 1 };
     stack.clear();
     if !accel.wide().is_empty() {
@@ -168,7 +249,7 @@ fn trace<const N: usize, I: Isa>(
                 if !node.used(c) {
                     break;
                 }
-                let (m, near) = slab::<N, I>(node.bounds(c), lanes, &best.t);
+                let (m, near) = slab::<N, I>(node.bounds(c), lanes, hits.t_min(), hits.t_max());
                 let m = m & mask;
                 if m != 0 {
                     kids[n] = (child, child_count, m, near[mask.trailing_zeros() as usize]);
@@ -176,7 +257,9 @@ fn trace<const N: usize, I: Isa>(
                 }
             }
             let kids = &mut kids[..n];
-            kids.sort_unstable_by(|a, b| b.3.total_cmp(&a.3));
+            if H::SORTED {
+                kids.sort_unstable_by(|a, b| b.3.total_cmp(&a.3));
+            }
             for &(i, c, m, _) in kids.iter() {
                 accel.prefetch_child(i, c);
                 stack.push((i, c, m));
@@ -187,7 +270,7 @@ fn trace<const N: usize, I: Isa>(
         // triangle is about one pixel: 1.2x the rays per second, bunny 1.03-1.15x; always
         // lane by lane lost 6-11 % on the bunny).
         if mask.count_ones() as usize <= N / 2 {
-            leaf_by_lane::<N, I>(accel, lanes, (index, count), mask, &mut best);
+            leaf_by_lane::<N, I>(accel, lanes, (index, count), mask, hits);
             continue;
         }
         for (group, valid) in accel.leaf(index, count) {
@@ -197,39 +280,29 @@ fn trace<const N: usize, I: Isa>(
                 tris &= tris - 1;
                 let corners = group.corners(lane);
                 let slot = group.first + lane as u32;
-                triangle::<N, I>(accel, lanes, &corners, slot, mask, &mut best);
+                triangle::<N, I>(accel, lanes, &corners, slot, mask, hits);
             }
         }
-    }
-    for (i, hit) in hits.iter_mut().enumerate() {
-        *hit = (best.hit >> i & 1 == 1).then(|| {
-            let crossing = Crossing {
-                t: best.t[i],
-                b1: best.b1[i],
-                b2: best.b2[i],
-            };
-            accel.slot_hit(best.slot[i] as usize, crossing)
-        });
     }
 }
 
 /// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
-/// `[0, tie_bound(t_max[i])]` (`t_max[i]` the lane's closest hit; `lanes::slab` widens it),
-/// and each lane's entry distance: the conservative test of `node`, per lane
-/// ([`crate::accel::lanes::slab`]).
+/// `[t_min, tie_bound(t_max[i])]` (`lanes::slab` widens it), and each lane's entry distance:
+/// the conservative test of `node`, per lane ([`crate::accel::lanes::slab`]).
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     (lo, hi): ([f32; 3], [f32; 3]),
     lanes: &Lanes<'_, N>,
+    t_min: f32,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
     let o = &lanes.origin;
     let rel = |a: usize, i: usize| (lo[a] - o[a][i], hi[a] - o[a][i]);
-    crate::accel::lanes::slab::<N, I>(rel, &lanes.inv_dir, 0.0, t_max, EXIT_SCALE)
+    crate::accel::lanes::slab::<N, I>(rel, &lanes.inv_dir, t_min, t_max, EXIT_SCALE)
 }
 
-/// Tests the triangle `corners` (leaf slot `slot`) on the lanes of
-/// `mask` and keeps it where it is closer than the lane's best hit.
+/// Tests the triangle `corners` (leaf slot `slot`) on the lanes of `mask` and gives the
+/// hits to `hits`: per lane, [`PreparedRay::hit`]'s answer under `hits`' rule and bounds.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
@@ -238,53 +311,68 @@ fn triangle<const N: usize, I: Isa>(
     corners: &Corners,
     slot: u32,
     mask: u32,
-    best: &mut Best<N>,
+    hits: &mut impl Hits<N>,
 ) {
     let [kx, ky, kz] = lanes.k;
     let v = corners.map(|c| [c[kx], c[ky], c[kz]]);
     let (mut hit, mut zero) = ([0i32; N], [0i32; N]);
     let (mut t, mut b1, mut b2) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    let (t_min, t_max) = (hits.t_min(), hits.t_max());
     for i in 0..N {
         let shear = (lanes.shear[0][i], lanes.shear[1][i]);
         let (exact, inside, ti, b1i, b2i) =
             hit_lane(v, lane(&lanes.permuted, i), shear, lanes.inv_dz[i]);
-        hit[i] = -i32::from(inside & (ti >= 0.0) & (ti <= best.t[i]));
+        hit[i] = -i32::from(inside & (ti >= t_min) & (ti <= t_max[i].min(T_LIMIT)));
         zero[i] = -i32::from(exact);
         (t[i], b1[i], b2[i]) = (ti, b1i, b2i);
     }
     let exact = I::mask(&zero) & mask;
-    let mut hits = I::mask(&hit) & mask & !exact;
+    let mut found = I::mask(&hit) & mask & !exact;
     // Lanes on an edge function's zero: the one-triangle test itself.
+    let (rule, border) = hits.rule();
+    let boundary = border.get(slot as usize).copied().unwrap_or_default();
     let mut rest = exact;
     while rest != 0 {
         let i = rest.trailing_zeros() as usize;
         rest &= rest - 1;
         // Every lane's ray is `Some` (see `lanes`).
         let Some(ray) = &lanes.rays[i] else { continue };
-        if let Some(c) = ray.hit(
-            accel.slot(slot as usize),
-            Boundary::default(),
-            0.0,
-            best.t[i],
-            EdgeRule::Inclusive,
-        ) {
+        let tri = accel.slot(slot as usize);
+        if let Some(c) = ray.hit(tri, boundary, t_min, t_max[i], rule) {
             (t[i], b1[i], b2[i]) = (c.t, c.b1, c.b2);
-            hits |= 1 << i;
+            found |= 1 << i;
         }
     }
-    while hits != 0 {
-        let i = hits.trailing_zeros() as usize;
-        hits &= hits - 1;
+    while found != 0 {
+        let i = found.trailing_zeros() as usize;
+        found &= found - 1;
         let c = Crossing {
             t: t[i],
             b1: b1[i],
             b2: b2[i],
         };
-        best.keep(accel, i, c, slot);
+        hits.keep(accel, i, c, slot);
     }
 }
 
-impl<const N: usize> Best<N> {
+impl<const N: usize> Hits<N> for Best<N> {
+    const SORTED: bool = true;
+
+    #[inline(always)]
+    fn t_min(&self) -> f32 {
+        0.0
+    }
+
+    #[inline(always)]
+    fn t_max(&self) -> &[f32; N] {
+        &self.t
+    }
+
+    #[inline(always)]
+    fn rule(&self) -> (EdgeRule, &[Boundary]) {
+        (EdgeRule::Inclusive, &[])
+    }
+
     /// Keeps the hit `c` of leaf slot `slot` as lane `i`'s best when it is closer; ids decide
     /// exact ties.
     #[inline(always)]
@@ -302,17 +390,41 @@ impl<const N: usize> Best<N> {
     }
 }
 
+impl<const N: usize> Hits<N> for Tally<'_, N> {
+    const SORTED: bool = false;
+
+    #[inline(always)]
+    fn t_min(&self) -> f32 {
+        self.t_min
+    }
+
+    #[inline(always)]
+    fn t_max(&self) -> &[f32; N] {
+        &self.t_max
+    }
+
+    #[inline(always)]
+    fn rule(&self) -> (EdgeRule, &[Boundary]) {
+        (EdgeRule::Owned, self.border)
+    }
+
+    #[inline(always)]
+    fn keep(&mut self, _: &WideBvh, i: usize, _: Crossing, _: u32) {
+        self.count[i] = self.count[i].saturating_add(1);
+    }
+}
+
 /// Tests the leaf `(index, count)` on the lanes of `mask` one lane at a time, each lane's ray
-/// against all the leaf's triangles at once (the single-ray group test), and keeps the closer
-/// hits: where few lanes reach a leaf (small triangles), cheaper than testing its triangles
-/// one by one on every lane.
+/// against all the leaf's triangles at once (the single-ray group test), and gives the hits
+/// to `hits`: where few lanes reach a leaf (small triangles), cheaper than testing its
+/// triangles one by one on every lane.
 #[inline(always)]
 fn leaf_by_lane<const N: usize, I: Isa>(
     accel: &WideBvh,
     lanes: &Lanes<'_, N>,
     (index, count): (u32, u32),
     mask: u32,
-    best: &mut Best<N>,
+    hits: &mut impl Hits<N>,
 ) {
     let mut rest = mask;
     while rest != 0 {
@@ -321,13 +433,14 @@ fn leaf_by_lane<const N: usize, I: Isa>(
         // Every lane's ray is `Some` (see `lanes`).
         let Some(ray) = &lanes.rays[i] else { continue };
         for (group, valid) in accel.leaf(index, count) {
-            let rule = EdgeRule::Inclusive;
-            let hits = ray.hit_group::<I>(group, valid, accel.tris(), &[], 0.0, best.t[i], rule);
-            let mut lanes_hit = hits.mask;
+            let (rule, border) = hits.rule();
+            let (t_min, t_max) = (hits.t_min(), hits.t_max()[i]);
+            let found = ray.hit_group::<I>(group, valid, accel.tris(), border, t_min, t_max, rule);
+            let mut lanes_hit = found.mask;
             while lanes_hit != 0 {
                 let lane = lanes_hit.trailing_zeros() as usize;
                 lanes_hit &= lanes_hit - 1;
-                best.keep(accel, i, hits.crossing(lane), group.first + lane as u32);
+                hits.keep(accel, i, found.crossing(lane), group.first + lane as u32);
             }
         }
     }
