@@ -158,6 +158,13 @@ impl Isa for Avx512 {
             return unsafe { mask16_avx512(lanes.as_ptr()) };
         }
         #[cfg(target_arch = "x86_64")]
+        if N == 32 {
+            // SAFETY: as for 16 lanes, twice.
+            return unsafe {
+                mask16_avx512(lanes.as_ptr()) | mask16_avx512(lanes.as_ptr().add(16)) << 16
+            };
+        }
+        #[cfg(target_arch = "x86_64")]
         if N == 8 {
             // SAFETY: `Avx512` is only used by `run_avx512`, which runs only on CPUs with
             // AVX-512 F, hence AVX2; the 8 lanes are 32 readable bytes.
@@ -176,6 +183,11 @@ impl Isa for Avx2 {
             // the 8 lanes are 32 readable bytes.
             return unsafe { mask8_avx2(lanes.as_ptr()) };
         }
+        #[cfg(target_arch = "x86_64")]
+        if N == 16 {
+            // SAFETY: as for 8 lanes, twice.
+            return unsafe { mask8_avx2(lanes.as_ptr()) | mask8_avx2(lanes.as_ptr().add(8)) << 8 };
+        }
         mask_by_lane(lanes)
     }
 }
@@ -187,6 +199,11 @@ impl Isa for Baseline {
         if N == 8 {
             // SAFETY: SSE2 is part of every x86-64 CPU; the 8 lanes are 32 readable bytes.
             return unsafe { mask8_sse2(lanes.as_ptr()) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if N == 16 {
+            // SAFETY: as for 8 lanes, twice.
+            return unsafe { mask8_sse2(lanes.as_ptr()) | mask8_sse2(lanes.as_ptr().add(8)) << 8 };
         }
         mask_by_lane(lanes)
     }
@@ -322,6 +339,47 @@ mod tests {
                 Err(SimdEnvError::Unsupported(path))
             };
             assert_eq!(parse_forced(Some(path.name())), expected);
+        }
+    }
+
+    /// `Isa::mask` of 8, 16 and 32 lanes with the sign bits of `bits`, on the path that runs.
+    struct Masks(u32);
+
+    impl Kernel for Masks {
+        type Output = [u32; 3];
+
+        fn run<const N: usize, I: Isa>(self) -> [u32; 3] {
+            let lanes = |i: usize| {
+                if self.0 >> i & 1 == 1 {
+                    -1 - i as i32
+                } else {
+                    i as i32
+                }
+            };
+            let (a, b, c): ([i32; 8], [i32; 16], [i32; 32]) = (
+                std::array::from_fn(lanes),
+                std::array::from_fn(lanes),
+                std::array::from_fn(lanes),
+            );
+            [I::mask(&a), I::mask(&b), I::mask(&c)]
+        }
+    }
+
+    #[test]
+    fn masks_of_one_or_two_vectors_are_the_lanes_sign_bits() {
+        for bits in [
+            0,
+            u32::MAX,
+            0x8000_0001,
+            0x1234_5678,
+            0xdead_beef,
+            1 << 16,
+            0xff00,
+        ] {
+            let want = [bits & 0xff, bits & 0xffff, bits];
+            for path in supported_paths() {
+                assert_eq!(dispatch(path, Masks(bits)), want, "{bits:#x} on {path:?}");
+            }
         }
     }
 }

@@ -202,9 +202,9 @@ fn packets_of_parallel_rays_count_as_single_rays() {
                 [o.x, o.y, o.z, d.x, d.y, d.z]
             };
             let mut rays = Vec::new();
-            // Sixteen rays on the line through each point (every lane enters the same nodes:
-            // the triangle-by-triangle test), from outside, inside and beyond the mesh.
-            let starts = (0..16).map(|k| k as f32 * 0.25 - 1.5);
+            // Thirty-two rays on the line through each point (a packet's lanes enter the same
+            // nodes: the triangle-by-triangle test), from outside, inside and beyond the mesh.
+            let starts = (0..32).map(|k| k as f32 * 0.125 - 1.5);
             for &p in &points {
                 rays.extend(starts.clone().map(|s| ray(p, s)));
             }
