@@ -286,29 +286,57 @@ impl RaycastingScene {
         budget(&[(total, 24), (rays.len() + 1, 4)], what)?;
         let mut out = Intersections {
             ray_splits: room(rays.len() + 1, what)?,
-            ray_ids: room(total, what)?,
-            t_hit: room(total, what)?,
-            geometry_ids: room(total, what)?,
-            primitive_ids: room(total, what)?,
-            primitive_uvs: room(total, what)?,
+            ray_ids: filled(&pool, options, total, 0)?,
+            t_hit: filled(&pool, options, total, 0.0)?,
+            geometry_ids: filled(&pool, options, total, 0)?,
+            primitive_ids: filled(&pool, options, total, 0)?,
+            primitive_uvs: filled(&pool, options, total, [0.0; 2])?,
         };
         out.ray_splits.push(0);
-        let mut ray = 0u32;
-        for (counts, hits) in chunks {
-            let mut hits = hits.iter();
-            for count in counts {
-                let last = *out.ray_splits.last().unwrap_or(&0);
-                out.ray_splits.push(last + count);
-                for h in hits.by_ref().take(count as usize) {
-                    out.ray_ids.push(ray);
-                    out.t_hit.push(h.crossing.t);
-                    out.geometry_ids.push(h.geometry);
-                    out.primitive_ids.push(h.primitive);
-                    out.primitive_uvs.push([h.crossing.b1, h.crossing.b2]);
-                }
-                ray += 1;
-            }
+        let mut last = 0;
+        for &count in chunks.iter().flat_map(|(counts, _)| counts) {
+            last += count;
+            out.ray_splits.push(last);
         }
+        // Each chunk's hits into its own part of the arrays, the chunks in parallel.
+        let sizes: Vec<usize> = chunks.iter().map(|(_, hits)| hits.len()).collect();
+        let items = (
+            chunks.par_iter(),
+            parts(&mut out.ray_ids, &sizes),
+            parts(&mut out.t_hit, &sizes),
+            parts(&mut out.geometry_ids, &sizes),
+            parts(&mut out.primitive_ids, &sizes),
+            parts(&mut out.primitive_uvs, &sizes),
+        );
+        let items = items.into_par_iter().enumerate();
+        run(
+            &pool,
+            options,
+            items,
+            |(k, ((counts, hits), ray_ids, t, g, p, uv))| {
+                let rays = counts.iter().enumerate().flat_map(|(i, &count)| {
+                    std::iter::repeat_n((k * CHUNK + i) as u32, count as usize)
+                });
+                for (j, (h, ray)) in hits.iter().zip(rays).enumerate() {
+                    ray_ids[j] = ray;
+                    t[j] = h.crossing.t;
+                    (g[j], p[j]) = (h.geometry, h.primitive);
+                    uv[j] = [h.crossing.b1, h.crossing.b2];
+                }
+            },
+        )?;
         Ok(out)
     }
+}
+
+/// `v` cut into consecutive parts of the lengths `sizes` (which sum to at most its length).
+fn parts<'a, T>(mut v: &'a mut [T], sizes: &[usize]) -> Vec<&'a mut [T]> {
+    sizes
+        .iter()
+        .map(|&n| {
+            let (part, rest) = std::mem::take(&mut v).split_at_mut(n);
+            v = rest;
+            part
+        })
+        .collect()
 }

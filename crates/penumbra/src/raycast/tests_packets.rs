@@ -1,6 +1,7 @@
-//! The closest-hit packets (`packet`) against the single-ray query, bit for bit, on every SIMD
-//! path this machine has: pinhole images of closed meshes (with exact ties on their shared
-//! edges) and rays from one eye aimed exactly at every shared edge and vertex.
+//! The packets against the single-ray queries, bit for bit, on every SIMD path this machine
+//! has: closest hits of pinhole images of closed meshes (with exact ties on their shared edges)
+//! and of rays from one eye aimed exactly at every shared edge and vertex; counts of parallel
+//! rays through every shared edge and vertex; occupancy in any order; long lists.
 
 use glam::{Mat3, Vec3};
 
@@ -254,4 +255,42 @@ fn occupancy_is_the_parity_of_each_points_count_in_any_order() {
     }
     let inside = occupancy.iter().filter(|&&o| o == 1.0).count();
     assert!(inside > 1000 && inside < 3000, "{inside} inside");
+}
+
+#[test]
+fn a_list_of_many_chunks_is_each_rays_own_list() {
+    let mesh = icosphere(2);
+    let mut scene = RaycastingScene::new();
+    scene.add_triangles(&mesh.0, &mesh.1).unwrap();
+    let options = QueryOptions {
+        threads: 2,
+        ..QueryOptions::default()
+    };
+    // Rays through the sphere and past it, three chunks and a part.
+    let rays: Vec<[f32; 6]> = (0..3500)
+        .map(|i| {
+            let a = i as f32 * 0.618;
+            let o = [3.0 * a.cos(), 3.0 * a.sin(), (i % 7) as f32 * 0.3 - 1.0];
+            [o[0], o[1], o[2], -o[0] + 0.3 * a.sin(), -o[1], 0.2]
+        })
+        .collect();
+    let all = scene.list_intersections(&rays, &options).unwrap();
+    let mut start = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let one = scene
+            .list_intersections(std::slice::from_ref(ray), &options)
+            .unwrap();
+        let n = one.t_hit.len();
+        let (a, b) = (all.ray_splits[i] as usize, all.ray_splits[i + 1] as usize);
+        assert_eq!((a, b), (start, start + n), "ray {i}");
+        assert!(all.ray_ids[a..b].iter().all(|&r| r == i as u32), "ray {i}");
+        let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&all.t_hit[a..b]), bits(&one.t_hit), "ray {i}");
+        assert_eq!(all.primitive_ids[a..b], one.primitive_ids[..], "ray {i}");
+        assert_eq!(all.geometry_ids[a..b], one.geometry_ids[..], "ray {i}");
+        assert_eq!(all.primitive_uvs[a..b], one.primitive_uvs[..], "ray {i}");
+        start += n;
+    }
+    assert_eq!(start, all.t_hit.len());
+    assert!(start > rays.len(), "{start} crossings");
 }
