@@ -87,6 +87,29 @@ fn packets_of_pinhole_images_answer_as_single_rays() {
     }
 }
 
+#[test]
+fn packets_of_rays_from_spread_origins_answer_as_single_rays() {
+    // A packet's culling bounds its origins by a box (here an orthographic image, and rays
+    // whose origins and directions both vary), not only by one eye.
+    let mesh = subdivided_cube(3, Mat3::from_rotation_y(0.3));
+    let mut rng = crate::Rng::new(3, &[]);
+    let (w, h) = (48, 40);
+    let mut rays = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = (
+                x as f32 / w as f32 * 3.0 - 1.5,
+                y as f32 / h as f32 * 3.0 - 1.5,
+            );
+            rays.push([u, v, 3.0, 0.1, -0.05, -1.0]);
+            let wobble = 0.02 * (rng.uniform() - 0.5);
+            rays.push([u + wobble, v, 3.0 + wobble, 0.1 + wobble, -0.05, -1.0]);
+        }
+    }
+    let hits = check(&mesh, &rays);
+    assert!(hits > rays.len() / 4, "{hits} of {} rays hit", rays.len());
+}
+
 /// Rays from `eye` to each point of `mesh` aimed at by [`targets`] (its shared edges and
 /// vertices), `t = 1` at the point.
 fn rays_from(eye: Vec3, mesh: &MeshData) -> Vec<[f32; 6]> {

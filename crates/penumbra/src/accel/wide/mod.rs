@@ -7,11 +7,13 @@
 //!   its one single-ray walk, which the closest-, any- and every-hit queries share;
 //! - `packets`: packets of neighbouring rays through one walk: closest hits (`cast_rays` on
 //!   pinhole images) and crossing counts of parallel rays (occupancy's votes);
+//! - `cull`: a packet's bounds, for culling a node's children for all its rays at once;
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
 //! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
 //! - `levels`: the scene's own tree and placed meshes' trees under a top-level tree, which
 //!   every query of the ray-casting API asks.
 
+mod cull;
 mod group;
 pub(crate) mod kernels;
 pub(crate) mod levels;

@@ -62,6 +62,14 @@ impl WideNode {
         self.count[lane] != UNUSED
     }
 
+    /// The lanes holding a child (bit `i` for lane `i`).
+    #[inline(always)]
+    pub fn used_mask(&self) -> u32 {
+        (0..WIDTH)
+            .filter(|&c| self.used(c))
+            .fold(0, |m, c| m | 1 << c)
+    }
+
     /// The box of child `lane` as its smallest and largest corners.
     #[inline(always)]
     pub fn bounds(&self, lane: usize) -> ([f32; 3], [f32; 3]) {
@@ -113,6 +121,52 @@ impl WideNode {
             entry[i] = near;
         }
         (I::mask(&inside), entry)
+    }
+
+    /// The children (bit `i` for child `i`) that some ray of a packet may enter with `t` in
+    /// `[t_min, t_max]`: the rays' origins lie in the box `origin` (smallest and largest
+    /// corners), their reciprocal directions in `inv_dir` (per axis one sign, finite).
+    ///
+    /// Interval arithmetic on the slab test (Boulos et al. 2006, "Geometric and arithmetic
+    /// culling methods for entire ray packets"): per axis, the entry distance `(p − o)·(1/d)`
+    /// is smallest at the origin's far end and at one end of `1/d`, the exit distance largest
+    /// at the near end. Rounding is monotonic, so the bounds computed in `f32` bound every
+    /// ray's own `f32` distances: a child missed here is missed by each ray's test
+    /// ([`crate::accel::lanes::slab`], with `t_max` at least each ray's bound), and culling
+    /// with it only saves the rays' tests.
+    #[inline(always)]
+    pub fn enter_interval<I: Isa>(
+        &self,
+        origin: &([f32; 3], [f32; 3]),
+        inv_dir: &([f32; 3], [f32; 3]),
+        t_min: f32,
+        t_max: f32,
+        exit_scale: f32,
+    ) -> u32 {
+        // Per axis: the entry and exit planes, the origin's end that gives the smallest
+        // entry and the one that gives the largest exit (plain loops: they vectorize).
+        let (o, (lo, hi)) = (origin, inv_dir);
+        let mut near = [t_min; WIDTH];
+        let mut far = [f32::INFINITY; WIDTH];
+        for a in 0..3 {
+            let (entry, exit, o_entry, o_exit) = if lo[a].is_sign_negative() {
+                (&self.max[a], &self.min[a], o.0[a], o.1[a])
+            } else {
+                (&self.min[a], &self.max[a], o.1[a], o.0[a])
+            };
+            for i in 0..WIDTH {
+                let x = entry[i] - o_entry;
+                let y = exit[i] - o_exit;
+                near[i] = max(near[i], min(x * lo[a], x * hi[a]));
+                far[i] = min(far[i], max(y * lo[a], y * hi[a]));
+            }
+        }
+        let mut inside = [0i32; WIDTH];
+        for i in 0..WIDTH {
+            let far = min(far[i] * exit_scale, t_max);
+            inside[i] = -i32::from((near[i] <= far) & (self.count[i] != UNUSED));
+        }
+        I::mask(&inside)
     }
 }
 

@@ -22,6 +22,7 @@
 //! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
 //! the own tree, one ray at a time (`kernels::ClosestPlaced`, `kernels::Counts`).
 
+use super::cull::{bounds, furthest, Bounds};
 use super::kernels::{prepare, Control};
 use super::levels::WideLevels;
 use super::node::WIDTH;
@@ -63,19 +64,26 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         let mut stack = Stack::default();
         let mut packet_stack = Vec::new();
-        for (rays, hits) in rays.chunks(N).zip(hits.chunks_mut(N)) {
+        // Packets of two vectors of lanes: with the whole packet's culling (`walk`), a 4 × 4
+        // tile of an image (AVX2) went 1.08-1.14x as fast as 4 × 2 (bunny, 1 thread).
+        for (rays, hits) in rays.chunks(2 * N).zip(hits.chunks_mut(2 * N)) {
             if options.cancelled() {
                 return;
             }
             // Cut-out triangles are tested one ray at a time, by the filtered single-ray walk,
             // and so are rays with other bounds than `[0, ∞]`.
             let packets = alpha.is_none() && range == (0.0, f32::INFINITY);
-            match lanes::<N>(rays).filter(|_| packets) {
-                Some(lanes) => trace::<N, I>(accel, &lanes, &mut packet_stack, hits),
-                None => {
-                    for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-                        *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
-                    }
+            let wide = &mut packet_stack;
+            let traced = packets
+                && match N {
+                    16 => lanes::<32>(rays).map(|l| trace::<32, I>(accel, &l, wide, hits)),
+                    8 => lanes::<16>(rays).map(|l| trace::<16, I>(accel, &l, wide, hits)),
+                    _ => None,
+                }
+                .is_some();
+            if !traced {
+                for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+                    *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
                 }
             }
         }
@@ -109,7 +117,9 @@ pub(crate) fn count_parallel<const N: usize, I: Isa>(
         border,
         count: [0; N],
     };
-    walk::<N, I, _>(accel, &lanes, stack, &mut tally);
+    // Origins spread along the rays make the packet's bounds as large as the tree's box:
+    // no culling for the whole packet.
+    walk::<N, I, _>(accel, &lanes, None, stack, &mut tally);
     out.copy_from_slice(&tally.count);
     true
 }
@@ -211,7 +221,8 @@ fn trace<const N: usize, I: Isa>(
         slot: [0; N],
         hit: 0,
     };
-    walk::<N, I, _>(accel, lanes, stack, &mut best);
+    let bounds = bounds(&lanes.origin, &lanes.inv_dir);
+    walk::<N, I, _>(accel, lanes, bounds.as_ref(), stack, &mut best);
     for (i, hit) in hits.iter_mut().enumerate() {
         *hit = (best.hit >> i & 1 == 1).then(|| {
             let crossing = Crossing {
@@ -225,11 +236,13 @@ fn trace<const N: usize, I: Isa>(
 }
 
 /// The packet walk: visits the leaves each lane's ray enters (the lanes that enter a node
-/// go on with it), and gives every hit of a lane to `hits`.
+/// go on with it), and gives every hit of a lane to `hits`. With the packet's `bounds`, a
+/// node's children are first culled for the whole packet, one test for all lanes.
 #[inline(always)]
 fn walk<const N: usize, I: Isa, H: Hits<N>>(
     accel: &WideBvh,
     lanes: &Lanes<'_, N>,
+    bounds: Option<&Bounds>,
     stack: &mut Vec<(u32, u32, u32)>,
     hits: &mut H,
 ) {
@@ -241,14 +254,21 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
     while let Some((index, count, mask)) = stack.pop() {
         if count == 0 {
             let node = &accel.wide()[index as usize];
+            // The children some lane may enter, culled for the whole packet first.
+            let mut maybe = match bounds {
+                Some((o, inv)) => {
+                    let t_max = furthest(hits.t_max(), mask);
+                    node.enter_interval::<I>(o, inv, hits.t_min(), t_max, EXIT_SCALE)
+                }
+                None => node.used_mask(),
+            };
             // Children the packet enters, the one its first lane enters first on top.
             let mut kids = [(0u32, 0u32, 0u32, 0.0f32); WIDTH];
             let mut n = 0;
-            for c in 0..WIDTH {
+            while maybe != 0 {
+                let c = maybe.trailing_zeros() as usize;
+                maybe &= maybe - 1;
                 let (child, child_count) = node.child(c);
-                if !node.used(c) {
-                    break;
-                }
                 let (m, near) = slab::<N, I>(node.bounds(c), lanes, hits.t_min(), hits.t_max());
                 let m = m & mask;
                 if m != 0 {

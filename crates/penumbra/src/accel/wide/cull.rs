@@ -1,0 +1,152 @@
+//! A packet's bounds for culling a wide node's children for all its rays at once
+//! ([`WideNode::enter_interval`](super::node::WideNode::enter_interval)): the box of the
+//! origins and the range of `1/direction` per axis (interval arithmetic, Boulos et al. 2006).
+
+use super::tree::tie_bound;
+
+/// The smallest and largest origin coordinates, and the smallest and largest `1/direction`,
+/// per axis.
+pub(super) type Bounds = (([f32; 3], [f32; 3]), ([f32; 3], [f32; 3]));
+
+/// The bounds of the rays `(origin, inv)` (by axis and lane), when every `1/direction` is
+/// finite and has one sign per axis (rays of one octant, as a pinhole image's neighbours):
+/// then no product in the interval test is a NaN, and each axis's entry plane is the same
+/// for every ray.
+#[inline(always)]
+pub(super) fn bounds<const N: usize>(
+    origin: &[[f32; N]; 3],
+    inv: &[[f32; N]; 3],
+) -> Option<Bounds> {
+    let mut b = (([0.0f32; 3], [0.0f32; 3]), ([0.0f32; 3], [0.0f32; 3]));
+    // Plain loops, not `map`: they stay inside the kernel compiled per instruction set.
+    for a in 0..3 {
+        let (mut o_lo, mut o_hi) = (origin[a][0], origin[a][0]);
+        let (mut i_lo, mut i_hi) = (inv[a][0], inv[a][0]);
+        for i in 1..N {
+            (o_lo, o_hi) = (o_lo.min(origin[a][i]), o_hi.max(origin[a][i]));
+            (i_lo, i_hi) = (i_lo.min(inv[a][i]), i_hi.max(inv[a][i]));
+        }
+        let usable = i_lo.is_finite()
+            && i_hi.is_finite()
+            && i_lo.is_sign_negative() == i_hi.is_sign_negative();
+        if !usable {
+            return None;
+        }
+        (b.0 .0[a], b.0 .1[a], b.1 .0[a], b.1 .1[a]) = (o_lo, o_hi, i_lo, i_hi);
+    }
+    Some(b)
+}
+
+/// The largest bound [`tie_bound`] makes of `t_max` on the lanes of `mask`: at least every
+/// such lane's own, so a child no lane enters below it is one no lane's test lets through.
+#[inline(always)]
+pub(super) fn furthest<const N: usize>(t_max: &[f32; N], mask: u32) -> f32 {
+    let mut far = 0.0f32;
+    for (i, &t) in t_max.iter().enumerate() {
+        if mask >> i & 1 == 1 {
+            far = far.max(t);
+        }
+    }
+    tie_bound(far)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::accel::lanes::slab;
+    use crate::accel::wide::node::{collapse, WideNode, WIDTH};
+    use crate::accel::wide::tree::EXIT_SCALE;
+    use crate::accel::Bvh;
+    use crate::geometry::{Geometry, Triangle};
+    use crate::simd::{dispatch, supported_paths, Isa, Kernel};
+    use crate::Rng;
+
+    /// 400 small random triangles in the unit cube: a tree of boxes of every size.
+    fn nodes() -> Vec<WideNode> {
+        let mut rng = Rng::new(7, &[]);
+        let mut g = Geometry::default();
+        for i in 0..400u32 {
+            let p = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            let d = |rng: &mut Rng| 0.05 * Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            let (b, c) = (p + d(&mut rng), p - d(&mut rng));
+            g.positions.extend([p, b, c]);
+            g.triangles.push(Triangle {
+                vertices: [3 * i, 3 * i + 1, 3 * i + 2],
+                material: 0,
+                object: 0,
+                smooth: false,
+            });
+        }
+        collapse(Bvh::build(&g).nodes(), 8, &mut |first, _| first)
+    }
+
+    /// 8 rays by axis: origins spread by `spread` around a point, directions by `cone`
+    /// around one, each with its own bound `t_max` (some infinite).
+    fn packet(rng: &mut Rng, spread: f32, cone: f32) -> ([[f32; 8]; 3], [[f32; 8]; 3], [f32; 8]) {
+        let mut u = || rng.uniform() * 2.0 - 1.0;
+        let (o0, d0) = ([u() * 2.0, u() * 2.0, u() * 2.0], [u(), u(), u()]);
+        let (mut o, mut inv, mut t_max) = ([[0.0; 8]; 3], [[0.0; 8]; 3], [0.0; 8]);
+        for i in 0..8 {
+            for a in 0..3 {
+                o[a][i] = o0[a] + spread * u();
+                inv[a][i] = 1.0 / (d0[a] + cone * u());
+            }
+            t_max[i] = if u() > 0.5 {
+                f32::INFINITY
+            } else {
+                3.0 * u().abs()
+            };
+        }
+        (o, inv, t_max)
+    }
+
+    /// Per path: how many (node, packet) pairs some lane enters a child that the interval
+    /// test culls (must be none), and how many children it culls in all.
+    struct Check<'a>(&'a [WideNode]);
+
+    impl Kernel for Check<'_> {
+        type Output = (usize, usize, usize);
+
+        fn run<const N: usize, I: Isa>(self) -> (usize, usize, usize) {
+            let mut rng = Rng::new(11, &[]);
+            let (mut wrong, mut culled, mut entered) = (0, 0, 0);
+            for k in 0..3000 {
+                let (spread, cone) = [(0.0, 0.05), (0.02, 0.02), (0.3, 0.3)][k % 3];
+                let (o, inv, t_max) = packet(&mut rng, spread, cone);
+                let Some((ob, ib)) = bounds(&o, &inv) else {
+                    continue;
+                };
+                for node in self.0 {
+                    let some =
+                        node.enter_interval::<I>(&ob, &ib, 0.0, furthest(&t_max, 255), EXIT_SCALE);
+                    for c in (0..WIDTH).filter(|&c| node.used(c)) {
+                        let (lo, hi) = node.bounds(c);
+                        let rel = |a: usize, i: usize| (lo[a] - o[a][i], hi[a] - o[a][i]);
+                        let (lanes, _) = slab::<8, I>(rel, &inv, 0.0, &t_max, EXIT_SCALE);
+                        let kept = some >> c & 1 == 1;
+                        wrong += usize::from(lanes != 0 && !kept);
+                        culled += usize::from(!kept);
+                        entered += usize::from(lanes != 0);
+                    }
+                }
+            }
+            (wrong, culled, entered)
+        }
+    }
+
+    #[test]
+    fn the_interval_test_culls_only_children_no_ray_enters() {
+        let nodes = nodes();
+        for path in supported_paths() {
+            let (wrong, culled, entered) = dispatch(path, Check(&nodes));
+            assert_eq!(wrong, 0, "{path:?}: children culled that a ray enters");
+            // It culls: a test that let every child through would pass the line above.
+            assert!(
+                culled > 4 * entered,
+                "{path:?}: {culled} culled, {entered} entered"
+            );
+        }
+    }
+}
