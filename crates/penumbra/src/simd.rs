@@ -188,6 +188,12 @@ impl Isa for Avx2 {
             // SAFETY: as for 8 lanes, twice.
             return unsafe { mask8_avx2(lanes.as_ptr()) | mask8_avx2(lanes.as_ptr().add(8)) << 8 };
         }
+        #[cfg(target_arch = "x86_64")]
+        if N == 32 {
+            // SAFETY: as for 8 lanes, four times.
+            let at = |k: usize| unsafe { mask8_avx2(lanes.as_ptr().add(8 * k)) << (8 * k) };
+            return at(0) | at(1) | at(2) | at(3);
+        }
         mask_by_lane(lanes)
     }
 }
@@ -204,6 +210,12 @@ impl Isa for Baseline {
         if N == 16 {
             // SAFETY: as for 8 lanes, twice.
             return unsafe { mask8_sse2(lanes.as_ptr()) | mask8_sse2(lanes.as_ptr().add(8)) << 8 };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if N == 32 {
+            // SAFETY: as for 8 lanes, four times.
+            let at = |k: usize| unsafe { mask8_sse2(lanes.as_ptr().add(8 * k)) << (8 * k) };
+            return at(0) | at(1) | at(2) | at(3);
         }
         mask_by_lane(lanes)
     }
@@ -366,7 +378,7 @@ mod tests {
     }
 
     #[test]
-    fn masks_of_one_or_two_vectors_are_the_lanes_sign_bits() {
+    fn masks_of_one_to_four_vectors_are_the_lanes_sign_bits() {
         for bits in [
             0,
             u32::MAX,
