@@ -238,6 +238,10 @@ pub(crate) fn filled<T: Copy + Send + Sync>(
 ) -> Result<Vec<T>, RaycastError> {
     let count = n.div_ceil(BLOCK);
     let mut blocks: Vec<[T; BLOCK]> = room(count, "the result")?;
+    if n <= ALONE {
+        // Handing a few blocks to the pool's threads costs more than writing them here.
+        blocks.resize(count, [value; BLOCK]);
+    }
     while blocks.len() < count {
         if options.cancelled() {
             return Err(RaycastError::Cancelled);
@@ -254,6 +258,10 @@ pub(crate) fn filled<T: Copy + Send + Sync>(
     out.truncate(n);
     Ok(out)
 }
+
+/// At most this many values [`filled`] writes on the calling thread (256 KB to 768 KB, tens
+/// of microseconds: about what waking the pool's threads costs).
+const ALONE: usize = 1 << 16;
 
 /// Values per block of [`filled`].
 const BLOCK: usize = 256;
