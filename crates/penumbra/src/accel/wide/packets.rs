@@ -1,8 +1,9 @@
 //! Packets: `N` neighbouring rays traced together through the wide tree, one lane each,
 //! compiled per instruction set by `crate::simd` (closest hits: two vectors, 16 lanes for
-//! AVX2 and the baseline, 32 for AVX-512; parallel rays: 32 lanes). One walk serves two queries ([`Hits`]): the closest hits of `cast_rays` (the
-//! pixels of a pinhole image come in row order) and the crossing counts of parallel rays
-//! (`count_parallel`: occupancy's votes, all along one direction, children in any order).
+//! AVX2 and the baseline, 32 for AVX-512; parallel rays: 32 lanes). One walk serves two
+//! queries ([`Hits`]): the closest hits of `cast_rays` (the pixels of a pinhole image come
+//! in row order) and the crossing counts of parallel rays (`count_parallel`: occupancy's
+//! votes, all along one direction, children in any order).
 //!
 //! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
 //! and share the watertight test's axis permutation (then every lane runs the same
