@@ -8,8 +8,7 @@ use rayon::prelude::*;
 use super::lazy;
 use super::run::{budget, filled, room, run, FarOrigins, QueryOptions, CHUNK};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
-use crate::accel::prim::watertight::PreparedRay;
-use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Listing};
+use crate::accel::wide::kernels::{closest_hits, counts, occlusions, Listing};
 use crate::simd::{dispatch, simd_path};
 
 /// The range of `t` of Open3D's `cast_rays` and `count_intersections`.
@@ -160,16 +159,12 @@ impl RaycastingScene {
             // The rays in the order of the packets: tile by tile across a band, or as given.
             let order: Option<Vec<usize>> = row_length.map(|w| tile_order(rays.len(), w));
             let index = |j: usize| order.as_ref().map_or(j, |o| o[j]);
-            let prepared: Vec<Option<PreparedRay>> =
-                (0..rays.len()).map(|j| prepare(&rays[index(j)])).collect();
-            let mut hits = vec![None; rays.len()];
-            // The rays as given, in the packets' order, for the placements.
-            let given = || match &order {
+            let ordered: Cow<[[f32; 6]]> = match &order {
                 Some(o) => o.iter().map(|&i| rays[i]).collect(),
                 None => Cow::from(rays),
             };
-            let query = (&prepared[..], range);
-            closest_hits(simd_path(), (accel, options), query, given, &mut hits);
+            let mut hits = vec![None; rays.len()];
+            closest_hits(simd_path(), (accel, options), (&ordered, range), &mut hits);
             for (j, hit) in hits.into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let i = index(j);

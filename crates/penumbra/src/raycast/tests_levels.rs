@@ -6,9 +6,8 @@
 use glam::{Mat4, Vec3};
 
 use super::*;
-use crate::accel::prim::watertight::PreparedRay;
 use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
-use crate::accel::wide::kernels::{closest_hits, counts, occlusions, prepare, Nearests};
+use crate::accel::wide::kernels::{closest_hits, counts, occlusions, Nearests};
 use crate::accel::wide::nearest::closest_f64;
 use crate::accel::wide::packets::ClosestHit;
 use crate::math::Transform;
@@ -80,7 +79,6 @@ fn random_rays(seed: u64, n: usize) -> Vec<[f32; 6]> {
 fn answers(scene: &RaycastingScene, rays: &[[f32; 6]]) -> (Vec<ClosestHit>, Vec<bool>, Vec<i32>) {
     let options = QueryOptions::default();
     let (accel, _) = scene.prepare(&options).unwrap();
-    let prepared: Vec<Option<PreparedRay>> = rays.iter().map(prepare).collect();
     let border = accel.borders(test_pool());
     let mut all = Vec::new();
     for path in supported_paths() {
@@ -88,7 +86,7 @@ fn answers(scene: &RaycastingScene, rays: &[[f32; 6]]) -> (Vec<ClosestHit>, Vec<
         let run = (&*accel, &options);
         let mut hits = vec![None; rays.len()];
         let every = (0.0, f32::INFINITY);
-        closest_hits(path, run, (&prepared, every), || rays.into(), &mut hits);
+        closest_hits(path, run, (rays, every), &mut hits);
         let mut occluded = vec![false; rays.len()];
         occlusions(path, run, rays, (0.0, 1.0), &mut occluded);
         let mut counted = vec![0; rays.len()];

@@ -8,6 +8,7 @@ use glam::{Mat3, Vec3};
 use super::*;
 use crate::accel::prim::watertight::PreparedRay;
 use crate::accel::wide::packets::{CastPackets, ClosestHit};
+use crate::accel::wide::rays::lane_rays;
 use crate::simd::{dispatch, supported_paths, SimdPath};
 
 use crate::accel::test_meshes::{icosphere, subdivided_cube, targets, MeshData};
@@ -33,12 +34,8 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
     scene.add_triangles(&mesh.0, &mesh.1).unwrap();
     let (accel, _) = scene.prepare(&QueryOptions::default()).unwrap();
     let accel = &*accel;
-    let prepared: Vec<Option<PreparedRay>> = rays
-        .iter()
-        .map(|r| PreparedRay::new(Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..])))
-        .collect();
     // One ray per kernel run: never a packet, the single-ray query.
-    let want: Vec<ClosestHit> = prepared
+    let want: Vec<ClosestHit> = rays
         .iter()
         .map(|r| {
             let mut hit = [None];
@@ -62,7 +59,7 @@ fn check(mesh: &MeshData, rays: &[[f32; 6]]) -> usize {
             accel,
             range: (0.0, f32::INFINITY),
             options: &QueryOptions::default(),
-            rays: &prepared,
+            rays,
             hits: &mut hits,
         };
         dispatch(path, kernel);
@@ -316,4 +313,79 @@ fn a_list_of_many_chunks_is_each_rays_own_list() {
     }
     assert_eq!(start, all.t_hit.len());
     assert!(start > rays.len(), "{start} crossings");
+}
+
+/// A prepared ray as comparable bits: `1/d`, origin, axes, shear and `1/d_z`.
+fn ray_bits(r: &PreparedRay) -> Vec<u32> {
+    let floats = [r.inv_dir.to_array(), r.origin.to_array()].concat();
+    let frame = [r.shear()[0], r.shear()[1], r.inv_dz()];
+    let axes = r.axes().map(|a| a as u32);
+    (floats.iter().chain(&frame).map(|x| x.to_bits()))
+        .chain(axes)
+        .collect()
+}
+
+#[test]
+fn a_packets_lanes_are_prepared_as_single_rays() {
+    let mut rng = crate::sampling::Rng::new(11, &[]);
+    let mut coordinate = |scale: f32| scale * (2.0 * rng.uniform() - 1.0);
+    // Directions near (±1, ±1, ±1)·(a, b, c) with exact ties of |d| between axes half the
+    // time, and zero components: every way the largest axis and its sign are chosen.
+    for sign in [
+        [1.0, 1.0, 1.0],
+        [-1.0, 1.0, -1.0],
+        [1.0, -1.0, 1.0],
+        [-1.0, -1.0, -1.0],
+    ] {
+        for &(a, b, c) in &[
+            (1.0, 1.0, 1.0),
+            (1.0, 1.0, 0.5),
+            (0.5, 1.0, 1.0),
+            (1.0, 0.0, 0.0),
+        ] {
+            let rays: Vec<[f32; 6]> = (0..16)
+                .map(|i| {
+                    let tie = i % 2 == 0;
+                    let jitter = |x: f32, s: f32| if tie || x == 0.0 { x } else { x + s };
+                    let d = [
+                        sign[0] * jitter(a, 0.01 * coordinate(1.0).abs()),
+                        sign[1] * b,
+                        sign[2] * c,
+                    ];
+                    let o = [coordinate(10.0), coordinate(10.0), coordinate(1e-3)];
+                    [o[0], o[1], o[2], d[0], d[1], d[2]]
+                })
+                .collect();
+            let single: Vec<Option<PreparedRay>> = rays
+                .iter()
+                .map(|r| PreparedRay::new(Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..])))
+                .collect();
+            let one_frame = single
+                .iter()
+                .all(|r| r.unwrap().axes() == single[0].unwrap().axes());
+            let packet = lane_rays::<16>(&rays);
+            assert_eq!(packet.is_some(), one_frame, "{sign:?} {a} {b} {c}");
+            for (lane, one) in packet.iter().flatten().zip(&single) {
+                assert_eq!(
+                    ray_bits(lane),
+                    ray_bits(&one.unwrap()),
+                    "{sign:?} {a} {b} {c}"
+                );
+            }
+        }
+    }
+    // A lane that `PreparedRay::new` refuses, or with another frame, makes no packet.
+    let good = [0.0, 0.0, 0.0, 0.1, 0.2, 1.0];
+    for bad in [
+        [0.0, 0.0, 0.0, 0.1, 1.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [f32::NAN, 0.0, 0.0, 0.1, 0.2, 1.0],
+        [0.0, 0.0, 0.0, 0.1, f32::INFINITY, 1.0],
+        [0.0, 0.0, 0.0, 0.1, 0.2, -1.0],
+    ] {
+        let mut rays = vec![good; 16];
+        rays[9] = bad;
+        assert!(lane_rays::<16>(&rays).is_none(), "{bad:?}");
+        assert!(lane_rays::<16>(&vec![good; 16]).is_some());
+    }
 }

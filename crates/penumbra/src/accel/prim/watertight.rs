@@ -95,6 +95,46 @@ pub(crate) struct Crossing {
     pub b2: f32,
 }
 
+/// The sheared frame of a ray along `d` (finite, not zero) as a number, `2·kz + s`: `kz` is
+/// the axis of the largest `|d|` (the first of equals) and `s` is 1 when `d` is negative
+/// along it. Branch-free selects, so that a packet's lanes compute it side by side.
+#[inline(always)]
+pub(crate) fn frame_code(d: [f32; 3]) -> u32 {
+    let (ax, ay, az) = (d[0].abs(), d[1].abs(), d[2].abs());
+    let y_over_x = ay > ax;
+    let z_top = az > if y_over_x { ay } else { ax };
+    let kz = if z_top { 2 } else { u32::from(y_over_x) };
+    let along = if z_top {
+        d[2]
+    } else if y_over_x {
+        d[1]
+    } else {
+        d[0]
+    };
+    2 * kz + u32::from(along < 0.0)
+}
+
+/// The axis permutation `[kx, ky, kz]` of the frame [`frame_code`] numbers: `kz` last, and
+/// the frame kept right-handed so that a triangle's winding keeps its sign.
+#[inline(always)]
+pub(crate) fn frame_axes(code: u32) -> [usize; 3] {
+    let kz = (code / 2) as usize;
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if code % 2 == 1 {
+        [ky, kx, kz]
+    } else {
+        [kx, ky, kz]
+    }
+}
+
+/// The shear `(−d_x/d_z, −d_y/d_z)` and `1/d_z` of a direction whose components in the
+/// frame's permuted axes are `(dx, dy, dz)`: written once for a ray and for a packet's
+/// lanes, which compute them side by side with the same results.
+#[inline(always)]
+pub(crate) fn shear_lane(dx: f32, dy: f32, dz: f32) -> ([f32; 2], f32) {
+    ([-dx / dz, -dy / dz], 1.0 / dz)
+}
+
 impl PreparedRay {
     /// Prepares `origin + t·direction`; `None` when a component is not finite or the
     /// direction is zero (such rays hit nothing).
@@ -103,21 +143,34 @@ impl PreparedRay {
         if !origin.is_finite() || !direction.is_finite() || direction == Vec3::ZERO {
             return None;
         }
-        let kz = direction.abs().max_position();
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Keep the frame right-handed so that a triangle's winding keeps its sign.
-        if direction[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let dz = direction[kz];
+        let k = frame_axes(frame_code(direction.to_array()));
+        let (shear, inv_dz) = shear_lane(direction[k[0]], direction[k[1]], direction[k[2]]);
         Some(PreparedRay {
             inv_dir: Vec3A::from(direction).recip(),
             origin: Vec3A::from(origin),
-            k: [kx, ky, kz],
-            shear: [-direction[kx] / dz, -direction[ky] / dz],
-            inv_dz: 1.0 / dz,
+            k,
+            shear,
+            inv_dz,
         })
+    }
+
+    /// The ray of origin `origin` whose direction's reciprocal is `inv_dir`, frame `k`
+    /// ([`frame_axes`]) and shear ([`shear_lane`]): a packet's lane, prepared with its
+    /// neighbours, as [`PreparedRay::new`] prepares it alone.
+    #[inline(always)]
+    pub(crate) fn from_parts(
+        origin: [f32; 3],
+        inv_dir: [f32; 3],
+        k: [usize; 3],
+        (shear, inv_dz): ([f32; 2], f32),
+    ) -> PreparedRay {
+        PreparedRay {
+            inv_dir: Vec3A::from(inv_dir),
+            origin: Vec3A::from(origin),
+            k,
+            shear,
+            inv_dz,
+        }
     }
 
     /// The axis permutation `[kx, ky, kz]` of the sheared frame.

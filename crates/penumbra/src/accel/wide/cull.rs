@@ -46,13 +46,22 @@ pub(super) fn bounds<const N: usize>(
 /// such lane's own, so a child no lane enters below it is one no lane's test lets through.
 #[inline(always)]
 pub(super) fn furthest<const N: usize>(t_max: &[f32; N], mask: u32) -> f32 {
-    let mut far = 0.0f32;
-    for (i, &t) in t_max.iter().enumerate() {
-        if mask >> i & 1 == 1 {
-            far = max(far, t);
+    // The lanes out of `mask` as 0, then a pairwise reduction: plain loops over lanes that
+    // compile to a few vector instructions (the branch per lane of a sequential maximum was
+    // 3 % of coherent `cast_rays`).
+    debug_assert!(N.is_power_of_two());
+    let mut far = [0.0f32; N];
+    for i in 0..N {
+        far[i] = if mask >> i & 1 == 1 { t_max[i] } else { 0.0 };
+    }
+    let mut width = N;
+    while width > 1 {
+        width /= 2;
+        for i in 0..width {
+            far[i] = max(far[i], far[i + width]);
         }
     }
-    tie_bound(far)
+    tie_bound(far[0])
 }
 
 #[cfg(test)]
@@ -186,6 +195,37 @@ mod tests {
     fn a_packets_bounds_hold_every_lane() {
         for path in supported_paths() {
             assert!(dispatch(path, Every), "{path:?}");
+        }
+    }
+
+    /// `furthest` over packets of 8, 16 and 32 lanes, on the path that runs: the bound of
+    /// the largest `t` among the lanes of each mask (one lane, two lanes, every other lane,
+    /// all of them), never of a lane out of the mask.
+    struct Furthest;
+
+    impl Kernel for Furthest {
+        type Output = bool;
+
+        fn run<const N: usize, I: Isa>(self) -> bool {
+            fn all<const M: usize>() -> bool {
+                let t: [f32; M] = std::array::from_fn(|i| 1.0 + ((i * 7) % M) as f32);
+                let full = if M == 32 { u32::MAX } else { (1 << M) - 1 };
+                let masks =
+                    (0..M as u32).flat_map(|i| [1 << i, (1 << i) | 1, 0x5555_5555 & full, full]);
+                masks.into_iter().all(|mask| {
+                    let lanes = (0..M).filter(|&i| mask >> i & 1 == 1);
+                    let want = lanes.map(|i| t[i]).fold(0.0, f32::max);
+                    furthest(&t, mask) == tie_bound(want)
+                })
+            }
+            all::<8>() && all::<16>() && all::<32>()
+        }
+    }
+
+    #[test]
+    fn the_furthest_bound_is_over_the_masks_lanes_only() {
+        for path in supported_paths() {
+            assert!(dispatch(path, Furthest), "{path:?}");
         }
     }
 }

@@ -15,7 +15,6 @@ use super::levels::{Borders, WideLevels};
 use super::nearest::Nearest;
 use super::tree::{SlotHit, Stack};
 use crate::accel::prim::watertight::PreparedRay;
-use std::borrow::Cow;
 
 use super::packets::{count_parallel, CastPackets};
 use crate::simd::{dispatch, Isa, Kernel, SimdPath};
@@ -290,26 +289,23 @@ impl<C: Control> Kernel for Listing<'_, C> {
     }
 }
 
-/// The closest hits of `prepared` with `t` in `range` on `path`, written to `hits`: the own
-/// tree by packets, then the placements, which read the rays as given in the same order
-/// (`rays`, made only when there are placements).
-pub(crate) fn closest_hits<'r, C: Control>(
+/// The closest hits of `rays` with `t` in `range` on `path`, written to `hits`: the own tree
+/// by packets (neighbouring rays, so `rays` in the packets' order), then the placements.
+pub(crate) fn closest_hits<C: Control>(
     path: SimdPath,
     (accel, options): (&WideLevels, &C),
-    (prepared, range): (&[Option<PreparedRay>], (f32, f32)),
-    rays: impl FnOnce() -> Cow<'r, [[f32; 6]]>,
+    (rays, range): (&[[f32; 6]], (f32, f32)),
     hits: &mut [Option<SlotHit>],
 ) {
     let own = CastPackets {
         accel,
         range,
         options,
-        rays: prepared,
+        rays,
         hits: &mut *hits,
     };
     dispatch(path, own);
     if accel.has_placements() {
-        let rays = &rays();
         dispatch(
             path,
             ClosestPlaced {

@@ -7,6 +7,7 @@
 //!   its one single-ray walk, which the closest-, any- and every-hit queries share;
 //! - `packets`: packets of neighbouring rays through one walk: closest hits (`cast_rays` on
 //!   pinhole images) and crossing counts of parallel rays (occupancy's votes);
+//! - `rays`: a packet's rays by lane, prepared side by side;
 //! - `cull`: a packet's bounds, for culling a node's children for all its rays at once;
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
 //! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
@@ -20,6 +21,7 @@ pub(crate) mod levels;
 pub(crate) mod nearest;
 pub(crate) mod node;
 pub(crate) mod packets;
+pub(crate) mod rays;
 mod stack;
 mod tree;
 

@@ -29,10 +29,11 @@ use super::cull::{bounds, furthest, Bounds};
 use super::kernels::{prepare, Control};
 use super::levels::WideLevels;
 use super::node::WIDTH;
+use super::rays::{lanes, Lanes};
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
-use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, PreparedRay, T_LIMIT};
+use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, T_LIMIT};
 use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray.
@@ -47,7 +48,8 @@ pub(crate) struct CastPackets<'a, C> {
     pub range: (f32, f32),
     /// Checked before each packet: a cancelled query stops there.
     pub options: &'a C,
-    pub rays: &'a [Option<PreparedRay>],
+    /// `[ox, oy, oz, dx, dy, dz]`, in the packets' order.
+    pub rays: &'a [[f32; 6]],
     pub hits: &'a mut [ClosestHit],
 }
 
@@ -86,6 +88,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
                 .is_some();
             if !traced {
                 for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+                    let ray = prepare(ray);
                     *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
                 }
             }
@@ -110,8 +113,7 @@ pub(crate) fn count_parallel<const N: usize, I: Isa>(
     if rays.len() != N || rays.iter().any(|r| direction(r) != direction(&rays[0])) {
         return false;
     }
-    let prepared: [Option<PreparedRay>; N] = std::array::from_fn(|i| prepare(&rays[i]));
-    let Some(lanes) = lanes::<N>(&prepared) else {
+    let Some(lanes) = lanes::<N>(rays) else {
         return false;
     };
     let mut tally = Tally {
@@ -125,56 +127,6 @@ pub(crate) fn count_parallel<const N: usize, I: Isa>(
     walk::<N, I, _>(accel, &lanes, None, stack, &mut tally);
     out.copy_from_slice(&tally.count);
     true
-}
-
-/// `N` rays by lane, in the watertight test's permuted axes (shared by all lanes).
-struct Lanes<'a, const N: usize> {
-    /// The rays themselves (all `Some`), for the one-triangle test of a lane on an edge.
-    rays: &'a [Option<PreparedRay>],
-    /// The axis permutation `[kx, ky, kz]`.
-    k: [usize; 3],
-    /// Origin and `1/direction` by world axis.
-    origin: [[f32; N]; 3],
-    inv_dir: [[f32; N]; 3],
-    /// Origin by permuted axis, shear and `1/d_z`.
-    permuted: [[f32; N]; 3],
-    shear: [[f32; N]; 2],
-    inv_dz: [f32; N],
-}
-
-/// The packet of `rays` when there are `N`, all valid, with one axis permutation.
-#[inline(always)]
-fn lanes<const N: usize>(rays: &[Option<PreparedRay>]) -> Option<Lanes<'_, N>> {
-    if rays.len() != N {
-        return None;
-    }
-    let first = rays[0]?;
-    let k = first.axes();
-    let mut lanes = Lanes {
-        rays,
-        k,
-        origin: [[0.0; N]; 3],
-        inv_dir: [[0.0; N]; 3],
-        permuted: [[0.0; N]; 3],
-        shear: [[0.0; N]; 2],
-        inv_dz: [0.0; N],
-    };
-    for (i, ray) in rays.iter().enumerate() {
-        let r = (*ray)?;
-        if r.axes() != k {
-            return None;
-        }
-        let (o, inv) = (r.origin.to_array(), r.inv_dir.to_array());
-        for a in 0..3 {
-            lanes.origin[a][i] = o[a];
-            lanes.inv_dir[a][i] = inv[a];
-            lanes.permuted[a][i] = o[k[a]];
-        }
-        let shear = r.shear();
-        (lanes.shear[0][i], lanes.shear[1][i]) = (shear[0], shear[1]);
-        lanes.inv_dz[i] = r.inv_dz();
-    }
-    Some(lanes)
 }
 
 /// What a packet walk does with its lanes' hits: keeps each lane's closest ([`Best`]) or
@@ -213,7 +165,7 @@ struct Tally<'a, const N: usize> {
 #[inline(always)]
 fn trace<const N: usize, I: Isa>(
     accel: &WideBvh,
-    lanes: &Lanes<'_, N>,
+    lanes: &Lanes<N>,
     stack: &mut Vec<(u32, u32, u32)>,
     hits: &mut [ClosestHit],
 ) {
@@ -244,7 +196,7 @@ fn trace<const N: usize, I: Isa>(
 #[inline(always)]
 fn walk<const N: usize, I: Isa, H: Hits<N>>(
     accel: &WideBvh,
-    lanes: &Lanes<'_, N>,
+    lanes: &Lanes<N>,
     bounds: Option<&Bounds>,
     stack: &mut Vec<(u32, u32, u32)>,
     hits: &mut H,
@@ -315,7 +267,7 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
 #[inline(always)]
 fn slab<const N: usize, I: Isa>(
     (lo, hi): ([f32; 3], [f32; 3]),
-    lanes: &Lanes<'_, N>,
+    lanes: &Lanes<N>,
     t_min: f32,
     t_max: &[f32; N],
 ) -> (u32, [f32; N]) {
@@ -330,7 +282,7 @@ fn slab<const N: usize, I: Isa>(
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(
     accel: &WideBvh,
-    lanes: &Lanes<'_, N>,
+    lanes: &Lanes<N>,
     corners: &Corners,
     slot: u32,
     mask: u32,
@@ -358,8 +310,7 @@ fn triangle<const N: usize, I: Isa>(
     while rest != 0 {
         let i = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        // Every lane's ray is `Some` (see `lanes`).
-        let Some(ray) = &lanes.rays[i] else { continue };
+        let ray = lanes.ray(i);
         let tri = accel.slot(slot as usize);
         if let Some(c) = ray.hit(tri, boundary, t_min, t_max[i], rule) {
             (t[i], b1[i], b2[i]) = (c.t, c.b1, c.b2);
@@ -444,7 +395,7 @@ impl<const N: usize> Hits<N> for Tally<'_, N> {
 #[inline(always)]
 fn leaf_by_lane<const N: usize, I: Isa>(
     accel: &WideBvh,
-    lanes: &Lanes<'_, N>,
+    lanes: &Lanes<N>,
     (index, count): (u32, u32),
     mask: u32,
     hits: &mut impl Hits<N>,
@@ -453,8 +404,7 @@ fn leaf_by_lane<const N: usize, I: Isa>(
     while rest != 0 {
         let i = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        // Every lane's ray is `Some` (see `lanes`).
-        let Some(ray) = &lanes.rays[i] else { continue };
+        let ray = lanes.ray(i);
         for (group, valid) in accel.leaf(index, count) {
             let (rule, border) = hits.rule();
             let (t_min, t_max) = (hits.t_min(), hits.t_max()[i]);
