@@ -19,18 +19,8 @@ pub(super) fn bounds<const N: usize>(
     inv: &[[f32; N]; 3],
 ) -> Option<Bounds> {
     let mut b = (([0.0f32; 3], [0.0f32; 3]), ([0.0f32; 3], [0.0f32; 3]));
-    // Plain loops over all `N` lanes with the vector instructions' `min`/`max`, not `map`
-    // (kept inside the kernel compiled per instruction set) nor `f32::min` from lane 1 on:
-    // in the dev profile's AVX2 kernel that reduction left out the last three of 16 lanes.
     for a in 0..3 {
-        let (mut o_lo, mut o_hi) = (origin[a][0], origin[a][0]);
-        let (mut i_lo, mut i_hi) = (inv[a][0], inv[a][0]);
-        for i in 0..N {
-            o_lo = min(o_lo, origin[a][i]);
-            o_hi = max(o_hi, origin[a][i]);
-            i_lo = min(i_lo, inv[a][i]);
-            i_hi = max(i_hi, inv[a][i]);
-        }
+        let ((o_lo, o_hi), (i_lo, i_hi)) = (extremes(&origin[a]), extremes(&inv[a]));
         let usable = i_lo.is_finite()
             && i_hi.is_finite()
             && i_lo.is_sign_negative() == i_hi.is_sign_negative();
@@ -46,22 +36,32 @@ pub(super) fn bounds<const N: usize>(
 /// such lane's own, so a child no lane enters below it is one no lane's test lets through.
 #[inline(always)]
 pub(super) fn furthest<const N: usize>(t_max: &[f32; N], mask: u32) -> f32 {
-    // The lanes out of `mask` as 0, then a pairwise reduction: plain loops over lanes that
-    // compile to a few vector instructions (the branch per lane of a sequential maximum was
-    // 3 % of coherent `cast_rays`).
-    debug_assert!(N.is_power_of_two());
     let mut far = [0.0f32; N];
     for i in 0..N {
         far[i] = if mask >> i & 1 == 1 { t_max[i] } else { 0.0 };
     }
+    tie_bound(extremes(&far).1)
+}
+
+/// The smallest and largest of `v` (no NaN; `N` a power of two), by a pairwise reduction:
+/// plain loops over lanes with the vector instructions' `min`/`max`, which compile to a few
+/// vector instructions per level (kept inside the kernel compiled per instruction set). A
+/// sequential fold runs lane after lane (a packet's bounds were 15 instructions a ray), and
+/// `f32::min` folded from lane 1 on left out the last three of 16 lanes in the dev
+/// profile's AVX2 kernel.
+#[inline(always)]
+fn extremes<const N: usize>(v: &[f32; N]) -> (f32, f32) {
+    debug_assert!(N.is_power_of_two());
+    let (mut lo, mut hi) = (*v, *v);
     let mut width = N;
     while width > 1 {
         width /= 2;
         for i in 0..width {
-            far[i] = max(far[i], far[i + width]);
+            lo[i] = min(lo[i], lo[i + width]);
+            hi[i] = max(hi[i], hi[i + width]);
         }
     }
-    tie_bound(far[0])
+    (lo[0], hi[0])
 }
 
 #[cfg(test)]
