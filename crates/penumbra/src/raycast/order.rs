@@ -55,20 +55,61 @@ pub(super) fn across_order(points: &[[f32; 3]], pool: &rayon::ThreadPool) -> Vec
         spread(c.x) | spread(c.y) << 1
     };
     let keys: Vec<u32> = pool.install(|| points.par_iter().map(key).collect());
-    // Counting sort: each cell's first place, then the points in order.
-    let mut start = vec![0usize; last + 2];
-    for &k in &keys {
-        start[k as usize + 1] += 1;
-    }
+    pool.install(|| counting_sort(&keys, last))
+}
+
+/// The indices `0..keys.len()` sorted by their key (each at most `last`), stably: a counting
+/// sort on the current pool's threads. The cells' counts are summed over parts of the keys;
+/// then the cells are cut into one run per thread, about as many points each, and each
+/// thread scans every key and places those of its cells, in order, in its own part of the
+/// result (a serial sort was 8 ms of occupancy's 50 ms on the bunny at 2 threads).
+fn counting_sort(keys: &[u32], last: usize) -> Vec<usize> {
+    let threads = rayon::current_num_threads().max(1);
+    let part = keys.len().div_ceil(threads).max(1);
+    // `start[k]`: the first place of cell `k` (`start[last + 1]` is the end).
+    let mut start = keys
+        .par_chunks(part)
+        .map(|keys| {
+            let mut count = vec![0usize; last + 2];
+            for &k in keys {
+                count[k as usize + 1] += 1;
+            }
+            count
+        })
+        .reduce_with(|mut a, b| {
+            a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
+            a
+        })
+        .unwrap_or_else(|| vec![0; last + 2]);
     for k in 1..start.len() {
         start[k] += start[k - 1];
     }
-    let mut order = vec![0; points.len()];
-    for (i, &k) in keys.iter().enumerate() {
-        let place = &mut start[k as usize];
-        order[*place] = i;
-        *place += 1;
+    // Runs of cells `cells[t]..cells[t + 1]`, each a contiguous part of the result.
+    let mut cells = vec![0usize];
+    for t in 1..threads {
+        let cut = start.partition_point(|&s| s < t * keys.len() / threads);
+        cells.push(cut.clamp(cells[t - 1], last + 1));
     }
+    cells.push(last + 1);
+    let mut order = vec![0; keys.len()];
+    let mut runs = Vec::with_capacity(threads);
+    let mut rest = &mut order[..];
+    for t in 0..threads {
+        let (run, tail) = rest.split_at_mut(start[cells[t + 1]] - start[cells[t]]);
+        runs.push((cells[t]..cells[t + 1], run));
+        rest = tail;
+    }
+    runs.into_par_iter().for_each(|(cells, run)| {
+        let base = start[cells.start];
+        let mut next: Vec<usize> = start[cells.clone()].iter().map(|s| s - base).collect();
+        for (i, &k) in keys.iter().enumerate() {
+            if cells.contains(&(k as usize)) {
+                let place = &mut next[k as usize - cells.start];
+                run[*place] = i;
+                *place += 1;
+            }
+        }
+    });
     order
 }
 
@@ -163,6 +204,26 @@ mod tests {
                     &[2, 3],
                     "non-finite last, in the given order"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn the_counting_sort_is_a_stable_sort_on_any_number_of_threads() {
+        let mut rng = crate::sampling::Rng::new(5, &[]);
+        for (n, last) in [(0, 4), (1, 4), (7, 4), (1000, 16), (5000, 1 << 12)] {
+            let keys: Vec<u32> = (0..n)
+                .map(|_| ((rng.uniform() * (last + 1) as f32) as u32).min(last as u32))
+                .collect();
+            let mut want: Vec<usize> = (0..n).collect();
+            want.sort_by_key(|&i| keys[i]);
+            for threads in [1, 2, 3, 8] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let got = pool.install(|| counting_sort(&keys, last));
+                assert_eq!(got, want, "{n} keys up to {last}, {threads} threads");
             }
         }
     }
