@@ -6,8 +6,9 @@
 //! surface and light they part ways after a few levels of the tree. The rays from a few
 //! neighbouring points to one light sample stay within a pixel or so of each other for their
 //! whole length, and the finer the image the closer they run: bundled, they share nearly every
-//! node they visit. Fans still serve points with many light samples (a fan of hundreds of rays
-//! is a packet of its own, and a bundle would hold every point's samples in memory at once).
+//! node they visit. Fans still serve points with many jittered samples (a fan of hundreds of
+//! rays is a packet of its own, and a bundle would hold every point's segments in memory at
+//! once), and points with more fixed samples than [`BUNDLE_MAX_FIXED`].
 //!
 //! When every point has the same light samples (no jittered light), a bundle is given as
 //! [`crate::accel::Pairs`]: the batch's points once and the samples once per render, the
@@ -31,8 +32,20 @@ use crate::math::Rgb;
 use crate::sampling::Rng;
 use crate::simd::{dispatch, Isa, Kernel};
 
-/// Points with more light samples than this (over all lights) trace each their own fan.
+/// Points with more light samples than this (over all lights) trace each their own fan when
+/// their samples are their own (jittered lights): a bundle would hold every point's segments
+/// in memory at once.
 const BUNDLE_MAX_SAMPLES: u64 = 64;
+
+/// Points whose lights are all fixed bundle their shadow rays as pairs up to this many light
+/// samples (64×64), whatever the tree: pairs write each sample once per render and each point
+/// once per batch, so a batch holds only its points' shading terms, about 1 MB at this bound.
+/// Against fans (process wall time, 2 threads, 1024²): four lights of 1, 9, 25 and 64 samples
+/// in the seed's room (scenes/bench/four_lights.toml) 0.59×, the seed's room at 16×16 samples
+/// 0.57×, the 1M-triangle room at 16×16 (512²) 0.86×. Beyond the bound (lights of up to
+/// 1024×1024 samples) a batch would hold hundreds of megabytes, and fans trace one point at a
+/// time.
+const BUNDLE_MAX_FIXED: u64 = 4096;
 
 /// Fans of fewer samples than this are poor packets (they go one ray at a time): such points
 /// bundle whatever the tree.
@@ -50,8 +63,13 @@ const BUNDLE_MIN_NODES: usize = 4096;
 /// Whether points with `samples` light samples bundle their shadow rays in a tree of `nodes`
 /// BVH nodes; `fixed` when every point has the same samples (no jittered light).
 pub(super) fn bundles(samples: u64, fixed: bool, nodes: usize) -> bool {
-    samples <= BUNDLE_MAX_SAMPLES
-        && (fixed || samples < FAN_MIN_SAMPLES || nodes >= BUNDLE_MIN_NODES)
+    match fixed {
+        true => samples <= BUNDLE_MAX_FIXED,
+        false => {
+            samples <= BUNDLE_MAX_SAMPLES
+                && (samples < FAN_MIN_SAMPLES || nodes >= BUNDLE_MIN_NODES)
+        }
+    }
 }
 
 /// Points shaded together when they bundle: the 4 samples of 4 pixels, a vector of 16 lanes
@@ -343,8 +361,9 @@ mod tests {
     use crate::math::{Ray, Transform};
     use crate::world::{World, WorldBuilder};
 
-    /// A floor under a sphere, both shiny, an area light (`jitter`ed or not), a point light and
-    /// a 4×4 area light above, and an area light low beside the floor, partly below its plane.
+    /// A floor under a sphere, both shiny, an area light (`jitter`ed or not), a point light, a
+    /// 4×4 and a 9×9 area light above, and an area light low beside the floor, partly below its
+    /// plane.
     fn world(jitter: bool) -> World {
         let mut b = WorldBuilder::new();
         let m = b
@@ -399,6 +418,16 @@ mod tests {
             v: Vec3::new(0.0, 0.0, 1.0),
             radiance: Vec3::splat(0.5),
             n: 4,
+            jitter: false,
+        }));
+        // With it the points have more samples than jittered lights may bundle (64): fixed,
+        // they still bundle.
+        b.add_light(Light::Area(AreaLight {
+            center: Vec3::new(1.5, 4.0, 1.0),
+            u: Vec3::new(0.8, 0.0, 0.0),
+            v: Vec3::new(0.0, 0.0, 0.8),
+            radiance: Vec3::splat(0.3),
+            n: 9,
             jitter: false,
         }));
         b.build(1)
