@@ -1,72 +1,73 @@
 //! The light samples of a batch of points whose lights are all fixed (point lights and fixed
 //! grids: the same samples at every point), computed sample by sample across the points.
 //!
-//! Gathering point by point (`Integrator::gather`) runs one short loop per light at each
-//! point: with a few point lights those loops hold one sample each, and a point's shading
-//! becomes a chain of dependent square roots and divisions with bookkeeping between them.
-//! Across the points, the directions to each sample are one vector loop over the batch's
-//! points (kept by axis), the rest of each sample's terms a loop whose points' chains
-//! overlap, and the answers land where the bundled shadow rays read and write them: slot
-//! `j · points + i` is point `i`'s sample `j`.
+//! The batch's points sit side by side in [`LANES`] lanes, each of their terms (position,
+//! normals, material) kept by lane, and every light sample is one pass of vector loops over
+//! the lanes: the directions toward the sample, the specular lobe's powers (`pow`, plain
+//! arithmetic that vectorizes), what the sample sends back, and at the end each point's sum.
+//! The loops always run over all [`LANES`] lanes, so that none has a scalar remainder: lanes
+//! past the batch's points repeat its last point and are never read. The answers land where
+//! the bundled shadow rays read and write them: slot `j · points + i` is point `i`'s sample
+//! `j`.
 //!
-//! Each slot holds exactly what gathering at its point gives (the same functions,
-//! [`toward`], `Lobe::specular` and [`Model::sample`], on the same values), so the image does
-//! not depend on which way the samples were gathered.
+//! Each slot holds exactly what gathering at its point gives (the same functions, [`toward`],
+//! [`Lobe::specular`]'s terms and [`Model::sample`], on the same values), and each point's
+//! light is summed in light and sample order, so the image does not depend on which way the
+//! samples were gathered.
 
 use glam::Vec3;
 
-use super::model::{Model, Physical, Seed};
-use super::plan::{toward, Directions, Source};
-use super::{Integrator, LightModel, Point, Seen};
+use super::batch::BUNDLE_POINTS;
+use super::model::{Lobe, Model, Physical, Seed};
+use super::plan::{toward, Source};
+use super::{Integrator, LightModel, Point, Seen, Shading};
 use crate::geometry::Surface;
 use crate::math::Rgb;
 
-/// Lights with fewer samples than this on average gather across points. Gathering point by
-/// point runs each light's loop over its samples as vectors, which pays once a light has a
-/// vector's worth of them; across points each sample is a scalar loop over the points.
-/// Gathered across points, three point lights took 0.85× the time (1024², 2 threads), and the
-/// seed's room (one light of 25 samples) 1.42×.
-const MAX_MEAN_SAMPLES: u64 = 8;
+/// Lanes of the batch's points: a bundle's points, a vector of 16 on AVX-512 (two on AVX2).
+const LANES: usize = BUNDLE_POINTS;
 
-/// Whether a render whose `lights` have `samples` fixed samples in all gathers them across
-/// points.
-pub(super) fn pays(samples: u64, lights: usize) -> bool {
-    samples < MAX_MEAN_SAMPLES * lights as u64
-}
+/// One value per lane.
+type Lane<T = f32> = [T; LANES];
 
-/// Every sample of a batch's points, slot `j · points + i` for point `i`'s sample `j`, in
-/// light and sample order.
+/// Every sample of a batch's points: its light by lane, sample by sample, and its masks in
+/// slot `j · points + i` for point `i`'s sample `j`, in light and sample order.
 #[derive(Default)]
 pub(super) struct Across {
-    pub(super) seen: Vec<Seen>,
     pub(super) points: Vec<Point>,
-    /// The light each sample sends toward the viewer if visible, by channel.
-    r: Vec<f32>,
-    g: Vec<f32>,
-    b: Vec<f32>,
+    lobes: Lobes,
+    /// The light sample `j` sends toward the viewer of each lane's point if visible, by
+    /// channel.
+    light: Vec<[Lane; 3]>,
     /// Whether a sample cannot contribute (below the surface, behind a one-sided emitter,
     /// sending nothing): no shadow ray.
     pub(super) dark: Vec<bool>,
     /// Whether a sample lies behind the surface: its shadow ray leaves from the other side.
     pub(super) behind: Vec<bool>,
-    /// Each point's position, shading normal and geometric normal, by axis, and the
-    /// directions from every point toward one sample.
-    frames: Frames,
-    row: Directions,
 }
 
-/// Points' positions, shading normals and geometric normals, by axis.
+/// The points' positions, normals and materials, by lane.
 #[derive(Default)]
-struct Frames {
-    x: [Vec<f32>; 3],
-    n: [Vec<f32>; 3],
-    n_geom: [Vec<f32>; 3],
+struct Lobes {
+    x: [Lane; 3],
+    /// The geometric normal, on the viewer's side.
+    n_geom: [Lane; 3],
+    /// [`Lobe`]'s fields.
+    n: [Lane; 3],
+    view: [Lane; 3],
+    kd: [Lane; 3],
+    ks: [Lane; 3],
+    p: Lane,
+    specular_norm: Lane,
+    /// Whether any point's material is specular.
+    specular: bool,
 }
 
 impl Across {
     /// Gathers every sample of `integrator`'s lights (all fixed) at the surfaces hit by
-    /// camera rays along `directions`: each point's ambient term and shadow-ray origins in
-    /// `points`, its samples' terms in the slots.
+    /// camera rays along `directions` (at most [`LANES`], at least one): each point's ambient
+    /// term, shadow-ray origins and shadow-ray count in `points`, its samples' terms in the
+    /// slots.
     #[inline(always)]
     pub(super) fn gather(
         &mut self,
@@ -74,159 +75,183 @@ impl Across {
         directions: &[Vec3],
         surfaces: &[Surface],
     ) {
-        self.seen.clear();
+        let count = directions.len();
+        assert!((1..=LANES).contains(&count), "{count} points");
         self.points.clear();
-        for (&direction, surface) in directions.iter().zip(surfaces) {
+        for (i, (&direction, surface)) in directions.iter().zip(surfaces).enumerate() {
             let (seen, point) = integrator.look(direction, surface);
-            self.seen.push(seen);
+            self.lobes.set(i, &seen);
             self.points.push(point);
         }
-        let frames = &mut self.frames;
-        for a in 0..3 {
-            let seen = &self.seen;
-            let axis = |v: &mut Vec<f32>, of: fn(&Seen) -> Vec3| {
-                v.clear();
-                v.extend(seen.iter().map(|s| of(s)[a]));
-            };
-            axis(&mut frames.x[a], |s| s.x);
-            axis(&mut frames.n[a], |s| s.lobe.n);
-            axis(&mut frames.n_geom[a], |s| s.n_geom);
-        }
+        self.lobes.pad(count);
         match integrator.settings.light_model {
             LightModel::Phong => self.samples::<Seed>(integrator),
             LightModel::Physical => self.samples::<Physical>(integrator),
         }
-        let count = self.points.len();
-        for (i, point) in self.points.iter_mut().enumerate() {
-            point.traced = self
-                .dark
-                .iter()
-                .skip(i)
-                .step_by(count)
-                .filter(|&&d| !d)
-                .count() as u64;
+        let mut traced = [0u64; LANES];
+        for row in self.dark.chunks_exact(count) {
+            for (t, &dark) in traced.iter_mut().zip(row) {
+                *t += u64::from(!dark);
+            }
+        }
+        for (point, t) in self.points.iter_mut().zip(traced) {
+            point.traced = t;
         }
     }
 
-    /// The slots of every sample, light by light.
+    /// The slots of every sample, light by light: each sample one pass over the lanes.
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn samples<M: Model>(&mut self, integrator: &Integrator) {
-        let count = self.seen.len();
-        let slots = integrator.samples as usize * count;
-        for v in [&mut self.r, &mut self.g, &mut self.b] {
-            v.resize(slots, 0.0);
-        }
-        self.dark.resize(slots, true);
-        self.behind.resize(slots, false);
-        let mut slot = 0;
+        let count = self.points.len();
+        let rows = integrator.samples as usize;
+        self.light.resize(rows, [[0.0; LANES]; 3]);
+        self.dark.resize(rows * count, true);
+        self.behind.resize(rows * count, false);
+        let shading = integrator.settings.shading;
+        let lobes = &self.lobes;
+        let mut row = 0;
         for plan in &integrator.lights {
             let Source::Fixed(points) = &plan.source else {
                 unreachable!("every light of a render gathered across points is fixed");
             };
             for k in 0..points.len() {
                 let y = [points.x[k], points.y[k], points.z[k]];
-                let row = slot..slot + count;
-                let (r, g, b) = (
-                    &mut self.r[row.clone()],
-                    &mut self.g[row.clone()],
-                    &mut self.b[row.clone()],
+                let (mut l, mut d2, mut cos, mut behind) = (
+                    [[0.0f32; LANES]; 3],
+                    [0.0f32; LANES],
+                    [0.0f32; LANES],
+                    [false; LANES],
                 );
-                let (dark, behind) = (&mut self.dark[row.clone()], &mut self.behind[row]);
-                self.frames.toward(y, &mut self.row, behind);
-                let dirs = &self.row;
-                for (i, seen) in self.seen.iter().enumerate() {
-                    let lobe = &seen.lobe;
-                    let l = Vec3::new(dirs.lx[i], dirs.ly[i], dirs.lz[i]);
-                    let (d2, cos) = (dirs.d2[i], dirs.cos[i]);
-                    // powf only where the sample can contribute.
-                    let spec = if cos > 0.0 {
-                        lobe.specular(l, cos)
-                    } else {
-                        0.0
-                    };
-                    let (e, off) = M::sample(&M::terms(plan, lobe), l, d2, cos, spec);
-                    (r[i], g[i], b[i], dark[i]) = (e.x, e.y, e.z, off);
+                for i in 0..LANES {
+                    let (x, n) = (lane(&lobes.x, i), lane(&lobes.n, i));
+                    let (u, d, c) = toward(x, n, y);
+                    let g = lane(&lobes.n_geom, i);
+                    (l[0][i], l[1][i], l[2][i], d2[i], cos[i]) = (u.x, u.y, u.z, d, c);
+                    behind[i] = g.x * u.x + g.y * u.y + g.z * u.z < 0.0;
                 }
-                slot += count;
+                let mut spec = [0.0f32; LANES];
+                if lobes.specular {
+                    for i in 0..LANES {
+                        spec[i] = lobes.lobe(i, shading).specular(lane(&l, i), cos[i]);
+                    }
+                }
+                let (mut e, mut dark) = ([[0.0f32; LANES]; 3], [false; LANES]);
+                for i in 0..LANES {
+                    let terms = M::terms(plan, &lobes.lobe(i, shading));
+                    let (light, off) = M::sample(&terms, lane(&l, i), d2[i], cos[i], spec[i]);
+                    (e[0][i], e[1][i], e[2][i], dark[i]) = (light.x, light.y, light.z, off);
+                }
+                self.light[row] = e;
+                let slots = row * count..(row + 1) * count;
+                self.dark[slots.clone()].copy_from_slice(&dark[..count]);
+                self.behind[slots].copy_from_slice(&behind[..count]);
+                row += 1;
             }
         }
     }
 
-    /// Point `i`'s ambient term plus every sample's light that `blocked` (by slot) lets
-    /// through, in light and sample order.
-    #[inline(always)]
-    pub(super) fn radiance(&self, i: usize, blocked: &[bool]) -> Rgb {
-        let count = self.points.len();
-        let slots = blocked.len();
-        let (r, g, b) = (&self.r[..slots], &self.g[..slots], &self.b[..slots]);
-        self.points[i].sum(slots / count, |j| {
-            let slot = j * count + i;
-            (!blocked[slot]).then(|| Rgb::new(r[slot], g[slot], b[slot]))
-        })
-    }
-}
-
-impl Frames {
-    /// The directions from every point toward `y` ([`toward`] each) in `dirs`, and whether
-    /// `y` lies behind each point's surface in `behind`. Whole chunks of [`LANES`] points are
-    /// computed into arrays of their own, in one loop that vectorizes (the square roots and
-    /// divisions of many points at once), and then copied out; the last few points one at a
-    /// time. Written in place over the slices, the loop stayed scalar, a bounds check per
-    /// store.
+    /// Each point's ambient term plus every sample's light that `blocked` (by slot) lets
+    /// through, in light and sample order, with the point's shadow-ray count, appended to
+    /// `out`.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn toward(&self, y: [f32; 3], dirs: &mut Directions, behind: &mut [bool]) {
-        let count = behind.len();
-        let [lx, ly, lz, d2s, coss] = dirs.lanes(count);
-        let whole = count - count % LANES;
-        for start in (0..whole).step_by(LANES) {
-            let (x, n, g) = (
-                whole_chunk(&self.x, start),
-                whole_chunk(&self.n, start),
-                whole_chunk(&self.n_geom, start),
-            );
-            let (mut l, mut d2, mut cos, mut back) = (
-                [[0.0f32; LANES]; 3],
-                [0.0f32; LANES],
-                [0.0f32; LANES],
-                [false; LANES],
-            );
-            for i in 0..LANES {
-                let v = |c: &[&[f32; LANES]; 3]| Vec3::new(c[0][i], c[1][i], c[2][i]);
-                let (u, d, c, b) = frame(v(&x), v(&n), v(&g), y);
-                (l[0][i], l[1][i], l[2][i], d2[i], cos[i], back[i]) = (u.x, u.y, u.z, d, c, b);
-            }
-            let out = start..start + LANES;
-            for (to, from) in [&mut *lx, &mut *ly, &mut *lz, &mut *d2s, &mut *coss]
-                .into_iter()
-                .zip([l[0], l[1], l[2], d2, cos])
-            {
-                to[out.clone()].copy_from_slice(&from);
-            }
-            behind[out].copy_from_slice(&back);
+    pub(super) fn radiance(&self, blocked: &[bool], out: &mut Vec<(Rgb, u64)>) {
+        let count = self.points.len();
+        let mut sum = [[0.0f32; LANES]; 3];
+        for (i, point) in self.points.iter().enumerate() {
+            let a = point.ambient;
+            (sum[0][i], sum[1][i], sum[2][i]) = (a.x, a.y, a.z);
         }
-        for i in whole..count {
-            let v = |c: &[Vec<f32>; 3]| Vec3::new(c[0][i], c[1][i], c[2][i]);
-            let (u, d, c, b) = frame(v(&self.x), v(&self.n), v(&self.n_geom), y);
-            (lx[i], ly[i], lz[i], d2s[i], coss[i], behind[i]) = (u.x, u.y, u.z, d, c, b);
+        for (light, row) in self.light.iter().zip(blocked.chunks_exact(count)) {
+            // Each lane's light masked to +0 where its sample is blocked, as `Point::sum`
+            // adds 0 there: bitwise, so that the loop compiles to vector instructions (a
+            // select was compiled to a branch per lane).
+            let mut keep = [0u32; LANES];
+            for (k, &b) in keep.iter_mut().zip(row) {
+                *k = u32::from(b).wrapping_sub(1);
+            }
+            // Over the points, not all lanes: a loop the compiler vectorizes as a loop,
+            // with the sums in memory (fully unrolled, its sums in registers were not).
+            let keep = &keep[..count];
+            for c in 0..3 {
+                let (sum, light) = (&mut sum[c][..count], &light[c][..count]);
+                for i in 0..count {
+                    sum[i] += f32::from_bits(light[i].to_bits() & keep[i]);
+                }
+            }
+        }
+        out.extend(
+            self.points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (Rgb::new(sum[0][i], sum[1][i], sum[2][i]), p.traced)),
+        );
+    }
+}
+
+impl Lobes {
+    /// Lane `i` takes the point `seen`.
+    #[inline(always)]
+    fn set(&mut self, i: usize, seen: &Seen) {
+        let lobe = &seen.lobe;
+        let fields = [
+            (&mut self.x, seen.x),
+            (&mut self.n_geom, seen.n_geom),
+            (&mut self.n, lobe.n),
+            (&mut self.view, lobe.view),
+            (&mut self.kd, lobe.kd),
+            (&mut self.ks, lobe.ks),
+        ];
+        for (field, v) in fields {
+            (field[0][i], field[1][i], field[2][i]) = (v.x, v.y, v.z);
+        }
+        (self.p[i], self.specular_norm[i]) = (lobe.p, lobe.specular_norm);
+    }
+
+    /// Lanes from `count` on repeat lane `count − 1`, and [`Lobes::specular`] is set.
+    #[inline(always)]
+    fn pad(&mut self, count: usize) {
+        let last = count - 1;
+        let fields = [
+            &mut self.x,
+            &mut self.n_geom,
+            &mut self.n,
+            &mut self.view,
+            &mut self.kd,
+            &mut self.ks,
+        ];
+        for field in fields {
+            for axis in field.iter_mut() {
+                let v = axis[last];
+                axis[count..].fill(v);
+            }
+        }
+        for axis in [&mut self.p, &mut self.specular_norm] {
+            let v = axis[last];
+            axis[count..].fill(v);
+        }
+        let ks = &self.ks;
+        self.specular = (0..LANES).any(|i| lane(ks, i) != Vec3::ZERO);
+    }
+
+    /// The lobe of lane `i` under `shading`.
+    #[inline(always)]
+    fn lobe(&self, i: usize, shading: Shading) -> Lobe {
+        Lobe {
+            n: lane(&self.n, i),
+            view: lane(&self.view, i),
+            kd: lane(&self.kd, i),
+            ks: lane(&self.ks, i),
+            p: self.p[i],
+            shading,
+            specular_norm: self.specular_norm[i],
         }
     }
 }
 
-/// Points computed together by [`Frames::toward`]: a vector of 16 on AVX-512, two on AVX2.
-const LANES: usize = 16;
-
-/// The [`LANES`] values of each axis of `v` from `start` (which are there).
+/// Lane `i` of a vector kept by axis.
 #[inline(always)]
-fn whole_chunk(v: &[Vec<f32>; 3], start: usize) -> [&[f32; LANES]; 3] {
-    v.each_ref()
-        .map(|axis| axis[start..].first_chunk().expect("a whole chunk"))
-}
-
-/// The direction from a point at `x` with shading normal `n` and geometric normal `g` toward
-/// `y`, its squared distance and cosine ([`toward`]), and whether `y` lies behind the surface.
-#[inline(always)]
-fn frame(x: Vec3, n: Vec3, g: Vec3, y: [f32; 3]) -> (Vec3, f32, f32, bool) {
-    let (l, d2, cos) = toward(x, n, y);
-    (l, d2, cos, g.x * l.x + g.y * l.y + g.z * l.z < 0.0)
+fn lane(v: &[Lane; 3], i: usize) -> Vec3 {
+    Vec3::new(v[0][i], v[1][i], v[2][i])
 }

@@ -14,9 +14,11 @@
 //! [`crate::accel::Pairs`]: the batch's points once and the samples once per render, the
 //! segments between them implied. All of a batch's segments then lie in one shaft between its
 //! points and the samples, and the BVH finds the few triangles in it once for the batch
-//! (in a room of large triangles, usually the points' own surface alone). Jittered samples differ from point to point, and their
-//! bundles list every segment ([`Segments`]), which costs their writes; those pay only on
-//! deep trees (see [`BUNDLE_MIN_NODES`]).
+//! (in a room of large triangles, usually the points' own surface alone). Such a batch's
+//! samples are gathered across its points too, each sample one pass of vector loops over
+//! the points (`across`). Jittered samples differ from point to point: each point gathers its
+//! own, and their bundles list every segment ([`Segments`]), which costs their writes; those
+//! pay only on deep trees (see [`BUNDLE_MIN_NODES`]).
 //!
 //! Either way each shadow ray is the same segment and gets the same answer (both packet kinds
 //! answer as [`crate::accel::Bvh::occluded`] would), and each point's light is summed in light
@@ -132,13 +134,11 @@ impl Kernel for ShadeBatch<'_, '_> {
             across,
             bundle,
         } = scratch;
-        if let (true, Some(ends)) = (integrator.across, &integrator.fixed_ends) {
+        if let (true, Some(ends)) = (integrator.bundles, &integrator.fixed_ends) {
             across.gather(integrator, directions, surfaces);
             let masks = (&across.dark[..], &across.behind[..]);
             bundle.pairs(integrator, &across.points, masks, ends);
-            out.extend(
-                (0..count).map(|i| (across.radiance(i, &bundle.blocked), across.points[i].traced)),
-            );
+            across.radiance(&bundle.blocked, out);
             return;
         }
         if points.len() < count {
@@ -160,19 +160,10 @@ impl Kernel for ShadeBatch<'_, '_> {
             }
             return;
         }
-        let (blocked, stride) = match &integrator.fixed_ends {
-            Some(ends) => {
-                // The across buffers, reused here for the points' masks.
-                transpose(points, &mut across.dark, &mut across.behind);
-                bundle.pairs(integrator, prepared, (&across.dark, &across.behind), ends);
-                (&bundle.blocked, count)
-            }
-            None => {
-                let lanes = count.next_multiple_of(N);
-                bundle.segments(integrator, points, prepared, lanes);
-                (&bundle.blocked, lanes)
-            }
-        };
+        // Jittered lights: each point's samples are its own.
+        let stride = count.next_multiple_of(N);
+        bundle.segments(integrator, points, prepared, stride);
+        let blocked = &bundle.blocked;
         // Each point's light, its samples' answers read where the bundles left them.
         out.extend(
             points
@@ -282,26 +273,6 @@ fn masks(mask: &mut Vec<bool>, dark: &[bool], behind: &[bool], back: bool) -> bo
         any_behind |= !dark[i] & behind[i];
     }
     any_behind
-}
-
-/// Point `i`'s gathered sample `j` (whether it cannot contribute, whether it lies behind the
-/// surface) in slot `j · points.len() + i` of `dark` and `behind`.
-#[inline(always)]
-fn transpose(points: &[Scratch], dark: &mut Vec<bool>, behind: &mut Vec<bool>) {
-    let (count, samples) = (points.len(), points.first().map_or(0, |p| p.blocked.len()));
-    dark.resize(samples * count, true);
-    behind.resize(samples * count, false);
-    if count == 0 {
-        return;
-    }
-    let rows = dark
-        .chunks_exact_mut(count)
-        .zip(behind.chunks_exact_mut(count));
-    for (j, (dark, behind)) in rows.enumerate() {
-        for (i, point) in points.iter().enumerate() {
-            (dark[i], behind[i]) = (point.blocked[j], point.behind[j]);
-        }
-    }
 }
 
 /// Blocks slot `j · origins.len() + i` of `blocked` when something occludes the segment from
@@ -457,21 +428,20 @@ mod tests {
             .iter()
             .map(|(r, h)| (r.direction, world.surface(h)))
             .unzip();
-        for light_model in [LightModel::Phong, LightModel::Physical] {
+        let models = [LightModel::Phong, LightModel::Physical];
+        let lobes = [Shading::Phong, Shading::BlinnPhong];
+        for (light_model, shading) in models.into_iter().flat_map(|m| lobes.map(|s| (m, s))) {
             let settings = ShadingSettings {
-                shading: Shading::Phong,
+                shading,
                 light_model,
                 ambient: Vec3::splat(0.1),
                 light_samples: None,
             };
-            // Fans, bundles gathered point by point, and bundles gathered across points
-            // (fixed lights only).
-            let mut shaded = [Vec::new(), Vec::new(), Vec::new()];
-            let ways = [(false, false), (true, false), (true, true)];
-            for ((bundles, across), out) in ways.into_iter().zip(&mut shaded) {
+            // Fans, and bundles (gathered across points for fixed lights).
+            let mut shaded = [Vec::new(), Vec::new()];
+            for (bundles, out) in [false, true].into_iter().zip(&mut shaded) {
                 let mut integrator = Integrator::new(world, settings);
                 integrator.bundles = bundles;
-                integrator.across = across && integrator.fixed_ends.is_some();
                 let mut rngs: Vec<Rng> =
                     (0..rays.len() as u64).map(|i| Rng::new(7, &[i])).collect();
                 let mut scratch = BatchScratch::default();
@@ -487,8 +457,7 @@ mod tests {
                     );
                 }
             }
-            assert_eq!(shaded[0], shaded[1], "{light_model:?}");
-            assert_eq!(shaded[0], shaded[2], "{light_model:?}");
+            assert_eq!(shaded[0], shaded[1], "{light_model:?}, {shading:?}");
             let traced: u64 = shaded[0].iter().map(|s| s.1).sum();
             let lit = shaded[0].iter().filter(|s| s.0.x > 0.1 + 1e-3).count();
             assert!(

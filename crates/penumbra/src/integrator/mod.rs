@@ -13,6 +13,7 @@ mod across;
 mod batch;
 mod model;
 mod plan;
+mod pow;
 
 use std::f32::consts::PI;
 
@@ -135,14 +136,15 @@ impl Point {
     }
 
     /// The ambient term plus the light of each of `samples` samples that `light(j)` lets
-    /// through, in light and sample order: the one order every way of shading sums in.
+    /// through, in light and sample order: the one order every way of shading sums in. A
+    /// blocked sample adds 0, so that summing many points side by side is a select and an add
+    /// per lane (the sum is the same as skipping it, but for a radiance of −0, which becomes
+    /// +0).
     #[inline(always)]
     fn sum(&self, samples: usize, light: impl Fn(usize) -> Option<Rgb>) -> Rgb {
         let mut radiance = self.ambient;
         for j in 0..samples {
-            if let Some(e) = light(j) {
-                radiance += e;
-            }
+            radiance += light(j).unwrap_or(Rgb::ZERO);
         }
         radiance
     }
@@ -159,8 +161,6 @@ pub(crate) struct Integrator<'w> {
     bundles: bool,
     /// Every light sample, when every point has the same ones (no jittered light).
     fixed_ends: Option<FixedEnds>,
-    /// Whether batches gather their samples across points (see `across`).
-    across: bool,
     /// The centre and radius of a sphere around the scene's geometry: shadow rays toward an
     /// environment end outside it.
     sphere: (Vec3, f32),
@@ -179,7 +179,6 @@ impl<'w> Integrator<'w> {
         let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
         let fixed_ends = fixed_ends(&lights);
         let bundles = batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count());
-        let across = bundles && fixed_ends.is_some() && across::pays(samples, lights.len());
         let bounds = world.bounds();
         let sphere = match bounds.is_empty() {
             true => (Vec3::ZERO, 1.0),
@@ -193,7 +192,6 @@ impl<'w> Integrator<'w> {
             world,
             settings,
             bundles,
-            across,
             fixed_ends,
             lights,
             samples,
@@ -275,8 +273,6 @@ impl<'w> Integrator<'w> {
         let Seen { x, n_geom, lobe } = seen;
         let (x, n_geom) = (*x, *n_geom);
         scratch.ends.clear();
-        // Pairs take the fixed samples from the plan; only fans and segments read `ends`.
-        let ends = !(self.bundles && self.fixed_ends.is_some());
         let mut base = 0;
         for plan in &self.lights {
             let points = match &plan.source {
@@ -315,9 +311,7 @@ impl<'w> Integrator<'w> {
                 }
             };
             let n = points.len();
-            if ends {
-                scratch.ends.extend_from_slice(&points.all);
-            }
+            scratch.ends.extend_from_slice(&points.all);
             let end = base + n;
             for v in [&mut scratch.r, &mut scratch.g, &mut scratch.b] {
                 v.resize(end, 0.0);
@@ -327,19 +321,7 @@ impl<'w> Integrator<'w> {
             let dirs = &mut scratch.directions;
             dirs.compute(x, lobe.n, points);
             scratch.spec.resize(n, 0.0);
-            if lobe.ks == Vec3::ZERO {
-                scratch.spec.fill(0.0);
-            } else {
-                for i in 0..n {
-                    let (cos, l) = (dirs.cos[i], Vec3::new(dirs.lx[i], dirs.ly[i], dirs.lz[i]));
-                    // powf only where the sample can contribute.
-                    scratch.spec[i] = if cos > 0.0 {
-                        lobe.specular(l, cos)
-                    } else {
-                        0.0
-                    };
-                }
-            }
+            lobe.speculars(dirs, &mut scratch.spec);
             let lanes = Lanes {
                 r: &mut scratch.r[base..end],
                 g: &mut scratch.g[base..end],

@@ -6,7 +6,11 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::plan::{Directions, LightPlan};
+use super::pow::pow;
 use super::Shading;
+
+/// Samples whose specular powers are computed together: a vector of 16 on AVX-512.
+const LANES: usize = 16;
 use crate::math::Rgb;
 
 /// The material at a shading point, seen from `view`.
@@ -26,22 +30,68 @@ pub(super) struct Lobe {
 
 impl Lobe {
     /// The specular lobe value max(0, base)^p for a unit direction `l` toward the light with
-    /// `cos = n·l > 0` (0⁰ = 1).
-    #[inline]
+    /// `cos = n·l` (0 where `cos ≤ 0`; 0⁰ = 1).
+    #[inline(always)]
     pub(super) fn specular(&self, l: Vec3, cos: f32) -> f32 {
         if self.ks == Vec3::ZERO {
             return 0.0;
         }
-        let base = match self.shading {
+        self.power(self.base(l, cos), cos)
+    }
+
+    /// [`Lobe::specular`] toward each direction of `dirs`, into `out` (as long as the
+    /// directions used). The bases are computed first, then their powers a whole vector of
+    /// [`LANES`] at a time, the last few padded to a whole vector: a vector loop's scalar
+    /// remainder would run the power's chain of dependent operations once per sample.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(super) fn speculars(&self, dirs: &Directions, out: &mut [f32]) {
+        let n = out.len();
+        if self.ks == Vec3::ZERO {
+            out.fill(0.0);
+            return;
+        }
+        let (cos, lx, ly, lz) = (&dirs.cos[..n], &dirs.lx[..n], &dirs.ly[..n], &dirs.lz[..n]);
+        for start in (0..n).step_by(LANES) {
+            let count = LANES.min(n - start);
+            // Padding lanes: a base of 1 and a cosine of 0, whose power is discarded.
+            let (mut base, mut c) = ([1.0f32; LANES], [0.0f32; LANES]);
+            // Indexed loops (an iterator's `for_each` was compiled outside the SIMD kernels).
+            for i in 0..count {
+                let (l, k) = (
+                    Vec3::new(lx[start + i], ly[start + i], lz[start + i]),
+                    start + i,
+                );
+                (base[i], c[i]) = (self.base(l, cos[k]), cos[k]);
+            }
+            let mut power = [0.0f32; LANES];
+            for i in 0..LANES {
+                power[i] = self.power(base[i], c[i]);
+            }
+            out[start..start + count].copy_from_slice(&power[..count]);
+        }
+    }
+
+    /// The lobe's base toward unit direction `l` with `cos = n·l`: r·v with r the mirrored
+    /// light direction (Phong), or n·h with h the half vector (Blinn-Phong).
+    #[inline(always)]
+    fn base(&self, l: Vec3, cos: f32) -> f32 {
+        match self.shading {
             Shading::Phong => (2.0 * cos * self.n - l).dot(self.view),
             Shading::BlinnPhong => self.n.dot((l + self.view).normalize()),
-        };
-        // max(0, base)^p without a powf call for the half of directions where base ≤ 0
-        // (a NaN base, from l = −v, counts as 0); 0⁰ = 1.
-        if base > 0.0 {
-            base.powf(self.p)
-        } else if self.p == 0.0 {
-            1.0
+        }
+    }
+
+    /// max(0, base)^p where `cos > 0`, else 0: a base ≤ 0 (or NaN, from l = −v) counts as 0,
+    /// and 0⁰ = 1. Branch-free: the power of every lane is computed and the answer selected.
+    #[inline(always)]
+    fn power(&self, base: f32, cos: f32) -> f32 {
+        let lit = base > 0.0;
+        let power = pow(if lit { base } else { 1.0 }, self.p);
+        let unlit = if self.p == 0.0 { 1.0 } else { 0.0 };
+        let value = if lit { power } else { unlit };
+        if cos > 0.0 {
+            value
         } else {
             0.0
         }
