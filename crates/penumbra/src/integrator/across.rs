@@ -115,6 +115,7 @@ impl Across {
             let Source::Fixed(points) = &plan.source else {
                 unreachable!("every light of a render gathered across points is fixed");
             };
+            let light = M::light(plan);
             for k in 0..points.len() {
                 let y = [points.x[k], points.y[k], points.z[k]];
                 let (mut l, mut d2, mut cos, mut behind) = (
@@ -138,7 +139,7 @@ impl Across {
                 }
                 let (mut e, mut dark) = ([[0.0f32; LANES]; 3], [false; LANES]);
                 for i in 0..LANES {
-                    let terms = M::terms(plan, &lobes.lobe(i, shading));
+                    let terms = M::terms(&light, &lobes.lobe(i, shading));
                     let (light, off) = M::sample(&terms, lane(&l, i), d2[i], cos[i], spec[i]);
                     (e[0][i], e[1][i], e[2][i], dark[i]) = (light.x, light.y, light.z, off);
                 }

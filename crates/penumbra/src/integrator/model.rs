@@ -116,8 +116,16 @@ pub(super) trait Model {
     /// What [`Model::sample`] needs of a light and a material, the same for all their samples.
     type Terms;
 
-    /// The terms of the samples of `plan` seen from a point with material `lobe`.
-    fn terms(plan: &LightPlan, lobe: &Lobe) -> Self::Terms;
+    /// What a light brings to [`Model::terms`], the same at every point.
+    type Light;
+
+    /// The light terms of `plan`, found once per light (and hoisted out of loops over
+    /// points: an `Option` of the plan read in such a loop was compiled to vector gathers).
+    fn light(plan: &LightPlan) -> Self::Light;
+
+    /// The terms of the samples of a light with terms `light` seen from a point with
+    /// material `lobe`.
+    fn terms(light: &Self::Light, lobe: &Lobe) -> Self::Terms;
 
     /// One sample with terms `t`: unit direction `l` toward it, squared distance `d2`, cosine
     /// `c = n·l` and specular lobe value `s`. Returns the light it sends toward the viewer if
@@ -137,7 +145,7 @@ pub(super) trait Model {
             &mut out.b[..n],
             &mut out.blocked[..n],
         );
-        let terms = Self::terms(plan, lobe);
+        let terms = Self::terms(&Self::light(plan), lobe);
         for i in 0..n {
             let l = Vec3::new(lx[i], ly[i], lz[i]);
             let (e, dark) = Self::sample(&terms, l, d2[i], cos[i], spec[i]);
@@ -165,10 +173,17 @@ pub(super) struct Seed;
 impl Model for Seed {
     /// The weight, k_d, k_s and whether the light sends nothing.
     type Terms = (Rgb, Rgb, Rgb, bool);
+    /// The weight and whether the light sends nothing.
+    type Light = (Rgb, bool);
 
     #[inline(always)]
-    fn terms(plan: &LightPlan, lobe: &Lobe) -> Self::Terms {
-        (plan.weight, lobe.kd, lobe.ks, plan.weight == Vec3::ZERO)
+    fn light(plan: &LightPlan) -> (Rgb, bool) {
+        (plan.weight, plan.weight == Vec3::ZERO)
+    }
+
+    #[inline(always)]
+    fn terms(&(w, dark): &(Rgb, bool), lobe: &Lobe) -> Self::Terms {
+        (w, lobe.kd, lobe.ks, dark)
     }
 
     #[inline(always)]
@@ -225,16 +240,22 @@ pub(super) struct PhysicalTerms {
 
 impl Model for Physical {
     type Terms = PhysicalTerms;
+    /// The weight, whether the light is one-sided, and its normal.
+    type Light = (Rgb, bool, Vec3);
 
     #[inline(always)]
-    fn terms(plan: &LightPlan, lobe: &Lobe) -> PhysicalTerms {
+    fn light(plan: &LightPlan) -> (Rgb, bool, Vec3) {
         // One-sided area lights: the emitter's cosine; point lights: none (1, always lit).
-        let (facing, nl) = match plan.facing {
-            Some(nl) => (true, nl),
-            None => (false, Vec3::ZERO),
-        };
+        match plan.facing {
+            Some(nl) => (plan.weight, true, nl),
+            None => (plan.weight, false, Vec3::ZERO),
+        }
+    }
+
+    #[inline(always)]
+    fn terms(&(w, facing, nl): &(Rgb, bool, Vec3), lobe: &Lobe) -> PhysicalTerms {
         PhysicalTerms {
-            w: plan.weight,
+            w,
             ks: lobe.ks,
             norm: lobe.specular_norm,
             kd_pi: lobe.kd * (1.0 / PI),
