@@ -84,25 +84,20 @@ impl Across {
             self.points.push(point);
         }
         self.lobes.pad(count);
-        match integrator.settings.light_model {
+        let traced = match integrator.settings.light_model {
             LightModel::Phong => self.samples::<Seed>(integrator),
             LightModel::Physical => self.samples::<Physical>(integrator),
-        }
-        let mut traced = [0u64; LANES];
-        for row in self.dark.chunks_exact(count) {
-            for (t, &dark) in traced.iter_mut().zip(row) {
-                *t += u64::from(!dark);
-            }
-        }
+        };
         for (point, t) in self.points.iter_mut().zip(traced) {
-            point.traced = t;
+            point.traced = t.into();
         }
     }
 
     /// The slots of every sample, light by light: each sample one pass over the lanes.
+    /// Returns each lane's number of samples that can contribute (its shadow rays).
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn samples<M: Model>(&mut self, integrator: &Integrator) {
+    fn samples<M: Model>(&mut self, integrator: &Integrator) -> Lane<u32> {
         let count = self.points.len();
         let rows = integrator.samples as usize;
         self.light.resize(rows, [[0.0; LANES]; 3]);
@@ -110,6 +105,7 @@ impl Across {
         self.behind.resize(rows * count, false);
         let shading = integrator.settings.shading;
         let lobes = &self.lobes;
+        let mut traced = [0u32; LANES];
         let mut row = 0;
         for plan in &integrator.lights {
             let Source::Fixed(points) = &plan.source else {
@@ -143,6 +139,9 @@ impl Across {
                     let (light, off) = M::sample(&terms, lane(&l, i), d2[i], cos[i], spec[i]);
                     (e[0][i], e[1][i], e[2][i], dark[i]) = (light.x, light.y, light.z, off);
                 }
+                for i in 0..LANES {
+                    traced[i] += u32::from(!dark[i]);
+                }
                 self.light[row] = e;
                 let slots = row * count..(row + 1) * count;
                 self.dark[slots.clone()].copy_from_slice(&dark[..count]);
@@ -150,6 +149,7 @@ impl Across {
                 row += 1;
             }
         }
+        traced
     }
 
     /// Each point's ambient term plus every sample's light that `blocked` (by slot) lets
