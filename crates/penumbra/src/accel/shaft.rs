@@ -22,7 +22,7 @@
 use glam::Vec3;
 
 use super::lanes::{self, lane};
-use super::prim::moller_trumbore::{origin_terms, solve};
+use super::prim::moller_trumbore::{determinant_bounds, origin_terms, solve};
 use super::{Bvh, BvhNode, Pairs, TriAccel, STACK_SIZE};
 use crate::simd::{max, min, Isa};
 
@@ -245,6 +245,7 @@ pub(super) fn occlude_pairs<const N: usize, I: Isa>(
                 o[a][i] = origins[a][start + i.min(count - 1)];
             }
         }
+        let from = bounds(origins.map(|axis| &axis[start..start + count]));
         for first in (0..n).step_by(ENDS_PER_PASS) {
             let ends_here = first..n.min(first + ENDS_PER_PASS);
             let mut active = [0u32; ENDS_PER_PASS];
@@ -258,9 +259,23 @@ pub(super) fn occlude_pairs<const N: usize, I: Isa>(
             if !live {
                 continue;
             }
+            // The box of every direction `end − origin` the pass traces (rounding is
+            // monotonic): ends some lane still traces (a sample behind a point's surface is
+            // traced from its other side, in a pass of its own).
+            let mut to = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for (mask, j) in active.iter().zip(ends_here.clone()) {
+                if *mask != 0 {
+                    let end = Vec3::new(ends[0][j], ends[1][j], ends[2][j]);
+                    to = (to.0.min(end), to.1.max(end));
+                }
+            }
+            let directions = ((to.0 - from.1).to_array(), (to.1 - from.0).to_array());
             for &(k, leaf) in candidates {
                 let (tri, leaf) = (&bvh.tris[k as usize], &bvh.nodes[leaf as usize]);
                 let fixed = Fixed::new(tri, &o);
+                if fixed.misses::<I>(tri, directions, t_max) {
+                    continue;
+                }
                 for (mask, j) in active.iter_mut().zip(ends_here.clone()) {
                     if *mask != 0 {
                         let end = [ends[0][j], ends[1][j], ends[2][j]];
@@ -329,6 +344,39 @@ impl<const N: usize> Fixed<N> {
             f.t_num[i] = t_num;
         }
         f
+    }
+
+    /// Whether the test gives no lane a `t` in `(0, t_max)` toward any end whose direction
+    /// from the lane's origin lies in `directions` (a box by axis): every such determinant has
+    /// one sign ([`determinant_bounds`]), and each lane's `t = t_num · (1 / det)` is then
+    /// either never positive (its `t` numerator has the other sign, or is zero) or never below
+    /// `t_max` (bounded by the same operations on the bound of `1 / det` that makes it
+    /// smallest: rounding is monotonic). Triangles under the batch's points (their own surface,
+    /// which a shaft usually holds: the rays leave it) and beyond its light samples (the
+    /// ceiling around a light: the rays stop short of it) are so. Exactly what the lanes' tests
+    /// would say, at about the cost of one.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn misses<I: Isa>(&self, tri: &TriAccel, directions: ([f32; 3], [f32; 3]), t_max: f32) -> bool {
+        let (e1, e2) = (tri.e1.to_array(), tri.e2.to_array());
+        let Some((lo, hi)) = determinant_bounds(directions, e1, e2) else {
+            return false;
+        };
+        // The sign of every determinant, and the bound of 1/det that gives each `t` of that
+        // sign's numerators its smallest value.
+        let (sign, inv) = match (lo > 0.0, hi < 0.0) {
+            (true, _) => (1.0, 1.0 / hi),
+            (_, true) => (-1.0, 1.0 / lo),
+            _ => return false,
+        };
+        let mut missed = [0i32; N];
+        for i in 0..N {
+            let t_num = self.t_num[i];
+            let behind = t_num * sign <= 0.0;
+            let beyond = t_num * sign > 0.0 && t_num * inv >= t_max;
+            missed[i] = -((behind | beyond) as i32);
+        }
+        I::mask(&missed).count_ones() as usize == N
     }
 
     /// The lanes of `lanes` whose segment from `o` to `end` the triangle meets with `t` in

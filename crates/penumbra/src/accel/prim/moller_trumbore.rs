@@ -58,6 +58,44 @@ pub(crate) fn determinant(d: [f32; 3], e1: [f32; 3], e2: [f32; 3]) -> ([f32; 3],
     (pvec, dot(e1, pvec))
 }
 
+/// Bounds `(lo, hi)` on [`determinant`]`(d, e1, e2).1` over every direction `d` with
+/// `d[a]` in `[lo[a], hi[a]]`, as computed in `f32`: the same operations on the interval's
+/// ends. Rounding is monotonic, so each product and difference of the test stays between
+/// those of the ends that bound it, and so does every direction's determinant. `None` when a
+/// bound is not finite (no conclusion then).
+#[inline(always)]
+pub(crate) fn determinant_bounds(
+    (lo, hi): ([f32; 3], [f32; 3]),
+    e1: [f32; 3],
+    e2: [f32; 3],
+) -> Option<(f32, f32)> {
+    // c·x for x in [l, h]: the smaller and larger of the ends' products.
+    let scale = |c: f32, (l, h): (f32, f32)| {
+        let (a, b) = (l * c, h * c);
+        if a <= b {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    let d = |a: usize| (lo[a], hi[a]);
+    // pvec = d × e2 (`cross`: a[1]·b[2] − b[1]·a[2], …), each term a difference of products.
+    let minus = |(a, b): (f32, f32), (c, e): (f32, f32)| (a - e, b - c);
+    let pvec = [
+        minus(scale(e2[2], d(1)), scale(e2[1], d(2))),
+        minus(scale(e2[0], d(2)), scale(e2[2], d(0))),
+        minus(scale(e2[1], d(0)), scale(e2[0], d(1))),
+    ];
+    // det = e1 · pvec, summed in `dot`'s order.
+    let [x, y, z] = [0, 1, 2].map(|a| scale(e1[a], pvec[a]));
+    let det = ((x.0 + y.0) + z.0, (x.1 + y.1) + z.1);
+    let terms = [pvec[0], pvec[1], pvec[2], x, y, z, det];
+    terms
+        .iter()
+        .all(|&(l, h)| l.is_finite() && h.is_finite())
+        .then_some(det)
+}
+
 /// The whole test from the origin's terms ([`origin_terms`]) and the direction `d`: whether
 /// the ray meets the triangle's inside (edges included), and `t`, `b1`, `b2`. The caller
 /// bounds `t`.
@@ -197,5 +235,50 @@ mod tests {
         let o = Vec3::new(0.5, 0.0, 1.0);
         assert!(intersect_triangle(o, -Vec3::Z, V0, E1, 2.0 * E1, 0.0, 9.0).is_none());
         assert!(intersect_triangle(o, -Vec3::Z, V0, Vec3::ZERO, Vec3::ZERO, 0.0, 9.0).is_none());
+    }
+
+    /// Every direction in a box has its determinant within `determinant_bounds`: the box's
+    /// corners, its inside, and boxes a few ulps wide (where rounding is all there is).
+    #[test]
+    fn the_determinant_of_every_direction_in_a_box_is_within_its_bounds() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut tight = 0;
+        for k in 0..2000 {
+            let mut v = || [next() * 8.0 - 4.0, next() * 8.0 - 4.0, next() * 8.0 - 4.0];
+            let (e1, e2, centre) = (v(), v(), v());
+            // Widths from a few ulps to a few units.
+            let width = [1e-6, 1e-3, 0.5, 3.0][k % 4];
+            let half = [0, 1, 2].map(|_| width * next());
+            let lo = [0, 1, 2].map(|a| centre[a] - half[a]);
+            let hi = [0, 1, 2].map(|a| centre[a] + half[a]);
+            let (det_lo, det_hi) = determinant_bounds((lo, hi), e1, e2).expect("finite");
+            tight += usize::from(det_lo > 0.0 || det_hi < 0.0);
+            for j in 0..64 {
+                let d = match j {
+                    // The eight corners.
+                    0..8 => [0, 1, 2].map(|a| if j >> a & 1 == 0 { lo[a] } else { hi[a] }),
+                    _ => [0, 1, 2].map(|a| lo[a] + (hi[a] - lo[a]) * next()),
+                };
+                let d = [0, 1, 2].map(|a| d[a].clamp(lo[a], hi[a]));
+                let det = determinant(d, e1, e2).1;
+                assert!(
+                    det_lo <= det && det <= det_hi,
+                    "{det} outside [{det_lo}, {det_hi}] for {d:?} in {lo:?}..{hi:?}"
+                );
+            }
+        }
+        // The bounds decide the sign often enough to be of use.
+        assert!(tight > 500, "{tight} of 2000 boxes of one sign");
+        let inf = [f32::INFINITY, 0.0, 0.0];
+        assert_eq!(
+            determinant_bounds(([0.0; 3], inf), [1.0; 3], [0.0, 1.0, 2.0]),
+            None
+        );
     }
 }
