@@ -53,8 +53,9 @@ pub(super) fn visible_environments(world: &World) -> Vec<&EnvironmentLight> {
 #[derive(Default)]
 pub(super) struct Buffers {
     scratch: BatchScratch,
-    /// Each camera ray's direction, its sample's generator (after the pixel jitter, ready for
-    /// the light jitter) and its hit.
+    /// Each camera ray's film point, direction, its sample's generator (after the pixel
+    /// jitter, ready for the light jitter) and its hit.
+    film: Vec<(f32, f32)>,
     dirs: Vec<Vec3>,
     rngs: Vec<Rng>,
     hits: Vec<Option<Hit>>,
@@ -121,6 +122,7 @@ impl Job<'_> {
         let spp = samples.len();
         let Buffers {
             scratch,
+            film,
             dirs,
             rngs,
             hits,
@@ -129,7 +131,7 @@ impl Job<'_> {
             hit_rngs,
             shaded,
         } = buffers;
-        dirs.clear();
+        film.clear();
         rngs.clear();
         for x in xs.clone() {
             let pixel_index = y as u64 * settings.width as u64 + x as u64;
@@ -139,13 +141,15 @@ impl Job<'_> {
                     Some(o) => o[s as usize],
                     None => jittered_offset(n, s / n, s % n, rng.uniform2()),
                 };
-                let ray = self
-                    .camera
-                    .ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-                dirs.push(ray.direction);
+                film.push((x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y));
                 rngs.push(rng);
             }
         }
+        // The directions in a loop of their own, which vectorizes (`PinholeCamera::ray` of
+        // each film point).
+        dirs.clear();
+        let camera = &self.camera;
+        dirs.extend(film.iter().map(|&(x, y)| camera.direction(x, y)));
         let eye = self.camera.eye();
         hits.resize(dirs.len(), None);
         self.world
