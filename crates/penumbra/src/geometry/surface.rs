@@ -64,6 +64,7 @@ impl Surface {
     }
 
     /// The surface of `geometry` at `hit` (a hit of the world's own triangles).
+    #[inline(always)]
     pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
         let tri = &geometry.triangles[hit.triangle as usize];
         let [i0, i1, i2] = tri.vertices.map(|v| v as usize);

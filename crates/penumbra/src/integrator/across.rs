@@ -21,7 +21,7 @@ use super::batch::BUNDLE_POINTS;
 use super::model::{Lobe, Model, Physical, Seed};
 use super::plan::{toward, Source};
 use super::{Integrator, LightModel, Point, Seen, Shading};
-use crate::geometry::Surface;
+use crate::geometry::Hit;
 use crate::math::Rgb;
 
 /// Lanes of the batch's points: a bundle's points, a vector of 16 on AVX-512 (two on AVX2).
@@ -69,17 +69,12 @@ impl Across {
     /// term, shadow-ray origins and shadow-ray count in `points`, its samples' terms in the
     /// slots.
     #[inline(always)]
-    pub(super) fn gather(
-        &mut self,
-        integrator: &Integrator,
-        directions: &[Vec3],
-        surfaces: &[Surface],
-    ) {
+    pub(super) fn gather(&mut self, integrator: &Integrator, directions: &[Vec3], hits: &[Hit]) {
         let count = directions.len();
         assert!((1..=LANES).contains(&count), "{count} points");
         self.points.clear();
-        for (i, (&direction, surface)) in directions.iter().zip(surfaces).enumerate() {
-            let (seen, point) = integrator.look(direction, surface);
+        for (i, (&direction, hit)) in directions.iter().zip(hits).enumerate() {
+            let (seen, point) = integrator.look(direction, &integrator.world.surface(hit));
             self.lobes.set(i, &seen);
             self.points.push(point);
         }

@@ -10,7 +10,6 @@ use super::aov::{AovContext, AovPixel};
 use super::RenderSettings;
 use crate::camera::PinholeCamera;
 use crate::geometry::Hit;
-use crate::geometry::Surface;
 use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
 use crate::light::{EnvironmentLight, Light};
 use crate::math::Rgb;
@@ -59,10 +58,11 @@ pub(super) struct Buffers {
     dirs: Vec<Vec3>,
     rngs: Vec<Rng>,
     hits: Vec<Option<Hit>>,
-    /// The directions of the rays that hit, their surfaces and generators, and what shading
-    /// them gave.
+    /// The hits of the rays that hit.
+    found: Vec<Hit>,
+    /// The directions of the rays that hit, and their generators, and what shading them
+    /// gave.
     hit_dirs: Vec<Vec3>,
-    surfaces: Vec<Surface>,
     hit_rngs: Vec<Rng>,
     shaded: Vec<(Rgb, u64)>,
 }
@@ -126,8 +126,8 @@ impl Job<'_> {
             dirs,
             rngs,
             hits,
+            found,
             hit_dirs,
-            surfaces,
             hit_rngs,
             shaded,
         } = buffers;
@@ -157,12 +157,12 @@ impl Job<'_> {
             .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
 
         hit_dirs.clear();
-        surfaces.clear();
+        found.clear();
         hit_rngs.clear();
         for ((hit, &dir), rng) in hits.iter().zip(dirs.iter()).zip(rngs.iter()) {
             if let Some(hit) = hit {
                 hit_dirs.push(dir);
-                surfaces.push(self.world.surface(hit));
+                found.push(*hit);
                 hit_rngs.push(rng.clone());
             }
         }
@@ -177,7 +177,7 @@ impl Job<'_> {
             let end = (start + step).min(hit_dirs.len());
             self.integrator.shade_batch(
                 &hit_dirs[start..end],
-                &surfaces[start..end],
+                &found[start..end],
                 &mut hit_rngs[start..end],
                 scratch,
                 shaded,
@@ -192,7 +192,7 @@ impl Job<'_> {
             for (i, hit) in hits.iter().enumerate().skip(pixel * spp).take(spp) {
                 if hit.is_some() {
                     if self.aovs.is_some() {
-                        albedo += self.world.albedo(&surfaces[next]);
+                        albedo += self.world.albedo(&self.world.surface(&found[next]));
                     }
                     let (c, rays) = shaded[next];
                     sum += c;

@@ -233,7 +233,7 @@ impl World {
     }
 
     /// The surface at `hit` (a hit of this world's triangles or instances).
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> Surface {
         let Some(instance) = hit.instance else {
             return Surface::from_hit(&self.geometry, hit);
