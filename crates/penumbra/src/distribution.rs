@@ -8,6 +8,8 @@
 
 use glam::Vec2;
 
+use crate::simd::prefetch;
+
 /// A distribution over `n` equal cells of `[0, 1)` with probabilities proportional to
 /// non-negative weights.
 #[derive(Clone, Debug, PartialEq)]
@@ -82,6 +84,36 @@ impl Distribution1D {
     }
 }
 
+impl Distribution1D {
+    /// The guide entries [`sample`](Self::sample) of `u` reads first.
+    #[inline(always)]
+    fn guides(&self, u: f32) -> (usize, usize) {
+        let n = self.len();
+        let k = ((f64::from(u) * n as f64) as usize).min(n);
+        (k.saturating_sub(1), (k + 2).min(n))
+    }
+
+    /// Asks the CPU to start loading what [`sample`](Self::sample) of `u` reads first, its
+    /// guide entries: a hint that changes no result.
+    #[inline(always)]
+    fn prefetch_guides(&self, u: f32) {
+        let (lo, hi) = self.guides(u);
+        prefetch(&self.guide[lo]);
+        prefetch(&self.guide[hi]);
+    }
+
+    /// Asks the CPU to start loading the CDF entries [`sample`](Self::sample) of `u` searches
+    /// (once its guide entries are in: it reads them).
+    #[inline(always)]
+    fn prefetch_cdf(&self, u: f32) {
+        let (lo, hi) = self.guides(u);
+        let (lo, hi) = (self.guide[lo] as usize, self.guide[hi] as usize);
+        prefetch(&self.cdf[lo]);
+        prefetch(&self.cdf[(lo + hi) / 2 + 1]);
+        prefetch(&self.cdf[hi + 1]);
+    }
+}
+
 /// The guide table of a CDF of `n + 1` entries: for each k in `0..=n`, the last cell i in
 /// `0..n` with `cdf[i] <= k/n`, found in one forward pass.
 fn guide(cdf: &[f64]) -> Vec<u32> {
@@ -145,6 +177,26 @@ impl Distribution2D {
         let (x, fx) = self.rows[y].sample(u.x);
         ((x, y), Vec2::new(fx, fy))
     }
+
+    /// [`sample`](Self::sample) of each of `us`, into `out` (as long): the same answers, found
+    /// in passes over all of them. The rows of a large map lie far apart in memory, and a
+    /// sample waits on each of its loads in turn (a row's guide entries, then the CDF entries
+    /// they point to); in passes, the loads of every sample are asked for before any is read,
+    /// and they overlap. (The marginal distribution is small and stays cached.)
+    #[inline(always)]
+    pub(crate) fn sample_all(&self, us: &[Vec2], out: &mut [((usize, usize), Vec2)]) {
+        for (o, &u) in out.iter_mut().zip(us) {
+            let (y, fy) = self.marginal.sample(u.y);
+            self.rows[y].prefetch_guides(u.x);
+            *o = ((0, y), Vec2::new(0.0, fy));
+        }
+        for (&((_, y), _), &u) in out.iter().zip(us) {
+            self.rows[y].prefetch_cdf(u.x);
+        }
+        for (((x, y), f), &u) in out.iter_mut().zip(us) {
+            (*x, f.x) = self.rows[*y].sample(u.x);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -196,6 +248,29 @@ mod tests {
                 let i = d.cdf[1..n].partition_point(|&c| c <= wide);
                 assert_eq!(d.sample(u).0, i, "n {n}, u {u}");
             }
+        }
+    }
+
+    #[test]
+    fn sampling_in_passes_answers_as_one_at_a_time() {
+        // A map with a bright spot, empty runs and faint cells, and u on cell boundaries.
+        let (w, h) = (37, 11);
+        let weights: Vec<f32> = (0..w * h)
+            .map(|k| match k % 7 {
+                0 => 0.0,
+                3 if k / w == 4 => 1e6,
+                _ => (k % 13) as f32 * 1e-3,
+            })
+            .collect();
+        let d = Distribution2D::new(&weights, w, h);
+        let us: Vec<Vec2> = (0..64)
+            .map(|k| Vec2::new((k % 8) as f32 / 8.0, ((k * 5) % 64) as f32 / 64.0))
+            .map(|u| u.min(Vec2::splat(ONE_BELOW)))
+            .collect();
+        let mut all = vec![((0, 0), Vec2::ZERO); us.len()];
+        d.sample_all(&us, &mut all);
+        for (u, got) in us.iter().zip(&all) {
+            assert_eq!(*got, d.sample(*u), "u {u}");
         }
     }
 

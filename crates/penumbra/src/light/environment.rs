@@ -76,7 +76,7 @@ pub struct EnvironmentMap {
 }
 
 /// A direction drawn from a map, with where in the map it was drawn.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Drawn {
     /// Unit direction in the map's frame.
     pub direction: Vec3,
@@ -84,6 +84,9 @@ pub(crate) struct Drawn {
     cell: (usize, usize),
     fx: f32,
 }
+
+/// The most draws [`EnvironmentMap::draw_all`] takes at once.
+pub(crate) const DRAWN_AT_ONCE: usize = 64;
 
 /// A direction drawn from a map.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -218,7 +221,29 @@ impl EnvironmentMap {
     /// The direction `u` maps to, without its radiance and density: [`Self::sample`] in
     /// parts, for callers that need those only for some directions.
     pub(crate) fn draw(&self, u: Vec2) -> Drawn {
-        let ((i, j), f) = self.cells.sample(u);
+        let (cell, f) = self.cells.sample(u);
+        self.drawn(cell, f)
+    }
+
+    /// [`draw`](Self::draw) of each of `us` (at most [`DRAWN_AT_ONCE`]), into `out` (as
+    /// long), with the loads of every draw (its cells, then the texels of its radiance)
+    /// asked for before any is read: a large map's cells and texels lie far apart in memory,
+    /// and one draw at a time waits on each of its cache misses in turn. The same answers.
+    pub(crate) fn draw_all(&self, us: &[Vec2], out: &mut [Drawn]) {
+        let mut cells = [((0, 0), Vec2::ZERO); DRAWN_AT_ONCE];
+        let cells = &mut cells[..us.len()];
+        self.cells.sample_all(us, cells);
+        for (o, &(cell, f)) in out.iter_mut().zip(cells.iter()) {
+            *o = self.drawn(cell, f);
+            let (i, j) = o.cell;
+            let w = self.width as usize;
+            crate::simd::prefetch(&self.texels[j * w + i]);
+            crate::simd::prefetch(&self.texels[(j + 1).min(self.height as usize - 1) * w + i]);
+        }
+    }
+
+    /// The direction of cell `(i, j)` at position `f` in it.
+    fn drawn(&self, (i, j): (usize, usize), f: Vec2) -> Drawn {
         let w = self.width as f32;
         let phi = 2.0 * PI * ((i as f32 + 0.5 + f.x) / w);
         let (c0, c1) = (self.cos_rows[j], self.cos_rows[j + 1]);

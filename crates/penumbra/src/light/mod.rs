@@ -13,6 +13,7 @@ use glam::{Vec2, Vec3};
 use crate::distribution::ONE_BELOW;
 use crate::math::{unit_cross, Rgb};
 use crate::sampling::{jittered_offset, Rng};
+use environment::{Drawn, DRAWN_AT_ONCE};
 pub use environment::{EnvironmentError, EnvironmentMap, EnvironmentSample};
 pub use punctual::{DirectionalLight, SpotLight};
 
@@ -82,18 +83,28 @@ impl EnvironmentLight {
     pub fn sample_directions(&self, normal: Vec3, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
         let n = self.n as f32;
         let rotation = self.sin_cos();
-        for k in 0..self.n {
-            for l in 0..self.n {
+        // The strata in order, drawn a few at a time (`EnvironmentMap::draw_all`).
+        let strata = (0..self.n).flat_map(|k| (0..self.n).map(move |l| (k, l)));
+        let mut us = [Vec2::ZERO; DRAWN_AT_ONCE];
+        let mut drawn = [Drawn::default(); DRAWN_AT_ONCE];
+        let mut strata = strata.peekable();
+        while strata.peek().is_some() {
+            let mut count = 0;
+            for (u, (k, l)) in us.iter_mut().zip(strata.by_ref()) {
                 let xi = rng.uniform2();
-                let u = Vec2::new((k as f32 + xi.x) / n, (l as f32 + xi.y) / n);
-                let u = u.min(Vec2::splat(ONE_BELOW));
-                let drawn = self.map.draw(u);
+                let v = Vec2::new((k as f32 + xi.x) / n, (l as f32 + xi.y) / n);
+                *u = v.min(Vec2::splat(ONE_BELOW));
+                count += 1;
+            }
+            let drawn = &mut drawn[..count];
+            self.map.draw_all(&us[..count], drawn);
+            for drawn in drawn.iter() {
                 let direction = rotate_y(rotation, drawn.direction);
                 let radiance = match direction.dot(normal) < -1e-3 {
                     true => Rgb::ZERO,
                     false => {
-                        let pdf = self.map.pdf_drawn(&drawn);
-                        self.map.radiance_drawn(&drawn) * (self.intensity / pdf)
+                        let pdf = self.map.pdf_drawn(drawn);
+                        self.map.radiance_drawn(drawn) * (self.intensity / pdf)
                     }
                 };
                 out.push((direction, radiance));
