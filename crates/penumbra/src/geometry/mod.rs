@@ -10,5 +10,6 @@ mod triangle;
 pub(crate) use mesh::material_of;
 pub use mesh::{Geometry, Mesh, Triangle};
 pub use shapes::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
+pub(crate) use surface::Facet;
 pub use surface::Surface;
 pub use triangle::{Hit, TriangleHit};

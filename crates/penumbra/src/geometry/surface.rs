@@ -66,17 +66,7 @@ impl Surface {
     /// The surface of `geometry` at `hit` (a hit of the world's own triangles).
     #[inline(always)]
     pub fn from_hit(geometry: &Geometry, hit: &Hit) -> Surface {
-        let tri = &geometry.triangles[hit.triangle as usize];
-        let [i0, i1, i2] = tri.vertices.map(|v| v as usize);
-        let p = [i0, i1, i2].map(|i| geometry.positions[i]);
-        let n = tri
-            .smooth
-            .then(|| [i0, i1, i2].map(|i| geometry.normals[i]));
-        let uv = [i0, i1, i2].map(|i| geometry.uvs[i]);
-        let colors =
-            (!geometry.colors.is_empty()).then(|| [i0, i1, i2].map(|i| geometry.colors[i]));
-        let ids = (hit.triangle, tri.object, tri.material);
-        Surface::interpolate(p, n, uv, colors, hit, ids)
+        Facet::of_geometry(geometry, hit).at(hit)
     }
 
     /// The surface at `hit` of `mesh` placed in the world by `world` as object `object`, its
@@ -89,6 +79,61 @@ impl Surface {
         object: u32,
         materials: &[u32],
     ) -> Surface {
+        Facet::of_instance(mesh, world, hit, object, materials).at(hit)
+    }
+}
+
+/// A triangle as shading reads it: its world-space corners and what they carry, and what
+/// every point on it shares (its unit normal, the part of the rounding bound that grows with
+/// its size). Consecutive hits on one triangle can share one ([`Facet::holds`]): a room's wall
+/// is two triangles under many thousands of pixels, and the normal's square root and
+/// division wait on each other.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Facet {
+    /// World-space corners.
+    p: [Vec3; 3],
+    /// A smooth triangle's world-space vertex normals.
+    n: Option<[Vec3; 3]>,
+    /// Texture coordinates of the corners.
+    uv: [Vec2; 3],
+    /// A coloured triangle's vertex colours.
+    colors: Option<[Rgb; 3]>,
+    /// The triangle, object and material ids.
+    ids: (u32, u32, u32),
+    /// The instance of the hits it is for.
+    instance: Option<u32>,
+    /// Unit `e1 × e2`.
+    geometric_normal: Vec3,
+    /// γ₃·(|e₁| + |e₂|), the ray–triangle test's share of [`Surface::error`].
+    edge_error: f32,
+}
+
+impl Facet {
+    /// The triangle of `geometry` that `hit` is on (a hit of the world's own triangles).
+    #[inline(always)]
+    pub(crate) fn of_geometry(geometry: &Geometry, hit: &Hit) -> Facet {
+        let tri = &geometry.triangles[hit.triangle as usize];
+        let [i0, i1, i2] = tri.vertices.map(|v| v as usize);
+        let p = [i0, i1, i2].map(|i| geometry.positions[i]);
+        let n = tri
+            .smooth
+            .then(|| [i0, i1, i2].map(|i| geometry.normals[i]));
+        let uv = [i0, i1, i2].map(|i| geometry.uvs[i]);
+        let colors =
+            (!geometry.colors.is_empty()).then(|| [i0, i1, i2].map(|i| geometry.colors[i]));
+        let ids = (hit.triangle, tri.object, tri.material);
+        Facet::new(p, n, uv, colors, ids, hit.instance)
+    }
+
+    /// The triangle `hit` is on, of `mesh` placed by `world` as object `object` (see
+    /// [`Surface::from_instance`]).
+    pub(crate) fn of_instance(
+        mesh: &Mesh,
+        world: &Transform,
+        hit: &Hit,
+        object: u32,
+        materials: &[u32],
+    ) -> Facet {
         let index = hit.triangle as usize;
         let corners = mesh.indices[index].map(|v| v as usize);
         let p = corners.map(|v| world.point(mesh.positions[v]));
@@ -102,40 +147,62 @@ impl Surface {
         let colors = mesh.has_colors().then(|| corners.map(|v| mesh.colors[v]));
         let material = material_of(mesh.slot(index), materials);
         let ids = (hit.triangle, object, material);
-        Surface::interpolate(p, n, uv, colors, hit, ids)
+        Facet::new(p, n, uv, colors, ids, hit.instance)
     }
 
-    /// The surface at `hit`'s barycentrics of the triangle with world-space corners `p`,
-    /// vertex normals `n` (a smooth triangle's), texture coordinates `uv` and vertex colours
-    /// `colors` (a coloured triangle's); `ids` are its triangle, object and material.
+    /// The facet with world-space corners `p`, vertex normals `n` (a smooth triangle's),
+    /// texture coordinates `uv` and vertex colours `colors` (a coloured triangle's); `ids` are
+    /// its triangle, object and material, `instance` the instance its hits are of.
     #[inline(always)]
-    fn interpolate(
+    fn new(
         p: [Vec3; 3],
         n: Option<[Vec3; 3]>,
         uv: [Vec2; 3],
         colors: Option<[Rgb; 3]>,
-        hit: &Hit,
         ids: (u32, u32, u32),
-    ) -> Surface {
+        instance: Option<u32>,
+    ) -> Facet {
         let [p0, p1, p2] = p;
+        Facet {
+            p,
+            n,
+            uv,
+            colors,
+            ids,
+            instance,
+            geometric_normal: unit_cross(p1 - p0, p2 - p0),
+            edge_error: GAMMA_3 * ((p1 - p0).length() + (p2 - p0).length()),
+        }
+    }
+
+    /// Whether `hit` is on this facet (the same triangle of the same instance).
+    #[inline(always)]
+    pub(crate) fn holds(&self, hit: &Hit) -> bool {
+        self.ids.0 == hit.triangle && self.instance == hit.instance
+    }
+
+    /// The surface at `hit`'s barycentrics (a hit the facet [`holds`](Self::holds)).
+    #[inline(always)]
+    pub(crate) fn at(&self, hit: &Hit) -> Surface {
+        let [p0, p1, p2] = self.p;
+        let (uv, geometric_normal) = (self.uv, self.geometric_normal);
         let b0 = 1.0 - hit.b1 - hit.b2;
-        let geometric_normal = unit_cross(p1 - p0, p2 - p0);
-        let shading_normal = match n {
+        let shading_normal = match self.n {
             Some([n0, n1, n2]) => {
                 let ns = b0 * n0 + hit.b1 * n1 + hit.b2 * n2;
                 ns.try_normalize().unwrap_or(geometric_normal)
             }
             None => geometric_normal,
         };
-        let (triangle, object, material) = ids;
+        let (triangle, object, material) = self.ids;
         Surface {
             position: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
             error: GAMMA_7 * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
-                + Vec3::splat(GAMMA_3 * ((p1 - p0).length() + (p2 - p0).length())),
+                + Vec3::splat(self.edge_error),
             geometric_normal,
             shading_normal,
             uv: b0 * uv[0] + hit.b1 * uv[1] + hit.b2 * uv[2],
-            color: match colors {
+            color: match self.colors {
                 // One colour at all three corners is that colour, exactly (the barycentrics'
                 // sum may round off 1): uncoloured meshes in a coloured scene stay white.
                 Some([c0, c1, c2]) if c0 == c1 && c1 == c2 => c0,

@@ -73,8 +73,10 @@ impl Across {
         let count = directions.len();
         assert!((1..=LANES).contains(&count), "{count} points");
         self.points.clear();
+        let mut facet = None;
         for (i, (&direction, hit)) in directions.iter().zip(hits).enumerate() {
-            let (seen, point) = integrator.look(direction, &integrator.world.surface(hit));
+            let surface = integrator.world.surface_after(hit, &mut facet);
+            let (seen, point) = integrator.look(direction, &surface);
             self.lobes.set(i, &seen);
             self.points.push(point);
         }

@@ -146,8 +146,10 @@ impl Kernel for ShadeBatch<'_, '_> {
         }
         let points = &mut points[..count];
         prepared.clear();
+        let mut facet = None;
         for (i, point) in points.iter_mut().enumerate() {
-            let (d, surface) = (directions[i], integrator.world.surface(&hits[i]));
+            let d = directions[i];
+            let surface = integrator.world.surface_after(&hits[i], &mut facet);
             prepared.push(integrator.prepare(d, &surface, &mut rngs[i], point));
         }
         // Every point has the same lights, hence as many samples.

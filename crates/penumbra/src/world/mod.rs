@@ -26,7 +26,7 @@ use thiserror::Error;
 
 use crate::accel::Levels;
 use crate::camera::Camera;
-use crate::geometry::{Geometry, Hit, Mesh, Surface};
+use crate::geometry::{Facet, Geometry, Hit, Mesh, Surface};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Ray};
@@ -235,14 +235,31 @@ impl World {
     /// The surface at `hit` (a hit of this world's triangles or instances).
     #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> Surface {
+        self.facet(hit).at(hit)
+    }
+
+    /// The surface at `hit`, reading the triangle from `last` when it holds the hit and
+    /// leaving the hit's triangle there: for hits in a row, which often share one. The same
+    /// surface as [`surface`](Self::surface).
+    #[inline(always)]
+    pub(crate) fn surface_after(&self, hit: &Hit, last: &mut Option<Facet>) -> Surface {
+        match last {
+            Some(facet) if facet.holds(hit) => facet.at(hit),
+            _ => last.insert(self.facet(hit)).at(hit),
+        }
+    }
+
+    /// The triangle `hit` is on, as shading reads it.
+    #[inline(always)]
+    fn facet(&self, hit: &Hit) -> Facet {
         let Some(instance) = hit.instance else {
-            return Surface::from_hit(&self.geometry, hit);
+            return Facet::of_geometry(&self.geometry, hit);
         };
         let p = &self.placed[instance as usize];
         let (first, count) = (p.materials.0 as usize, p.materials.1 as usize);
         let materials = &self.instance_materials[first..first + count];
         let mesh = &self.meshes[p.mesh as usize];
-        Surface::from_instance(mesh, &p.transform, hit, p.object, materials)
+        Facet::of_instance(mesh, &p.transform, hit, p.object, materials)
     }
 
     /// Counts and timings.
