@@ -206,6 +206,20 @@ def render_penumbra(exe, sc, spp, out_dir, fmt):
 # --------------------------------------------------------------------------------------------
 # Mitsuba
 # --------------------------------------------------------------------------------------------
+def sensor(mi, cam, width, height, spp):
+    """Mitsuba's sensor for penumbra's pinhole `cam` (vertical `fov`): a box-filtered RGB film
+    of `width × height` and `spp` independent samples a pixel."""
+    return {
+        "type": "perspective", "fov": float(cam["fov"]), "fov_axis": "y",
+        "near_clip": 0.01, "far_clip": 1000.0,
+        "to_world": mi.ScalarTransform4f().look_at(origin=cam["position"],
+                                                   target=cam["look_at"], up=cam["up"]),
+        "sampler": {"type": "independent", "sample_count": spp},
+        "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb",
+                 "rfilter": {"type": "box"}},
+    }
+
+
 def mitsuba_scene(mi, sc, spp):
     T = mi.ScalarTransform4f
     cam = sc["camera"]
@@ -220,18 +234,7 @@ def mitsuba_scene(mi, sc, spp):
         # direct lighting only (emitter + BSDF sampling with MIS); penumbra's lights are
         # invisible to camera rays, hence hide_emitters (the light is out of view anyway).
         "integrator": {"type": "direct", "hide_emitters": True},
-        "sensor": {
-            "type": "perspective",
-            "fov": float(cam["fov"]),
-            "fov_axis": "y",
-            "near_clip": 0.01,
-            "far_clip": 1000.0,
-            "to_world": T().look_at(origin=cam["position"], target=cam["look_at"],
-                                    up=cam["up"]),
-            "sampler": {"type": "independent", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": sc["width"], "height": sc["height"],
-                     "pixel_format": "rgb", "rfilter": {"type": "box"}},
-        },
+        "sensor": sensor(mi, cam, sc["width"], sc["height"], spp),
     }
     for i, q in enumerate(sc["quads"]):
         c = vec(q["corner"]) + vec(q["u"]) / 2 + vec(q["v"]) / 2

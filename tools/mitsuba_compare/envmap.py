@@ -34,6 +34,7 @@ from compare import (  # noqa: E402
     parallelogram_to_world,
     psnr,
     read_pfm,
+    sensor,
     srgb8,
     toml_vec,
     vec,
@@ -116,15 +117,7 @@ def render_mitsuba(sc, env, rotation, spp, seed, sun=None):
     d = {
         "type": "scene",
         "integrator": {"type": "direct", "hide_emitters": False},
-        "sensor": {
-            "type": "perspective", "fov": float(cam["fov"]), "fov_axis": "y",
-            "near_clip": 0.01, "far_clip": 1000.0,
-            "to_world": T().look_at(origin=cam["position"], target=cam["look_at"],
-                                    up=cam["up"]),
-            "sampler": {"type": "independent", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": sc["width"], "height": sc["height"],
-                     "pixel_format": "rgb", "rfilter": {"type": "box"}},
-        },
+        "sensor": sensor(mi, cam, sc["width"], sc["height"], spp),
     }
     if sun:
         e, *direction = sun

@@ -79,16 +79,8 @@ def mitsuba_scene(mi, herd, spp, light_n, scale):
         "type": "scene",
         "integrator": {"type": "direct", "hide_emitters": True,
                        "emitter_samples": light_n ** 2, "bsdf_samples": 0},
-        "sensor": {
-            "type": "perspective", "fov": float(cam["fov"]), "fov_axis": "y",
-            "near_clip": 0.01, "far_clip": 1000.0,
-            "to_world": T().look_at(origin=cam["position"], target=cam["look_at"],
-                                    up=cam["up"]),
-            "sampler": {"type": "independent", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": round(film["width"] * scale),
-                     "height": round(film["height"] * scale), "pixel_format": "rgb",
-                     "rfilter": {"type": "box"}},
-        },
+        "sensor": compare.sensor(mi, cam, round(film["width"] * scale),
+                                 round(film["height"] * scale), spp),
     }
     light = herd["lights"][0]
     d["light"] = {
