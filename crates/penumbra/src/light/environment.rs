@@ -229,6 +229,7 @@ impl EnvironmentMap {
     /// long), with the loads of every draw (its cells, then the texels of its radiance)
     /// asked for before any is read: a large map's cells and texels lie far apart in memory,
     /// and one draw at a time waits on each of its cache misses in turn. The same answers.
+    #[inline(always)]
     pub(crate) fn draw_all(&self, us: &[Vec2], out: &mut [Drawn]) {
         let mut cells = [((0, 0), Vec2::ZERO); DRAWN_AT_ONCE];
         let cells = &mut cells[..us.len()];
@@ -243,6 +244,7 @@ impl EnvironmentMap {
     }
 
     /// The direction of cell `(i, j)` at position `f` in it.
+    #[inline(always)]
     fn drawn(&self, (i, j): (usize, usize), f: Vec2) -> Drawn {
         let w = self.width as f32;
         let phi = 2.0 * PI * ((i as f32 + 0.5 + f.x) / w);

@@ -80,6 +80,7 @@ impl EnvironmentLight {
     /// plane of `normal` (cosine under −10⁻³) brings no light to it, so it is given zero
     /// radiance without looking the map up; shading finds the same (a cosine ≤ 0 lights
     /// nothing) whatever the radiance.
+    #[inline(always)]
     pub fn sample_directions(&self, normal: Vec3, rng: &mut Rng, out: &mut Vec<(Vec3, Rgb)>) {
         let n = self.n as f32;
         let rotation = self.sin_cos();
