@@ -222,6 +222,7 @@ impl World {
     }
 
     /// The materials instance `p`'s slots map to.
+    #[inline(always)]
     pub(crate) fn instance_materials(&self, p: &Placed) -> &[u32] {
         let (first, count) = (p.materials.0 as usize, p.materials.1 as usize);
         &self.instance_materials[first..first + count]
@@ -256,9 +257,7 @@ impl World {
             return Facet::of_geometry(&self.geometry, hit);
         };
         let p = &self.placed[instance as usize];
-        let (first, count) = (p.materials.0 as usize, p.materials.1 as usize);
-        let materials = &self.instance_materials[first..first + count];
-        let mesh = &self.meshes[p.mesh as usize];
+        let (mesh, materials) = (&self.meshes[p.mesh as usize], self.instance_materials(p));
         Facet::of_instance(mesh, &p.transform, hit, p.object, materials)
     }
 
