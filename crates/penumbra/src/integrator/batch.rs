@@ -74,6 +74,10 @@ pub(super) fn bundles(samples: u64, fixed: bool, nodes: usize) -> bool {
     }
 }
 
+/// Points with at most this many light samples are shaded a batch at a time even when each
+/// traces its own fans: a batch is then a few thousand shadow rays at most.
+pub(super) const FEW_SAMPLES: u64 = 256;
+
 /// Points shaded together when they bundle: the 4 samples of 4 pixels, a vector of 16 lanes
 /// per light sample (two of 8 on AVX2).
 pub(super) const BUNDLE_POINTS: usize = 16;
@@ -141,12 +145,26 @@ impl Kernel for ShadeBatch<'_, '_> {
             across.radiance(&bundle.blocked, out);
             return;
         }
+        let mut facet = None;
+        if !integrator.bundles {
+            // Each point traces its own fans, one point after another in one scratch.
+            if points.is_empty() {
+                points.push(Scratch::default());
+            }
+            let point = &mut points[0];
+            for (i, &d) in directions.iter().enumerate() {
+                let surface = integrator.world.surface_after(&hits[i], &mut facet);
+                let p = integrator.prepare(d, &surface, &mut rngs[i], point);
+                integrator.occlude(p.front, p.back, point);
+                out.push((p.radiance(point), p.traced));
+            }
+            return;
+        }
         if points.len() < count {
             points.resize_with(count, Scratch::default);
         }
         let points = &mut points[..count];
         prepared.clear();
-        let mut facet = None;
         for (i, point) in points.iter_mut().enumerate() {
             let d = directions[i];
             let surface = integrator.world.surface_after(&hits[i], &mut facet);
@@ -155,13 +173,6 @@ impl Kernel for ShadeBatch<'_, '_> {
         // Every point has the same lights, hence as many samples.
         let samples = points.first().map_or(0, |p| p.blocked.len());
         debug_assert!(points.iter().all(|p| p.blocked.len() == samples));
-        if !integrator.bundles {
-            for (point, p) in points.iter_mut().zip(prepared.iter()) {
-                integrator.occlude(p.front, p.back, point);
-                out.push((p.radiance(point), p.traced));
-            }
-            return;
-        }
         // Jittered lights: each point's samples are its own.
         let stride = count.next_multiple_of(N);
         bundle.segments(integrator, points, prepared, stride);

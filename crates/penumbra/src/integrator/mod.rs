@@ -200,9 +200,11 @@ impl<'w> Integrator<'w> {
     }
 
     /// How many points [`Integrator::shade_batch`] should be given at a time: a few pixels'
-    /// worth when they bundle their shadow rays, else one (each may trace many thousands).
+    /// worth when they bundle their shadow rays or have few samples each (one call, one
+    /// dispatch to the SIMD kernel, for all of them), else one (each may trace many
+    /// thousands, and a cancelled render stops between calls).
     pub(crate) fn batch_points(&self) -> usize {
-        if self.bundles {
+        if self.bundles || self.samples <= batch::FEW_SAMPLES {
             batch::BUNDLE_POINTS
         } else {
             1
