@@ -221,7 +221,8 @@ fn write_to(
 ) -> Result<(), String> {
     let interrupted = || "interrupted".to_owned();
     let prepared = prepare(film, format, gamma, cancel)?.ok_or_else(interrupted)?;
-    let mut w = BufWriter::new(Unless { file, cancel });
+    // Large writes: at 8 KiB a 1024² float image took 1,500 system calls.
+    let mut w = BufWriter::with_capacity(1 << 20, Unless { file, cancel });
     encode(film, &prepared, format, &mut w)?;
     w.flush().map_err(|e| e.to_string())
 }
@@ -252,12 +253,16 @@ fn encode<W: Write + Seek>(
         Prepared::Floats => {
             // Negative scale means little-endian; scanlines go bottom to top.
             write!(w, "PF\n{width} {height}\n-1.0\n").map_err(|e| e.to_string())?;
+            // A row's bytes at a time: four bytes a call cost 3 million calls at 1024².
+            let mut line = Vec::with_capacity(width as usize * 12);
             for row in film.pixels.chunks(width as usize).rev() {
+                line.clear();
                 for p in row {
                     for c in p.to_array() {
-                        w.write_all(&c.to_le_bytes()).map_err(|e| e.to_string())?;
+                        line.extend_from_slice(&c.to_le_bytes());
                     }
                 }
+                w.write_all(&line).map_err(|e| e.to_string())?;
             }
         }
     }
