@@ -20,8 +20,8 @@ use glam::Vec3;
 
 use super::lanes::{self, lane};
 use super::prim::moller_trumbore::{origin_terms, solve};
-use super::shadow_fans::{walk, ShadowLanes};
-use super::shaft::{self, Shaft};
+use super::shadow_fans::{walk_from, ShadowLanes};
+use super::shaft::{self, Roots, Shaft};
 use super::{traverse, Bvh, BvhNode, TriAccel};
 use crate::math::Ray;
 use crate::simd::{Isa, Kernel};
@@ -115,6 +115,7 @@ impl Kernel for OccludeSegments<'_> {
             let segments = segments.range(chunk * N, blocked.len());
             occlude_lanes(
                 bvh,
+                &[0],
                 &mut bundle,
                 blocked,
                 |i| segments.get(i),
@@ -154,9 +155,10 @@ impl Kernel for OccludePairs<'_> {
         if bvh.nodes.is_empty() || m == 0 || n == 0 {
             return;
         }
-        let gathered = match n >= shaft::MIN_ENDS {
-            true => Shaft::new(bvh, origins, ends).gather(bvh),
-            false => None,
+        let shaft = (n >= shaft::ROOTS_MIN_ENDS).then(|| Shaft::new(bvh, origins, ends));
+        let gathered = match &shaft {
+            Some(shaft) if n >= shaft::MIN_ENDS => shaft.gather(bvh),
+            _ => None,
         };
         match gathered {
             Some(candidates) if candidates.as_slice().is_empty() => return,
@@ -167,6 +169,11 @@ impl Kernel for OccludePairs<'_> {
             }
             None => {}
         }
+        let roots = shaft.map_or_else(Roots::whole, |shaft| shaft.roots(bvh));
+        let roots = roots.as_slice();
+        if roots.is_empty() {
+            return;
+        }
         let mut bundle = Bundle::<N, I>::new(t_max);
         for (j, row) in blocked.chunks_mut(m).enumerate() {
             let end = [ends[0][j], ends[1][j], ends[2][j]];
@@ -176,6 +183,7 @@ impl Kernel for OccludePairs<'_> {
                 let point = |i: usize| Vec3::new(origin[0][i], origin[1][i], origin[2][i]);
                 occlude_lanes(
                     bvh,
+                    roots,
                     &mut bundle,
                     blocked,
                     |i| (point(i), end.into()),
@@ -193,6 +201,7 @@ impl Kernel for OccludePairs<'_> {
 #[inline(always)]
 fn occlude_lanes<const N: usize, I: Isa>(
     bvh: &Bvh,
+    roots: &[u32],
     bundle: &mut Bundle<N, I>,
     blocked: &mut [bool],
     segment: impl Fn(usize) -> (Vec3, Vec3),
@@ -212,7 +221,7 @@ fn occlude_lanes<const N: usize, I: Isa>(
         }
     } else {
         fill(&mut bundle.rays);
-        occlude_packet(bvh, bundle, blocked);
+        occlude_packet(bvh, roots, bundle, blocked);
     }
 }
 
@@ -267,12 +276,22 @@ fn set_axis<const N: usize>(
 /// Marks `blocked[i]` for each lane `i` of `bundle` (`blocked` has one slot per segment, at
 /// most `N`) that is not blocked yet and that a triangle meets for `t` in `(0, t_max)`.
 #[inline(always)]
-fn occlude_packet<const N: usize, I: Isa>(bvh: &Bvh, bundle: &Bundle<N, I>, blocked: &mut [bool]) {
+fn occlude_packet<const N: usize, I: Isa>(
+    bvh: &Bvh,
+    roots: &[u32],
+    bundle: &Bundle<N, I>,
+    blocked: &mut [bool],
+) {
     let mut active: u32 = 0;
     for (i, &b) in blocked.iter().enumerate() {
         active |= u32::from(!b) << i;
     }
-    let active = walk::<N, false>(bvh, bundle, active);
+    for &root in roots {
+        active = walk_from::<N, false>(bvh, bundle, active, root);
+        if active == 0 {
+            break;
+        }
+    }
     for (i, b) in blocked.iter_mut().enumerate() {
         *b |= active & (1 << i) == 0;
     }

@@ -147,11 +147,25 @@ pub(super) trait ShadowLanes<const N: usize> {
 pub(super) fn walk<const N: usize, const PREFETCH: bool>(
     bvh: &Bvh,
     rays: &impl ShadowLanes<N>,
+    active: u32,
+) -> u32 {
+    walk_from::<N, PREFETCH>(bvh, rays, active, 0)
+}
+
+/// [`walk`] below node `root` alone: the lanes of `active` that no triangle of its subtree
+/// blocks. A lane enters a box only if it enters every box above it (a child's box lies in
+/// its parent's, and the slab test's rounding is monotonic), so a lane meets here exactly the
+/// triangles of the subtree that [`walk`] would test for it.
+#[inline(always)]
+pub(super) fn walk_from<const N: usize, const PREFETCH: bool>(
+    bvh: &Bvh,
+    rays: &impl ShadowLanes<N>,
     mut active: u32,
+    root: u32,
 ) -> u32 {
     let mut stack = [(0u32, 0u32); STACK_SIZE];
     let mut sp = 0;
-    let mut node = &bvh.nodes[0];
+    let mut node = &bvh.nodes[root as usize];
     // The lanes that entered `node` and every box above it.
     let mut entered = rays.enter(node).0 & active;
     if entered == 0 {

@@ -39,6 +39,15 @@ pub(super) const MAX_CANDIDATES: usize = 32;
 /// (25 ends) the shaft saves 13 % there.
 pub const MIN_ENDS: usize = 16;
 
+/// Fewest ends for which a batch too small for [`MIN_ENDS`] still finds its [`Roots`]: with
+/// fewer (point lights), the descent costs more than the walks save.
+pub const ROOTS_MIN_ENDS: usize = 4;
+
+/// Most subtrees a shaft's descent leaves for the walks to start from. 4 and 8 gave the same
+/// time under a 3×3 light (scenes/bench/small_light.toml: 0.92× the walks from the tree's
+/// root); 16 was slower, 1 and 2 saved little.
+pub(super) const MAX_ROOTS: usize = 4;
+
 /// Axes the shaft is measured along: x, y, z, and three across its direction.
 const AXES: usize = 6;
 
@@ -58,6 +67,27 @@ pub(super) struct Candidates {
 impl Candidates {
     /// The candidates: each one's leaf-order index and its leaf's node index.
     pub(super) fn as_slice(&self) -> &[(u32, u32)] {
+        &self.index[..self.len]
+    }
+}
+
+/// The subtrees a shaft meets: node indices, at most [`MAX_ROOTS`] of them.
+pub(super) struct Roots {
+    index: [u32; MAX_ROOTS],
+    len: usize,
+}
+
+impl Roots {
+    /// The whole tree: its root alone.
+    pub(super) fn whole() -> Roots {
+        Roots {
+            index: [0; MAX_ROOTS],
+            len: 1,
+        }
+    }
+
+    /// The subtrees' node indices.
+    pub(super) fn as_slice(&self) -> &[u32] {
         &self.index[..self.len]
     }
 }
@@ -127,6 +157,54 @@ impl Shaft {
             let d = corners.map(|c| self.axes[k].dot(c));
             d[0].max(d[1]).max(d[2]) < self.lo[k] || d[0].min(d[1]).min(d[2]) > self.hi[k]
         })
+    }
+
+    /// At most [`MAX_ROOTS`] subtrees of `bvh` (not empty) whose boxes meet the shaft and
+    /// hold every triangle it does: the tree's root, split into the children that meet the
+    /// shaft, level by level, while there is room. Every segment of the batch lies in the
+    /// shaft, so the boxes it enters lie in these subtrees (or above them), and walks that
+    /// start from them test the triangles a walk from the root would.
+    #[inline(always)]
+    pub(super) fn roots(&self, bvh: &Bvh) -> Roots {
+        let mut roots = Roots {
+            index: [0; MAX_ROOTS],
+            len: 0,
+        };
+        if self.misses_box(&bvh.nodes[0]) {
+            return roots;
+        }
+        roots.len = 1;
+        let mut split = true;
+        while split {
+            split = false;
+            let mut i = 0;
+            while i < roots.len {
+                let node = &bvh.nodes[roots.index[i] as usize];
+                i += 1;
+                if node.is_leaf() {
+                    continue;
+                }
+                let (l, r) = (node.first, node.first + 1);
+                let meets = |k: u32| !self.misses_box(&bvh.nodes[k as usize]);
+                match (meets(l), meets(r)) {
+                    (true, true) if roots.len < MAX_ROOTS => {
+                        roots.index[i - 1] = l;
+                        roots.index[roots.len] = r;
+                        roots.len += 1;
+                    }
+                    (true, true) => continue,
+                    (true, false) => roots.index[i - 1] = l,
+                    (false, true) => roots.index[i - 1] = r,
+                    (false, false) => {
+                        roots.len -= 1;
+                        roots.index[i - 1] = roots.index[roots.len];
+                        i -= 1;
+                    }
+                }
+                split = true;
+            }
+        }
+        roots
     }
 
     /// The triangles of `bvh` (not empty) the shaft holds, or `None` when there are more

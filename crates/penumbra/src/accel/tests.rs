@@ -209,7 +209,8 @@ fn assert_segments_agree(g: &Geometry, bvh: &Bvh, origin: Vec3, ends: &[Vec3], t
 }
 
 /// `occlude_pairs` on every SIMD path leaves blocked pairs blocked and blocks the others
-/// exactly as [`Bvh::occluded`] does, with a shaft (from [`SHAFT_MIN_ENDS`] ends) or without;
+/// exactly as [`Bvh::occluded`] does, with a shaft (from [`SHAFT_MIN_ENDS`] ends), with walks
+/// from the subtrees a shaft meets (from `shaft::ROOTS_MIN_ENDS`), or from the tree's root;
 /// [`Bvh::occluded`] agrees with brute force's [`Verdict`].
 fn assert_pairs_agree(g: &Geometry, bvh: &Bvh, origins: &[Vec3], ends: &[Vec3], t_max: f32) {
     let (from, to) = (by_axis(origins), by_axis(ends));
