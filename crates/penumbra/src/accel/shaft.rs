@@ -41,7 +41,7 @@ pub const MIN_ENDS: usize = 16;
 
 /// Fewest ends for which a batch too small for [`MIN_ENDS`] still finds its [`Roots`]: with
 /// fewer (point lights), the descent costs more than the walks save.
-pub const ROOTS_MIN_ENDS: usize = 4;
+pub(super) const ROOTS_MIN_ENDS: usize = 4;
 
 /// Most subtrees a shaft's descent leaves for the walks to start from. 4 and 8 gave the same
 /// time under a 3×3 light (scenes/bench/small_light.toml: 0.92× the walks from the tree's
