@@ -14,6 +14,7 @@ use glam::Vec3;
 use super::levels::{Borders, WideLevels};
 use super::nearest::Nearest;
 use super::tree::{SlotHit, Stack};
+use super::turns::{in_turns, prepare, Turns, INTERLEAVED};
 use crate::accel::prim::watertight::PreparedRay;
 
 use super::packets::{count_parallel, CastPackets};
@@ -45,15 +46,6 @@ pub(crate) trait Control {
     ) -> Result<(), Self::Error>;
 }
 
-/// The ray `[ox, oy, oz, dx, dy, dz]` prepared for traversal; `None` hits nothing.
-#[inline(always)]
-pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
-    PreparedRay::new(
-        Vec3::new(ray[0], ray[1], ray[2]),
-        Vec3::new(ray[3], ray[4], ray[5]),
-    )
-}
-
 /// Whether a triangle meets each ray of `rays` with `t` in `range`, written to `out`: the
 /// own tree's ([`WideLevels::occluded_own`]), or with `PLACED` the placements' for each ray
 /// not yet occluded ([`WideLevels::occluded_placed`]). The two are kernels of their own, so
@@ -73,21 +65,41 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let (accel, range) = (self.accel, self.range);
-        let mut stack = Stack::default();
+        let (mut stack, mut turns) = (Stack::default(), Turns::default());
         for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
             if self.options.cancelled() {
                 return;
             }
-            for (ray, o) in rays.iter().zip(out) {
-                *o = match PLACED {
-                    false => {
-                        prepare(ray).is_some_and(|r| accel.occluded_own::<I>(&r, range, &mut stack))
-                    }
-                    true => *o || accel.occluded_placed::<I>(ray, range, &mut stack),
-                };
+            if PLACED {
+                for (ray, o) in rays.iter().zip(out) {
+                    *o = *o || accel.occluded_placed::<I>(ray, range, &mut stack);
+                }
+            } else if accel.own().interleaves() {
+                let stacks = (&mut stack, &mut turns);
+                occluded_in_turns::<INTERLEAVED, I>(accel, range, rays, out, stacks);
+            } else {
+                let stacks = (&mut stack, &mut turns);
+                occluded_in_turns::<1, I>(accel, range, rays, out, stacks);
             }
         }
     }
+}
+
+/// [`WideLevels::occluded_own`] of each ray of `rays`, `K` at a time ([`in_turns`]).
+#[inline(always)]
+fn occluded_in_turns<const K: usize, I: Isa>(
+    accel: &WideLevels,
+    range: (f32, f32),
+    rays: &[[f32; 6]],
+    out: &mut [bool],
+    stacks: (&mut Stack, &mut Turns),
+) {
+    in_turns::<K, _>(
+        (rays, out),
+        stacks,
+        |r, stacks, out| out.copy_from_slice(&accel.occluded_own_many::<K, I>(r, range, stacks)),
+        |r, stack, o| *o = r.is_some_and(|r| accel.occluded_own::<I>(&r, range, stack)),
+    );
 }
 
 /// The closest of each hit of `hits` (the own tree's, from `packets::CastPackets`) and the
@@ -168,9 +180,10 @@ fn seed(p: Vec3, q: Vec3) -> f64 {
     d * d
 }
 
-/// The number of hits of [`WideLevels::each_hit`] from `t = 0` on for each ray of `rays`:
-/// the own tree's written to `out` (left alone for a ray that hits nothing), or with `PLACED`
-/// the placements' added to it (two kernels, as for [`Occlusions`]).
+/// The number of crossings from `t = 0` on of each ray of `rays`: the own tree's
+/// ([`WideLevels::each_hit_own`]) written to `out` (left alone for a ray that hits nothing),
+/// or with `PLACED` the placements' ([`WideLevels::each_hit_placed`]) added to it (two
+/// kernels, as for [`Occlusions`]).
 pub(crate) struct Counts<'a, C, const PLACED: bool> {
     pub accel: &'a WideLevels,
     /// Crossings with `t` in this range count.
@@ -189,7 +202,8 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let (accel, border, range) = (self.accel, self.border, self.range);
-        let mut stack = Stack::default();
+        let own = (range, border);
+        let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let mut packet_stack = Vec::new();
         // Runs of parallel rays go as packets of 32 through the own tree (without cut-outs):
         // such rays share most of their walk (occupancy on the bunny: 1.15x the points per
@@ -204,9 +218,9 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                 if self.options.cancelled() {
                     return;
                 }
-                let (tree, own) = (accel.own(), (range, border.own));
+                let (tree, parallel) = (accel.own(), (range, border.own));
                 let stack = &mut packet_stack;
-                let done = count_parallel::<PARALLEL, I>(tree, rays, own, stack, out);
+                let done = count_parallel::<PARALLEL, I>(tree, rays, parallel, stack, out);
                 if done {
                     continue;
                 }
@@ -215,20 +229,51 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                 if self.options.cancelled() {
                     return;
                 }
-                for (ray, count) in rays.iter().zip(out) {
-                    let mut n = 0i32;
-                    let tally = &mut |_| n = n.saturating_add(1);
-                    if PLACED {
+                if PLACED {
+                    for (ray, count) in rays.iter().zip(out) {
+                        let mut n = 0i32;
+                        let tally = &mut |_| n = n.saturating_add(1);
                         accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
                         *count = count.saturating_add(n);
-                    } else if let Some(r) = prepare(ray) {
-                        accel.each_hit_own::<I>(&r, range, border, &mut stack, tally);
-                        *count = n;
                     }
+                } else if accel.own().interleaves() {
+                    let stacks = (&mut stack, &mut turns);
+                    counted_in_turns::<INTERLEAVED, I>(accel, own, rays, out, stacks);
+                } else {
+                    let stacks = (&mut stack, &mut turns);
+                    counted_in_turns::<1, I>(accel, own, rays, out, stacks);
                 }
             }
         }
     }
+}
+
+/// The own tree's crossings of each ray of `rays` with `t` in `range` (`border`: the
+/// borders), written to `out` (left alone for a ray that hits nothing), `K` rays at a time
+/// ([`in_turns`]).
+#[inline(always)]
+fn counted_in_turns<const K: usize, I: Isa>(
+    accel: &WideLevels,
+    (range, border): ((f32, f32), &Borders),
+    rays: &[[f32; 6]],
+    out: &mut [i32],
+    stacks: (&mut Stack, &mut Turns),
+) {
+    let many = |r: [&PreparedRay; K], stacks: [&mut Stack; K], out: &mut [i32]| {
+        let mut n = [0i32; K];
+        let tally = &mut |k: usize, _| n[k] = n[k].saturating_add(1);
+        accel.each_hit_own_many::<K, I>(r, range, border, stacks, tally);
+        out.copy_from_slice(&n);
+    };
+    let one = |r: Option<PreparedRay>, stack: &mut Stack, count: &mut i32| {
+        if let Some(r) = r {
+            let mut n = 0i32;
+            let tally = &mut |_| n = n.saturating_add(1);
+            accel.each_hit_own::<I>(&r, range, border, stack, tally);
+            *count = n;
+        }
+    };
+    in_turns::<K, _>((rays, out), stacks, many, one);
 }
 
 /// The hits of each ray of `rays` from `t = 0` on, one per crossing, sorted by `t` then ids:
@@ -250,40 +295,74 @@ impl<C: Control> Kernel for Listing<'_, C> {
 
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) -> Listed<C::Error> {
-        let (mut counts, mut all, mut one) = (Vec::new(), Vec::new(), Vec::new());
-        let mut stack = Stack::default();
+        match self.accel.own().interleaves() {
+            true => self.list::<INTERLEAVED, I>(),
+            false => self.list::<1, I>(),
+        }
+    }
+}
+
+impl<C: Control> Listing<'_, C> {
+    /// [`Listing`] with the own tree's walks `K` rays at a time (see `turns`).
+    #[inline(always)]
+    fn list<const K: usize, I: Isa>(self) -> Listed<C::Error> {
+        let (accel, border, options) = (self.accel, self.border, self.options);
+        let (mut counts, mut all) = (Vec::new(), Vec::new());
+        let mut ones: [Vec<SlotHit>; K] = std::array::from_fn(|_| Vec::new());
+        let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let what = "the intersections";
-        let options = self.options;
         options.grow(&mut counts, self.rays.len(), what)?;
-        for (j, ray) in self.rays.iter().enumerate() {
-            if j % CHECK == 0 && self.options.cancelled() {
+        for (c, rays) in self.rays.chunks(K).enumerate() {
+            if (c * K).is_multiple_of(CHECK) && options.cancelled() {
                 return Err(options.cancel_error());
             }
-            one.clear();
+            ones.iter_mut().for_each(Vec::clear);
             let mut full = Ok(());
-            if let Some(r) = prepare(ray) {
-                let all = (0.0, f32::INFINITY);
-                self.accel
-                    .each_hit::<I>((ray, &r), all, self.border, &mut stack, &mut |h| {
-                        // A ray may cross millions of triangles: grown fallibly.
-                        if full.is_ok() {
-                            full = options.grow(&mut one, 1, what);
+            // A ray may cross millions of triangles: grown fallibly.
+            let mut push = |k: usize, h| {
+                if full.is_ok() {
+                    full = options.grow(&mut ones[k], 1, what);
+                }
+                if full.is_ok() {
+                    ones[k].push(h);
+                }
+            };
+            let prepared: [Option<PreparedRay>; K] =
+                std::array::from_fn(|i| rays.get(i).and_then(prepare));
+            let refs = prepared.each_ref().map(Option::as_ref);
+            let range = (0.0, f32::INFINITY);
+            match (refs[0], turns.of::<K>()) {
+                (Some(first), Some(stacks)) if K > 1 && refs.iter().all(Option::is_some) => {
+                    let refs = refs.map(|r| r.unwrap_or(first));
+                    accel.each_hit_own_many::<K, I>(refs, range, border, stacks, &mut push);
+                }
+                _ => {
+                    for (k, r) in refs.iter().enumerate() {
+                        if let Some(r) = r {
+                            let f = &mut |h| push(k, h);
+                            accel.each_hit_own::<I>(r, range, border, &mut stack, f);
                         }
-                        if full.is_ok() {
-                            one.push(h);
-                        }
-                    });
+                    }
+                }
+            }
+            for (k, (ray, r)) in rays.iter().zip(&refs).enumerate() {
+                if r.is_some() {
+                    let f = &mut |h| push(k, h);
+                    accel.each_hit_placed::<I>(ray, range, border, &mut stack, f);
+                }
             }
             full?;
-            one.sort_by(|a: &SlotHit, b: &SlotHit| {
-                a.crossing
-                    .t
-                    .total_cmp(&b.crossing.t)
-                    .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
-            });
-            counts.push(one.len() as u32);
-            options.grow(&mut all, one.len(), what)?;
-            all.extend_from_slice(&one);
+            for one in ones.iter_mut().take(rays.len()) {
+                one.sort_by(|a: &SlotHit, b: &SlotHit| {
+                    a.crossing
+                        .t
+                        .total_cmp(&b.crossing.t)
+                        .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
+                });
+                counts.push(one.len() as u32);
+                options.grow(&mut all, one.len(), what)?;
+                all.extend_from_slice(one);
+            }
         }
         Ok((counts, all))
     }

@@ -232,6 +232,18 @@ impl WideLevels {
         self.own.occluded::<I>(prepared, range, own, stack)
     }
 
+    /// [`WideLevels::occluded_own`] of `K` rays, their walks interleaved.
+    #[inline(always)]
+    pub fn occluded_own_many<const K: usize, I: Isa>(
+        &self,
+        prepared: [&PreparedRay; K],
+        range: (f32, f32),
+        stacks: [&mut Stack; K],
+    ) -> [bool; K] {
+        let own = self.own_alpha.as_deref();
+        self.own.occluded_many::<K, I>(prepared, range, own, stacks)
+    }
+
     /// True when a triangle of a placement meets `ray` with `t` in `range`.
     #[inline(always)]
     pub fn occluded_placed<I: Isa>(
@@ -252,23 +264,9 @@ impl WideLevels {
         hit
     }
 
-    /// Calls `f` with every crossing of `ray` (prepared: `prepared`) with `t` in `range`, one
-    /// per crossing of each tree's surface (see [`WideBvh::each_hit`]): the own tree's, then
-    /// the placements'.
-    #[inline(always)]
-    pub fn each_hit<I: Isa>(
-        &self,
-        (ray, prepared): (&[f32; 6], &PreparedRay),
-        range: (f32, f32),
-        borders: &Borders,
-        stack: &mut Stack,
-        f: &mut impl FnMut(SlotHit),
-    ) {
-        self.each_hit_own::<I>(prepared, range, borders, stack, f);
-        self.each_hit_placed::<I>(ray, range, borders, stack, f);
-    }
-
-    /// [`WideLevels::each_hit`] of the own tree alone.
+    /// Calls `f` with every crossing of `prepared` with `t` in `range` in the own tree, one per
+    /// crossing of its surface (see [`WideBvh::each_hit`]); the placements' are
+    /// [`WideLevels::each_hit_placed`]'s.
     #[inline(always)]
     pub fn each_hit_own<I: Isa>(
         &self,
@@ -282,7 +280,24 @@ impl WideLevels {
         self.own.each_hit::<I>(prepared, range, own, stack, f);
     }
 
-    /// [`WideLevels::each_hit`] of the placements alone.
+    /// [`WideLevels::each_hit_own`] of `K` rays, their walks interleaved: `f(k, hit)` for
+    /// ray `k`'s hits.
+    #[inline(always)]
+    pub fn each_hit_own_many<const K: usize, I: Isa>(
+        &self,
+        prepared: [&PreparedRay; K],
+        range: (f32, f32),
+        borders: &Borders,
+        stacks: [&mut Stack; K],
+        f: &mut impl FnMut(usize, SlotHit),
+    ) {
+        let own = (borders.own, self.own_alpha.as_deref());
+        self.own
+            .each_hit_many::<K, I>(prepared, range, own, stacks, f);
+    }
+
+    /// [`WideLevels::each_hit_own`] of the placements: every crossing of `ray` with each placed
+    /// mesh's surface.
     #[inline(always)]
     pub fn each_hit_placed<I: Isa>(
         &self,

@@ -9,6 +9,8 @@
 //!   pinhole images) and crossing counts of parallel rays (occupancy's votes);
 //! - `rays`: a packet's rays by lane, prepared side by side;
 //! - `cull`: a packet's bounds, for culling a node's children for all its rays at once;
+//! - `turns`: a few rays' single-ray walks side by side, one step each in turn, so that
+//!   their cache misses overlap on trees larger than the caches;
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
 //! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
 //! - `levels`: the scene's own tree and placed meshes' trees under a top-level tree, which
@@ -24,5 +26,6 @@ pub(crate) mod packets;
 pub(crate) mod rays;
 mod stack;
 mod tree;
+pub(crate) mod turns;
 
 pub(crate) use tree::{tie_bound, WideBvh};

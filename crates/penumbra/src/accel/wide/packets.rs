@@ -26,14 +26,16 @@
 //! the own tree, one ray at a time (`kernels::ClosestPlaced`, `kernels::Counts`).
 
 use super::cull::{bounds, furthest, Bounds};
-use super::kernels::{prepare, Control};
+use super::kernels::Control;
 use super::levels::WideLevels;
 use super::node::WIDTH;
 use super::rays::{lanes, Lanes};
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
+use super::turns::{in_turns, Turns, INTERLEAVED};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, T_LIMIT};
+use crate::accel::AlphaTests;
 use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray.
@@ -67,7 +69,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         } = self;
         let (accel, alpha) = (levels.own(), levels.own_alpha());
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
-        let mut stack = Stack::default();
+        let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let mut packet_stack = Vec::new();
         // Packets of two vectors of lanes: with the whole packet's culling (`walk`), a 4 × 4
         // tile of an image (AVX2) went 1.08-1.14x as fast as 4 × 2 (bunny, 1 thread).
@@ -86,14 +88,35 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
                     _ => None,
                 }
                 .is_some();
-            if !traced {
-                for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-                    let ray = prepare(ray);
-                    *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
-                }
+            if !traced && accel.interleaves() {
+                let stacks = (&mut stack, &mut turns);
+                closest_in_turns::<INTERLEAVED, I>(accel, (range, alpha), rays, hits, stacks);
+            } else if !traced {
+                let stacks = (&mut stack, &mut turns);
+                closest_in_turns::<1, I>(accel, (range, alpha), rays, hits, stacks);
             }
         }
     }
+}
+
+/// The closest hit of each ray of `rays` with `t` in `range` on `accel` (cut out by `alpha`),
+/// written to `hits`, `K` rays at a time ([`in_turns`]).
+#[inline(always)]
+fn closest_in_turns<const K: usize, I: Isa>(
+    accel: &WideBvh,
+    (range, alpha): ((f32, f32), Option<&AlphaTests>),
+    rays: &[[f32; 6]],
+    hits: &mut [ClosestHit],
+    stacks: (&mut Stack, &mut Turns),
+) {
+    in_turns::<K, _>(
+        (rays, hits),
+        stacks,
+        |r, stacks, hits| {
+            hits.copy_from_slice(&accel.closest_many::<K, I>(r, range, alpha, stacks))
+        },
+        |r, stack, hit| *hit = r.and_then(|r| accel.closest::<I>(&r, range, alpha, stack)),
+    );
 }
 
 /// Counts the crossings of `rays` with `t` in `range` as one packet, as

@@ -91,6 +91,22 @@ pub(crate) struct SlotHit {
     pub level: u32,
 }
 
+/// A hit found by a walk: the group, the lane and the crossing.
+pub(super) type Found<'a> = (&'a TriangleGroup, usize, Crossing);
+
+/// The hit record of a hit found by a walk, its ids read from its group (still in the caches).
+#[inline(always)]
+pub(super) fn found_hit((group, lane, crossing): Found) -> SlotHit {
+    let [geometry, primitive] = group.ids(lane);
+    SlotHit {
+        crossing,
+        geometry,
+        primitive,
+        slot: group.first + lane as u32,
+        level: OWN,
+    }
+}
+
 impl WideBvh {
     /// Builds the hierarchy over `geometry`, on `pool` when given. A triangle's geometry id
     /// is its `object`, its primitive id `local_ids[triangle]`.
@@ -225,17 +241,12 @@ impl WideBvh {
         alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> Option<SlotHit> {
-        self.first_hit::<false, I>(ray, t_min, t_max, alpha, stack)
-            .map(|(group, lane, crossing)| {
-                let [geometry, primitive] = group.ids(lane);
-                SlotHit {
-                    crossing,
-                    geometry,
-                    primitive,
-                    slot: group.first + lane as u32,
-                    level: OWN,
-                }
-            })
+        let mut best = None;
+        let tests = (t_min, &tie_bound, true, (EdgeRule::Inclusive, &[][..]));
+        self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, t| {
+            self.keep::<false>(&mut best, alpha, (g, lane, c), t)
+        });
+        best.map(found_hit)
     }
 
     /// True when some triangle meets the ray with `t` in `[t_min, t_max]`, edges and vertices
@@ -248,107 +259,119 @@ impl WideBvh {
         alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> bool {
-        self.first_hit::<true, I>(ray, t_min, t_max, alpha, stack)
-            .is_some()
+        let mut found = false;
+        let tests = (t_min, &|t| t, false, (EdgeRule::Inclusive, &[][..]));
+        self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
+            found = self.keeps(alpha, g.first as usize + lane, &c);
+            !found
+        });
+        found
     }
 
-    /// The closest hit (the smallest `t`, and among hits at exactly that `t` the smallest
-    /// geometry id, then primitive id, whatever the order of the visit) or, when `ANY`, the
-    /// first hit found. Returns the group, the lane and the crossing.
+    /// The closest-hit rule, for a hit `found` of a walk with the closest hit so far `best` at
+    /// `t_max`: the smallest `t`, and among hits at exactly that `t` the smallest geometry
+    /// id, then primitive id, whatever the order of the visit; or, when `ANY`, the first hit
+    /// found. Keeps `found` in `best` (lowering `t_max`) when it wins and `alpha` does not cut
+    /// it out; false when the walk may stop.
     #[inline(always)]
-    fn first_hit<const ANY: bool, I: Isa>(
+    pub(super) fn keep<'a, const ANY: bool>(
         &self,
-        ray: &PreparedRay,
-        t_min: f32,
-        t_max: f32,
+        best: &mut Option<Found<'a>>,
         alpha: Option<&AlphaTests>,
-        stack: &mut Stack,
-    ) -> Option<(&TriangleGroup, usize, Crossing)> {
-        let mut best: Option<(&TriangleGroup, usize, Crossing)> = None;
-        let mut t_max = t_max;
-        // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
-        let bound = |t: f32| if ANY { t } else { tie_bound(t) };
-        let rule = (EdgeRule::Inclusive, &[][..]);
-        self.walk::<I>(
-            ray,
-            t_min,
-            &mut t_max,
-            bound,
-            !ANY,
-            rule,
-            stack,
-            #[inline(always)]
-            |group, lane, c, t_max| {
-                if ANY {
-                    if !self.keeps(alpha, group.first as usize + lane, &c) {
-                        return true;
-                    }
-                    best = Some((group, lane, c));
-                    return false;
-                }
-                // Lanes of one group are tested against the same `t_max`: a later lane may be
-                // farther than an earlier one's hit. Ids are read only for a tie.
-                let closer = match best {
-                    None => true,
-                    Some((g, l, _)) => {
-                        let (i, b) = (group.first as usize + lane, g.first as usize + l);
-                        c.t < *t_max || (c.t == *t_max && self.key(i) < self.key(b))
-                    }
-                };
-                if closer && self.keeps(alpha, group.first as usize + lane, &c) {
-                    *t_max = c.t;
-                    best = Some((group, lane, c));
-                }
-                true
-            },
-        );
-        best
+        (group, lane, c): Found<'a>,
+        t_max: &mut f32,
+    ) -> bool {
+        let slot = group.first as usize + lane;
+        if ANY {
+            if !self.keeps(alpha, slot, &c) {
+                return true;
+            }
+            *best = Some((group, lane, c));
+            return false;
+        }
+        // Lanes of one group are tested against the same `t_max`: a later lane may be farther
+        // than an earlier one's hit. Ids are read only for a tie.
+        let closer = match best {
+            None => true,
+            Some((g, l, _)) => {
+                let other = g.first as usize + *l;
+                c.t < *t_max || (c.t == *t_max && self.key(slot) < self.key(other))
+            }
+        };
+        if closer && self.keeps(alpha, slot, &c) {
+            *t_max = c.t;
+            *best = Some((group, lane, c));
+        }
+        true
     }
 
     /// The one walk of the wide tree every single-ray query is made of: visits the leaves the
     /// ray enters with `t` in `[t_min, bound(t_max)]` (`sorted`: nearest child first), tests
     /// their groups under `rule` (with the border of [`WideBvh::border`] for
     /// [`EdgeRule::Owned`]) for `t` in `[t_min, t_max]`, and calls `hit(group, lane,
-    /// crossing, t_max)` for each hit, which may lower `t_max` and returns false to stop.
-    #[allow(clippy::too_many_arguments)]
+    /// crossing, t_max)` for each hit, which may lower `t_max` and returns false to stop:
+    /// [`WideBvh::step`] until the ray is done.
+    #[allow(clippy::type_complexity)]
     #[inline(always)]
     fn walk<'a, I: Isa>(
         &'a self,
         ray: &PreparedRay,
-        t_min: f32,
         t_max: &mut f32,
-        bound: impl Fn(f32) -> f32,
-        sorted: bool,
-        (rule, border): (EdgeRule, &[Boundary]),
+        tests: (f32, &impl Fn(f32) -> f32, bool, (EdgeRule, &[Boundary])),
         stack: &mut Stack,
         mut hit: impl FnMut(&'a TriangleGroup, usize, Crossing, &mut f32) -> bool,
     ) {
         let (o, inv) = (ray.origin.to_array(), ray.inv_dir.to_array());
         stack.start(&self.wide);
-        while let Some((first, count, near)) = stack.pop() {
-            let limit = bound(*t_max);
-            if near > limit {
-                continue;
+        while self.step::<I>((ray, &o, &inv), t_max, tests, stack, &mut hit) {}
+    }
+
+    /// One step of a ray's walk ([`WideBvh::walk`]): the next entry of its stack that
+    /// it enters before `bound(t_max)`, a wide node's children pushed or a leaf's groups
+    /// tested. False when the ray is done: its stack is empty or `hit` said stop.
+    #[allow(clippy::type_complexity)]
+    #[inline(always)]
+    pub(super) fn step<'a, I: Isa>(
+        &'a self,
+        (ray, o, inv): (&PreparedRay, &[f32; 3], &[f32; 3]),
+        t_max: &mut f32,
+        (t_min, bound, sorted, (rule, border)): (
+            f32,
+            &impl Fn(f32) -> f32,
+            bool,
+            (EdgeRule, &[Boundary]),
+        ),
+        stack: &mut Stack,
+        hit: &mut impl FnMut(&'a TriangleGroup, usize, Crossing, &mut f32) -> bool,
+    ) -> bool {
+        let limit = bound(*t_max);
+        let next = loop {
+            match stack.pop() {
+                Some((_, _, near)) if near > limit => continue,
+                entry => break entry,
             }
-            if count == 0 {
-                let node = &self.wide[first as usize];
-                let (mask, near) = node.enter::<I>(&o, &inv, t_min, limit, EXIT_SCALE);
-                stack.push_children(self, node, mask, &near, sorted);
-                continue;
-            }
-            for (group, valid) in self.leaf(first, count) {
-                let tris = &self.tris;
-                let hits = ray.hit_group::<I>(group, valid, tris, border, t_min, *t_max, rule);
-                let mut mask = hits.mask;
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if !hit(group, lane, hits.crossing(lane), t_max) {
-                        return;
-                    }
+        };
+        let Some((first, count, _)) = next else {
+            return false;
+        };
+        if count == 0 {
+            let node = &self.wide[first as usize];
+            let (mask, near) = node.enter::<I>(o, inv, t_min, limit, EXIT_SCALE);
+            stack.push_children(self, node, mask, &near, sorted);
+            return true;
+        }
+        for (group, valid) in self.leaf(first, count) {
+            let hits = ray.hit_group::<I>(group, valid, &self.tris, border, t_min, *t_max, rule);
+            let mut mask = hits.mask;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if !hit(group, lane, hits.crossing(lane), t_max) {
+                    return false;
                 }
             }
         }
+        true
     }
 
     /// Starts loading the child `(index, count)` of a wide node (a wide node when `count` is
@@ -360,6 +383,11 @@ impl WideBvh {
         } else {
             prefetch(&self.groups[index as usize]);
         }
+    }
+
+    /// The bytes of the wide nodes and triangle groups that the walks read.
+    pub(super) fn walked_bytes(&self) -> usize {
+        self.wide.len() * size_of::<WideNode>() + self.groups.len() * size_of::<TriangleGroup>()
     }
 
     /// The wide tree.
@@ -406,24 +434,24 @@ impl WideBvh {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        let rule = (EdgeRule::Owned, border);
-        let mut t_max = t_max;
-        self.walk::<I>(
-            ray,
-            t_min,
-            &mut t_max,
-            |t| t,
-            false,
-            rule,
-            stack,
-            #[inline(always)]
-            |g, lane, c, _| {
-                let slot = g.first as usize + lane;
-                if self.keeps(alpha, slot, &c) {
-                    f(self.slot_hit(slot, c));
-                }
-                true
-            },
-        );
+        let tests = (t_min, &|t| t, false, (EdgeRule::Owned, border));
+        self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
+            self.each(alpha, (g, lane, c), f);
+            true
+        });
+    }
+
+    /// Calls `f` with the hit record of `found` unless `alpha` cuts it out.
+    #[inline(always)]
+    pub(super) fn each(
+        &self,
+        alpha: Option<&AlphaTests>,
+        (g, lane, c): Found,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        let slot = g.first as usize + lane;
+        if self.keeps(alpha, slot, &c) {
+            f(self.slot_hit(slot, c));
+        }
     }
 }
