@@ -305,7 +305,7 @@ impl<C: Control> Kernel for Listing<'_, C> {
 impl<C: Control> Listing<'_, C> {
     /// [`Listing`] with the own tree's walks `K` rays at a time (see `turns`).
     #[inline(always)]
-    fn list<const K: usize, I: Isa>(self) -> Listed<C::Error> {
+    pub(super) fn list<const K: usize, I: Isa>(self) -> Listed<C::Error> {
         let (accel, border, options) = (self.accel, self.border, self.options);
         let (mut counts, mut all) = (Vec::new(), Vec::new());
         let mut ones: [Vec<SlotHit>; K] = std::array::from_fn(|_| Vec::new());

@@ -209,8 +209,12 @@ mod tests {
     use super::*;
     use crate::accel::prim::boundary::boundaries;
     use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
+    use crate::accel::wide::kernels::Listing;
+    use crate::accel::wide::levels::{Borders, WideLevels};
     use crate::accel::Bvh;
     use crate::geometry::{Geometry, Triangle};
+    use crate::pool::test_pool;
+    use crate::raycast::QueryOptions;
     use crate::sampling::Rng;
     use crate::simd::{dispatch, supported_paths, Kernel};
 
@@ -405,6 +409,66 @@ mod tests {
             assert_eq!(one, four, "{path:?}");
             assert!(!one[5] && !one[402]);
             assert!(one.iter().filter(|&&b| b).count() > 200);
+        }
+    }
+
+    /// `list_intersections`' kernel with `K` rays a turn, on one SIMD path.
+    struct Lists<'a, const K: usize> {
+        levels: &'a WideLevels,
+        border: &'a Borders<'a>,
+        rays: &'a [[f32; 6]],
+    }
+
+    impl<const K: usize> Kernel for Lists<'_, K> {
+        type Output = (Vec<u32>, Vec<SlotHit>);
+
+        fn run<const N: usize, I: Isa>(self) -> (Vec<u32>, Vec<SlotHit>) {
+            let options = QueryOptions::default();
+            let (accel, border, rays) = (self.levels, self.border, self.rays);
+            let listing = Listing {
+                accel,
+                border,
+                rays,
+                options: &options,
+            };
+            listing
+                .list::<K, I>()
+                .expect("not cancelled, and memory enough")
+        }
+    }
+
+    #[test]
+    fn crossings_listed_in_turns_are_those_listed_one_ray_at_a_time() {
+        let levels = WideLevels::new(tree(), None, Vec::new(), Vec::new(), None);
+        let border = levels.borders(test_pool());
+        let mut rays: Vec<[f32; 6]> = (rays(1001).iter())
+            .map(|r| {
+                let (o, d) = (r.origin, r.inv_dir.recip());
+                [o.x, o.y, o.z, d.x, d.y, d.z]
+            })
+            .collect();
+        rays[6] = [f32::NAN; 6];
+        for path in supported_paths() {
+            let (border, rays) = (&border, &rays[..]);
+            let one = dispatch(
+                path,
+                Lists::<1> {
+                    levels: &levels,
+                    border,
+                    rays,
+                },
+            );
+            let four = dispatch(
+                path,
+                Lists::<4> {
+                    levels: &levels,
+                    border,
+                    rays,
+                },
+            );
+            assert_eq!(one, four, "{path:?}");
+            assert_eq!((one.0.len(), one.0[6]), (rays.len(), 0));
+            assert!(one.1.len() > 500, "{} crossings", one.1.len());
         }
     }
 
