@@ -18,13 +18,14 @@ use crate::accel::AlphaTests;
 use crate::simd::Isa;
 
 /// The size of a tree past which its single-ray walks go [`INTERLEAVED`] rays at a time
-/// ([`WideBvh::interleaves`]), about three quarters of a 32 MiB last-level cache. Measured on
-/// an AMD EPYC with 2 MiB of L2 per core and a 32 MiB L3, 1 M rays on 2 threads
-/// (`examples/raycast_workload`): on the 1 M-triangle blob (72 MiB of nodes and triangles)
-/// four rays in turn made occlusion, counting and closest hits 1.24–1.27× as fast; on the
-/// Stanford bunny (4.9 MiB), which the caches serve, occlusion went 0.86× as fast (the turns'
-/// bookkeeping, with no misses to overlap), so it walks one ray at a time.
-pub(crate) const INTERLEAVE_BYTES: usize = 24 << 20;
+/// ([`WideBvh::interleaves`]). Measured on an AMD EPYC with 2 MiB of L2 per core and a 32 MiB
+/// L3, 1 M rays on 2 threads (`examples/raycast_workload`), four rays in turn against one:
+/// the Stanford bunny (4.9 MiB of nodes and triangles) went 0.83–0.86× as fast and a 100k-
+/// triangle skull (7.5 MiB) 0.75–0.88×: the caches serve them, and the turns' bookkeeping
+/// has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even (occlusion
+/// 0.91×, closest hits 1.07×, medians of 5 pairs); blobs of 250k, 450k and 1M triangles
+/// (18, 32 and 72 MiB) went 1.05–1.2×, 1.1–1.4× and 1.24–1.27× as fast.
+pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
 
 /// Rays whose walks go in turn through a tree larger than [`INTERLEAVE_BYTES`].
 pub(crate) const INTERLEAVED: usize = 4;
