@@ -66,6 +66,7 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
     fn run<const N: usize, I: Isa>(self) {
         let (accel, range) = (self.accel, self.range);
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let interleave = accel.own().interleaves();
         for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
             if self.options.cancelled() {
                 return;
@@ -74,7 +75,7 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
                 for (ray, o) in rays.iter().zip(out) {
                     *o = *o || accel.occluded_placed::<I>(ray, range, &mut stack);
                 }
-            } else if accel.own().interleaves() {
+            } else if interleave {
                 let stacks = (&mut stack, &mut turns);
                 occluded_in_turns::<INTERLEAVED, I>(accel, range, rays, out, stacks);
             } else {
@@ -204,6 +205,7 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
         let (accel, border, range) = (self.accel, self.border, self.range);
         let own = (range, border);
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let interleave = accel.own().interleaves();
         let mut packet_stack = Vec::new();
         // Runs of parallel rays go as packets of 32 through the own tree (without cut-outs):
         // such rays share most of their walk (occupancy on the bunny: 1.15x the points per
@@ -236,7 +238,7 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                         accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
                         *count = count.saturating_add(n);
                     }
-                } else if accel.own().interleaves() {
+                } else if interleave {
                     let stacks = (&mut stack, &mut turns);
                     counted_in_turns::<INTERLEAVED, I>(accel, own, rays, out, stacks);
                 } else {

@@ -147,19 +147,18 @@ pub(crate) fn prepare(ray: &[f32; 6]) -> Option<PreparedRay> {
     )
 }
 
-/// The stacks of the rays of a turn ([`in_turns`]).
-pub(crate) struct Turns([Stack; INTERLEAVED]);
-
-impl Default for Turns {
-    fn default() -> Turns {
-        Turns(std::array::from_fn(|_| Stack::default()))
-    }
-}
+/// The stacks of the rays of a turn ([`in_turns`]), made by the first turn: a query on a
+/// tree that walks one ray at a time never needs them.
+#[derive(Default)]
+pub(crate) struct Turns(Vec<Stack>);
 
 impl Turns {
     /// The stacks of a turn of `K` rays (`None` past [`INTERLEAVED`]).
     pub(crate) fn of<const K: usize>(&mut self) -> Option<[&mut Stack; K]> {
         const { assert!(K >= 1 && K <= INTERLEAVED) };
+        if self.0.is_empty() {
+            self.0 = (0..INTERLEAVED).map(|_| Stack::default()).collect();
+        }
         let (stacks, _) = self.0.split_first_chunk_mut::<K>()?;
         Some(stacks.each_mut())
     }
