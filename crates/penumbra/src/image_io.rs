@@ -13,6 +13,7 @@ use crate::encode8::encode_all;
 use crate::film::Film;
 use crate::image_error::ImageError;
 use crate::image_format::OutputFormat;
+use crate::math::Rgb;
 use crate::staged::StagedFile;
 
 /// Writes `film` to `path` in the format its extension names. The file appears complete or not
@@ -42,6 +43,12 @@ pub fn write_image_unless(
 /// 8-bit formats, which clamp.
 pub fn check_finite(film: &Film, path: &Path, format: OutputFormat) -> Result<(), ImageError> {
     if !matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
+        return Ok(());
+    }
+    // A branch-free pass first (vectorized; a search that stops at the first bad value ran
+    // one value at a time, 2 ms at 1024²), then the search only when something is bad.
+    let finite = |p: &Rgb| p.x.is_finite() & p.y.is_finite() & p.z.is_finite();
+    if film.pixels.iter().fold(true, |all, p| all & finite(p)) {
         return Ok(());
     }
     let bad = film.pixels.iter().enumerate().find_map(|(i, p)| {
@@ -120,6 +127,9 @@ pub fn stage_image(
         }
     })
 }
+
+/// The bytes an image file is written in at a time.
+const WRITE_BUFFER: usize = 1 << 20;
 
 /// A file whose writes fail once `cancel` is set, so that an encoder stops at its next write.
 struct Unless<'a> {
@@ -222,7 +232,7 @@ fn write_to(
     let interrupted = || "interrupted".to_owned();
     let prepared = prepare(film, format, gamma, cancel)?.ok_or_else(interrupted)?;
     // Large writes: at 8 KiB a 1024² float image took 1,500 system calls.
-    let mut w = BufWriter::with_capacity(1 << 20, Unless { file, cancel });
+    let mut w = BufWriter::with_capacity(WRITE_BUFFER, Unless { file, cancel });
     encode(film, &prepared, format, &mut w)?;
     w.flush().map_err(|e| e.to_string())
 }
@@ -253,16 +263,26 @@ fn encode<W: Write + Seek>(
         Prepared::Floats => {
             // Negative scale means little-endian; scanlines go bottom to top.
             write!(w, "PF\n{width} {height}\n-1.0\n").map_err(|e| e.to_string())?;
-            // A row's bytes at a time: four bytes a call cost 3 million calls at 1024².
-            let mut line = Vec::with_capacity(width as usize * 12);
-            for row in film.pixels.chunks(width as usize).rev() {
-                line.clear();
-                for p in row {
-                    for c in p.to_array() {
-                        line.extend_from_slice(&c.to_le_bytes());
+            // Whole rows at a time, at least the writer's buffer so that they go straight to
+            // the file (four bytes a call cost 3 million calls at 1024², and rows copied
+            // through the buffer a second pass over 12 MB). Each pixel's twelve bytes go to
+            // their place (appended four at a time, they took 5 ms at 1024²).
+            let row_bytes = width as usize * 12;
+            let rows = WRITE_BUFFER.div_ceil(row_bytes.max(1));
+            let mut chunk = Vec::with_capacity(rows * row_bytes);
+            let mut bottom_up = film.pixels.chunks(width as usize).rev().peekable();
+            while bottom_up.peek().is_some() {
+                chunk.clear();
+                for row in bottom_up.by_ref().take(rows) {
+                    let at = chunk.len();
+                    chunk.resize(at + row_bytes, 0);
+                    for (bytes, p) in chunk[at..].chunks_exact_mut(12).zip(row) {
+                        for (to, c) in bytes.chunks_exact_mut(4).zip(p.to_array()) {
+                            to.copy_from_slice(&c.to_le_bytes());
+                        }
                     }
                 }
-                w.write_all(&line).map_err(|e| e.to_string())?;
+                w.write_all(&chunk).map_err(|e| e.to_string())?;
             }
         }
     }
@@ -297,6 +317,37 @@ mod tests {
             .collect();
         assert_eq!(names.len(), 4, "temporary files left: {names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn pfm_rows_go_bottom_up_across_several_writes() {
+        // 3,600 bytes a row: 292 rows a write, so 700 rows take three writes, the last short.
+        let (width, height) = (300u32, 700u32);
+        let pixels: Vec<glam::Vec3> = (0..width * height)
+            .map(|i| glam::Vec3::new(i as f32, -(i as f32), 0.5 + i as f32))
+            .collect();
+        let film = Film {
+            width,
+            height,
+            pixels,
+        };
+        let mut w = BufWriter::with_capacity(WRITE_BUFFER, Cursor::new(Vec::new()));
+        encode(&film, &Prepared::Floats, OutputFormat::Pfm, &mut w).unwrap();
+        let bytes = w.into_inner().unwrap().into_inner();
+        let header = format!("PF\n{width} {height}\n-1.0\n");
+        assert_eq!(&bytes[..header.len()], header.as_bytes());
+        let floats: Vec<f32> = bytes[header.len()..]
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        let want: Vec<f32> = film
+            .pixels
+            .chunks(width as usize)
+            .rev()
+            .flatten()
+            .flat_map(|p| p.to_array())
+            .collect();
+        assert!(floats == want, "the file's floats are not the film's rows bottom up");
     }
 
     #[test]

@@ -199,6 +199,13 @@ impl<'w> Integrator<'w> {
         }
     }
 
+    /// Whether shading draws random numbers: false when every light's samples are fixed
+    /// (point lights, grid area lights), and then the generators given to
+    /// [`Integrator::shade_batch`] are never read.
+    pub(crate) fn draws(&self) -> bool {
+        self.fixed_ends.is_none()
+    }
+
     /// How many points [`Integrator::shade_batch`] should be given at a time: a few pixels'
     /// worth when they bundle their shadow rays or have few samples each (one call, one
     /// dispatch to the SIMD kernel, for all of them), else one (each may trace many
