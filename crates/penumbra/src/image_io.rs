@@ -347,7 +347,10 @@ mod tests {
             .flatten()
             .flat_map(|p| p.to_array())
             .collect();
-        assert!(floats == want, "the file's floats are not the film's rows bottom up");
+        assert!(
+            floats == want,
+            "the file's floats are not the film's rows bottom up"
+        );
     }
 
     #[test]
