@@ -134,7 +134,7 @@ impl Job<'_> {
         film.clear();
         rngs.clear();
         // A sample's generator is hashed from its pixel and index, and kept, only when
-        // something draws from it (2.3 % of the instructions under three point lights).
+        // something draws from it (3 % of the instructions under three point lights).
         let draws = self.offsets.is_none() || self.integrator.draws();
         let unread = Rng::new(settings.seed, &[]);
         for x in xs.clone() {
