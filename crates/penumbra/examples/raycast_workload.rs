@@ -10,8 +10,9 @@
 //!
 //! The workloads are those of `tools/bench_raycast.py`: `coherent` (`cast_rays_rows` on a
 //! square pinhole image of `n` rays framing the mesh; `rows` is the same rays through plain
-//! `cast_rays`, as a flat batch), `incoherent` (`cast_rays` between random points
-//! around and inside the mesh's box), `count` (`count_intersections` on those rays), `occlusion`
+//! `cast_rays`, as a flat batch; `miss`, not in the benchmark, is that image with every ray
+//! turned around, so that none meets the mesh's box: what a query costs besides its walk),
+//! `incoherent` (`cast_rays` between random points around and inside the mesh's box), `count` (`count_intersections` on those rays), `occlusion`
 //! (`test_occlusions` on segments between random points of the box, `t` in `[0, 1]`) and `none`
 //! (build only, to subtract). Prints a checksum of the answers on stdout and the
 //! query's throughput on stderr.
@@ -60,7 +61,7 @@ fn main() {
         }
         _ => {
             eprintln!(
-                "usage: raycast_workload MESH.obj coherent|rows|incoherent|count|list|occlusion|closest|occupancy|none N [THREADS [REPEAT]]"
+                "usage: raycast_workload MESH.obj coherent|rows|miss|incoherent|count|list|occlusion|closest|occupancy|none N [THREADS [REPEAT]]"
             );
             std::process::exit(2);
         }
@@ -86,7 +87,7 @@ fn main() {
     let mut random_in =
         |a: Vec3, b: Vec3| a + (b - a) * Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
     let rays: Vec<[f32; 6]> = match workload.as_str() {
-        "coherent" | "rows" => {
+        "coherent" | "rows" | "miss" => {
             let side = (n as f64).sqrt() as u32;
             let eye = center + size * Vec3::new(0.3, 0.4, 1.1);
             create_rays_pinhole_fov(
@@ -98,6 +99,15 @@ fn main() {
                 side,
             )
             .unwrap()
+            .into_iter()
+            .map(|r| {
+                if workload == "miss" {
+                    [r[0], r[1], r[2], -r[3], -r[4], -r[5]]
+                } else {
+                    r
+                }
+            })
+            .collect()
         }
         "incoherent" | "count" | "list" => (0..n)
             .map(|_| {
@@ -128,9 +138,9 @@ fn main() {
     let points: Vec<[f32; 3]> = rays.iter().map(|r| [r[0], r[1], r[2]]).collect();
     let query = || -> u64 {
         match workload.as_str() {
-            "coherent" | "rows" | "incoherent" => {
+            "coherent" | "rows" | "incoherent" | "miss" => {
                 let hits = match workload.as_str() {
-                    "coherent" => {
+                    "coherent" | "miss" => {
                         let side = (rays.len() as f64).sqrt() as usize;
                         scene.cast_rays_rows(&rays, side, &options).unwrap()
                     }
