@@ -12,10 +12,10 @@
 //! square pinhole image of `n` rays framing the mesh; `rows` is the same rays through plain
 //! `cast_rays`, as a flat batch; `miss`, not in the benchmark, is that image with every ray
 //! turned around, so that none meets the mesh's box: what a query costs besides its walk),
-//! `incoherent` (`cast_rays` between random points around and inside the mesh's box), `count` (`count_intersections` on those rays), `occlusion`
-//! (`test_occlusions` on segments between random points of the box, `t` in `[0, 1]`) and `none`
-//! (build only, to subtract). Prints a checksum of the answers on stdout and the
-//! query's throughput on stderr.
+//! `incoherent` (`cast_rays` between random points around and inside the mesh's box), `count`
+//! (`count_intersections` on those rays), `occlusion` (`test_occlusions` on segments between
+//! random points of the box, `t` in `[0, 1]`) and `none` (build only, to subtract). Prints a
+//! checksum of the answers on stdout and the query's throughput on stderr.
 
 use std::path::Path;
 
