@@ -99,15 +99,6 @@ fn main() {
                 side,
             )
             .unwrap()
-            .into_iter()
-            .map(|r| {
-                if workload == "miss" {
-                    [r[0], r[1], r[2], -r[3], -r[4], -r[5]]
-                } else {
-                    r
-                }
-            })
-            .collect()
         }
         "incoherent" | "count" | "list" => (0..n)
             .map(|_| {
@@ -135,6 +126,12 @@ fn main() {
             .collect(),
         _ => Vec::new(),
     };
+    let mut rays = rays;
+    if workload == "miss" {
+        for r in &mut rays {
+            r[3..].iter_mut().for_each(|d| *d = -*d);
+        }
+    }
     let points: Vec<[f32; 3]> = rays.iter().map(|r| [r[0], r[1], r[2]]).collect();
     let query = || -> u64 {
         match workload.as_str() {
