@@ -86,7 +86,7 @@ fn main() {
     let mut rng = Rng::new(1, &[]);
     let mut random_in =
         |a: Vec3, b: Vec3| a + (b - a) * Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
-    let rays: Vec<[f32; 6]> = match workload.as_str() {
+    let mut rays: Vec<[f32; 6]> = match workload.as_str() {
         "coherent" | "rows" | "miss" => {
             let side = (n as f64).sqrt() as u32;
             let eye = center + size * Vec3::new(0.3, 0.4, 1.1);
@@ -126,7 +126,6 @@ fn main() {
             .collect(),
         _ => Vec::new(),
     };
-    let mut rays = rays;
     if workload == "miss" {
         for r in &mut rays {
             r[3..].iter_mut().for_each(|d| *d = -*d);
