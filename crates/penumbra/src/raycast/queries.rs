@@ -15,7 +15,7 @@ use crate::simd::{dispatch, simd_path};
 pub(super) const ALL: (f32, f32) = (0.0, f32::INFINITY);
 
 /// Rows per band of [`RaycastingScene::cast_rays_rows`], and columns per tile: the packets
-/// (32 rays with AVX-512, 16 without) are then 8 × 4 or 4 × 4 neighbouring rays.
+/// (32 rays) are then 8 × 4 neighbouring rays.
 const TILE: usize = 4;
 
 /// Bytes of [`CastRays`] per ray: `t_hit`, two ids, uv and normal.
@@ -93,11 +93,11 @@ impl RaycastingScene {
     /// [`RaycastingScene::cast_rays`] on the rays of an image stored row after row,
     /// `row_length` rays per row, as [`create_rays_pinhole`](super::create_rays_pinhole)
     /// makes them: the same results, bit for bit, found faster. Neighbouring rays go through
-    /// the hierarchy together as packets, and packets of 4 × 4 rays (with AVX2; 8 × 4 with
-    /// AVX-512) meet fewer boxes and triangles than runs of one row (with AVX2, 1024² images
-    /// on one thread: 1.0–1.07× the rays per second of the same rays as a flat batch on the
-    /// Stanford bunny, 1.13× on a 1M-triangle blob). A `row_length` of 0, or one
-    /// longer than 4096, is the plain query.
+    /// the hierarchy together as packets, and packets of 8 × 4 rays meet fewer boxes and
+    /// triangles than runs of one row (with AVX2 on an AMD EPYC, 1024² images on one thread:
+    /// 1.03–1.07× the rays per second of the same rays as a flat batch on the Stanford bunny,
+    /// 1.22–1.25× on a 1M-triangle blob). A `row_length` of 0, or one longer than 4096, is
+    /// the plain query.
     pub fn cast_rays_rows(
         &self,
         rays: &[[f32; 6]],

@@ -1,6 +1,6 @@
 //! Packets: `N` neighbouring rays traced together through the wide tree, one lane each,
-//! compiled per instruction set by `crate::simd` (closest hits: two vectors, 16 lanes for
-//! AVX2 and the baseline, 32 for AVX-512; parallel rays: 32 lanes). One walk serves two
+//! compiled per instruction set by `crate::simd` (32 lanes: four vectors of 8 with AVX2 and
+//! the baseline, two of 16 with AVX-512). One walk serves two
 //! queries ([`Hits`]): the closest hits of `cast_rays` (the pixels of a pinhole image come
 //! in row order) and the crossing counts of parallel rays (`count_parallel`: occupancy's
 //! votes, all along one direction, children in any order).
@@ -41,6 +41,12 @@ use crate::simd::{Isa, Kernel};
 /// The closest hit of a ray.
 pub(crate) type ClosestHit = Option<SlotHit>;
 
+/// Rays per packet of closest hits (four vectors of 8 lanes, or two of 16 with AVX-512): 8 × 4
+/// rays of an image in tile order. With the whole packet's culling (`walk`), 4 × 4 tiles went
+/// 1.08–1.14× as fast as 4 × 2 (AVX2, bunny, 1 thread); 8 × 4 then went 1.03–1.05× as fast
+/// as 4 × 4 with AVX2 (AMD EPYC, bunny and a 1M-triangle blob, 1 and 2 threads).
+const PACKET: usize = 32;
+
 /// The closest hit in the own tree of [`WideLevels`] with `t` in `[0, ∞]` for every ray of
 /// `rays` (`None`: a ray that hits nothing), written to `hits`, as a [`Kernel`] (the
 /// placements are asked after, by `kernels::ClosestPlaced`).
@@ -72,9 +78,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let interleave = accel.interleaves();
         let mut packet_stack = Vec::new();
-        // Packets of two vectors of lanes: with the whole packet's culling (`walk`), a 4 × 4
-        // tile of an image (AVX2) went 1.08-1.14x as fast as 4 × 2 (bunny, 1 thread).
-        for (rays, hits) in rays.chunks(2 * N).zip(hits.chunks_mut(2 * N)) {
+        for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
             if options.cancelled() {
                 return;
             }
@@ -83,12 +87,9 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
             let packets = alpha.is_none() && range == (0.0, f32::INFINITY);
             let wide = &mut packet_stack;
             let traced = packets
-                && match N {
-                    16 => lanes::<32>(rays).map(|l| trace::<32, I>(accel, &l, wide, hits)),
-                    8 => lanes::<16>(rays).map(|l| trace::<16, I>(accel, &l, wide, hits)),
-                    _ => None,
-                }
-                .is_some();
+                && lanes::<PACKET>(rays)
+                    .map(|l| trace::<PACKET, I>(accel, &l, wide, hits))
+                    .is_some();
             if !traced && interleave {
                 let stacks = (&mut stack, &mut turns);
                 closest_in_turns::<INTERLEAVED, I>(accel, (range, alpha), rays, hits, stacks);
