@@ -8,9 +8,10 @@
 //! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
 //! and share the watertight test's axis permutation (then every lane runs the same
 //! operations), else one ray at a time. Each wide node is fetched once per packet and its
-//! eight boxes tested for all lanes, each lane bounded by its own closest hit so far; for
-//! closest hits, the children no lane can enter are first culled by one interval test for
-//! the whole packet (`cull`).
+//! boxes tested for all lanes, each lane bounded by its own closest hit so far. For closest
+//! hits, the children no lane can enter are first culled by one interval test for the whole
+//! packet (`cull`); of the rest, only the leaves are tested lane by lane, and an inner child
+//! keeps the lanes that reached its node.
 //!
 //! Exactness: per lane the box test is the single-ray test (conservative, so it only
 //! prunes), the triangle test is `PreparedRay::hit` operation for operation (a lane whose
@@ -242,17 +243,31 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
                 }
                 None => node.used_mask(),
             };
-            // Children the packet enters, the one its first lane enters first on top.
+            // Children the packet enters, the one its first lane enters first on top. With
+            // the packet's bounds, an inner child the interval test let through keeps all
+            // the lanes (the lanes are tested at the leaves), ordered by its centre along the
+            // first lane's ray: 2.2-2.5 % fewer instructions for an image (bunny, Spot).
+            let first = mask.trailing_zeros() as usize;
             let mut kids = [(0u32, 0u32, 0u32, 0.0f32); WIDTH];
             let mut n = 0;
             while maybe != 0 {
                 let c = maybe.trailing_zeros() as usize;
                 maybe &= maybe - 1;
                 let (child, child_count) = node.child(c);
-                let (m, near) = slab::<N, I>(node.bounds(c), lanes, hits.t_min(), hits.t_max());
-                let m = m & mask;
+                let b = node.bounds(c);
+                let (m, near) = match bounds {
+                    Some(_) if child_count == 0 => (mask, ahead(b, lanes, first)),
+                    Some(_) => {
+                        let (m, _) = slab::<N, I>(b, lanes, hits.t_min(), hits.t_max());
+                        (m & mask, ahead(b, lanes, first))
+                    }
+                    None => {
+                        let (m, near) = slab::<N, I>(b, lanes, hits.t_min(), hits.t_max());
+                        (m & mask, near[first])
+                    }
+                };
                 if m != 0 {
-                    kids[n] = (child, child_count, m, near[mask.trailing_zeros() as usize]);
+                    kids[n] = (child, child_count, m, near);
                     n += 1;
                 }
             }
@@ -284,6 +299,16 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
             }
         }
     }
+}
+
+/// Twice the dot product of lane `i`'s direction and the offset of the centre of the box
+/// `(lo, hi)` from its origin: boxes ordered along the lane's ray.
+#[inline(always)]
+fn ahead<const N: usize>((lo, hi): ([f32; 3], [f32; 3]), lanes: &Lanes<N>, i: usize) -> f32 {
+    let (o, inv) = (&lanes.origin, &lanes.inv_dir);
+    (0..3)
+        .map(|a| (lo[a] + hi[a] - 2.0 * o[a][i]) / inv[a][i])
+        .sum()
 }
 
 /// The lanes (bit `i` for lane `i`) whose ray enters the box `(lo, hi)` with `t` in
