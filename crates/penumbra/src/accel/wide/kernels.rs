@@ -191,7 +191,7 @@ pub(crate) struct Counts<'a, C, const PLACED: bool> {
     pub range: (f32, f32),
     /// [`WideLevels::borders`].
     pub border: &'a Borders<'a>,
-    /// Checked every [`CHECK`] rays.
+    /// Checked every [`CHECK`] rays, and by a packet's walk before each leaf.
     pub options: &'a C,
     pub rays: &'a [[f32; 6]],
     pub out: &'a mut [i32],
@@ -222,7 +222,9 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                 }
                 let (tree, parallel) = (accel.own(), (range, border.own));
                 let stack = &mut packet_stack;
-                let done = count_parallel::<PARALLEL, I>(tree, rays, parallel, stack, out);
+                let options = self.options;
+                let done =
+                    count_parallel::<PARALLEL, I, _>(tree, rays, parallel, options, stack, out);
                 if done {
                     continue;
                 }

@@ -128,10 +128,11 @@ fn closest_in_turns<const K: usize, I: Isa>(
 /// their origins are sorted across them); false, and `out` untouched, otherwise. The caller
 /// tests cut-out triangles alone.
 #[inline(always)]
-pub(crate) fn count_parallel<const N: usize, I: Isa>(
+pub(crate) fn count_parallel<const N: usize, I: Isa, C: Control>(
     accel: &WideBvh,
     rays: &[[f32; 6]],
     (range, border): ((f32, f32), &[Boundary]),
+    options: &C,
     stack: &mut Vec<(u32, u32, u32)>,
     out: &mut [i32],
 ) -> bool {
@@ -146,6 +147,7 @@ pub(crate) fn count_parallel<const N: usize, I: Isa>(
         t_min: range.0,
         t_max: [range.1; N],
         border,
+        options,
         count: [0; N],
     };
     // Origins spread along the rays make the packet's bounds as large as the tree's box:
@@ -167,6 +169,10 @@ trait Hits<const N: usize> {
     fn rule(&self) -> (EdgeRule, &[Boundary]);
     /// Takes lane `i`'s hit `c` of leaf slot `slot`.
     fn keep(&mut self, accel: &WideBvh, i: usize, c: Crossing, slot: u32);
+    /// Whether the walk stops before its next leaf, unfinished (a cancelled query).
+    fn stopped(&self) -> bool {
+        false
+    }
 }
 
 /// The closest hits so far, by lane: `slot` is the leaf slot (valid where `hit`).
@@ -179,11 +185,13 @@ struct Best<const N: usize> {
 }
 
 /// Every crossing with `t` in `range`, counted by lane, one per crossing of the surface
-/// ([`EdgeRule::Owned`] with the tree's border): `WideBvh::each_hit`'s count.
-struct Tally<'a, const N: usize> {
+/// ([`EdgeRule::Owned`] with the tree's border): `WideBvh::each_hit`'s count. The walk stops
+/// once `options` is cancelled: 32 rays through a dense region can take 100 ms.
+struct Tally<'a, const N: usize, C> {
     t_min: f32,
     t_max: [f32; N],
     border: &'a [Boundary],
+    options: &'a C,
     count: [i32; N],
 }
 
@@ -281,6 +289,9 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
                 stack.push((i, c, m));
             }
             continue;
+        }
+        if hits.stopped() {
+            return;
         }
         // With half the lanes or fewer, lane by lane (in the 1M-triangle blob's image, a
         // triangle is about one pixel: 1.2x the rays per second, bunny 1.03-1.15x; always
@@ -415,7 +426,7 @@ impl<const N: usize> Hits<N> for Best<N> {
     }
 }
 
-impl<const N: usize> Hits<N> for Tally<'_, N> {
+impl<const N: usize, C: Control> Hits<N> for Tally<'_, N, C> {
     const SORTED: bool = false;
 
     #[inline(always)]
@@ -436,6 +447,11 @@ impl<const N: usize> Hits<N> for Tally<'_, N> {
     #[inline(always)]
     fn keep(&mut self, _: &WideBvh, i: usize, _: Crossing, _: u32) {
         self.count[i] = self.count[i].saturating_add(1);
+    }
+
+    #[inline(always)]
+    fn stopped(&self) -> bool {
+        self.options.cancelled()
     }
 }
 
