@@ -1,9 +1,10 @@
 //! A packet's bounds for culling a wide node's children for all its rays at once
 //! ([`WideNode::enter_interval`](super::node::WideNode::enter_interval)): the box of the
-//! origins and the range of `1/direction` per axis (interval arithmetic, Boulos et al. 2006).
+//! origins and the range of `1/direction` per axis (interval arithmetic, Boulos et al. 2006);
+//! and whether a packet misses the whole tree, tested on the rays before they are prepared.
 
-use super::tree::tie_bound;
-use crate::simd::{max, min};
+use super::tree::{tie_bound, WideBvh, EXIT_SCALE};
+use crate::simd::{max, min, Isa};
 
 /// The smallest and largest origin coordinates, and the smallest and largest `1/direction`,
 /// per axis.
@@ -30,6 +31,67 @@ pub(super) fn bounds<const N: usize>(
         (b.0 .0[a], b.0 .1[a], b.1 .0[a], b.1 .1[a]) = (o_lo, o_hi, i_lo, i_hi);
     }
     Some(b)
+}
+
+/// [`bounds`] of the `N` rays `rays` (`[ox, oy, oz, dx, dy, dz]`) taken from the rays
+/// themselves, before any lane is prepared: the same bounds, since rounding `1/d` is monotone
+/// in `d` on each side of 0 (the smallest `1/d` of the lanes is `1/d` of the largest `d`).
+/// `None` when a coordinate is not finite or an axis's directions are not all of one sign.
+/// A few vector instructions a packet: the rays are read as 24 floats (four rays) at a time.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(super) fn ray_bounds<const N: usize>(rays: &[[f32; 6]]) -> Option<Bounds> {
+    const ROW: usize = 24;
+    let flat = rays.as_flattened();
+    if rays.len() != N || !N.is_multiple_of(4) {
+        return None;
+    }
+    let (mut lo, mut hi, mut nan) = ([f32::INFINITY; ROW], [f32::NEG_INFINITY; ROW], [0.0; ROW]);
+    for row in flat.chunks_exact(ROW) {
+        for j in 0..ROW {
+            lo[j] = min(lo[j], row[j]);
+            hi[j] = max(hi[j], row[j]);
+            // 0 for a finite value, NaN for an infinity or a NaN: the sum stays NaN.
+            nan[j] += row[j] * 0.0;
+        }
+    }
+    let mut b = ([0.0f32; 6], [0.0f32; 6]);
+    for c in 0..6 {
+        let (mut l, mut h) = (lo[c], hi[c]);
+        for k in [6, 12, 18] {
+            (l, h) = (min(l, lo[c + k]), max(h, hi[c + k]));
+        }
+        (b.0[c], b.1[c]) = (l, h);
+    }
+    let finite = nan.iter().sum::<f32>() == 0.0;
+    let one_sign = (3..6).all(|c| b.0[c] > 0.0 || b.1[c] < 0.0);
+    if !(finite && one_sign) {
+        return None;
+    }
+    let inv = |c: usize, end: [f32; 6]| 1.0 / end[c + 3];
+    let (o_lo, o_hi) = ([0, 1, 2].map(|c| b.0[c]), [0, 1, 2].map(|c| b.1[c]));
+    let (i_lo, i_hi) = (
+        [0, 1, 2].map(|c| inv(c, b.1)),
+        [0, 1, 2].map(|c| inv(c, b.0)),
+    );
+    // A direction so small that its reciprocal overflows: as in `bounds`, no usable interval.
+    let usable = i_lo.iter().chain(&i_hi).all(|i| i.is_finite());
+    usable.then_some(((o_lo, o_hi), (i_lo, i_hi)))
+}
+
+/// True when the `N` rays of `rays` enter none of the root's children of `accel` by the
+/// packet's interval test with `t` in `[0, ∞]`, their bounds taken from the rays themselves
+/// ([`ray_bounds`]): the packet walk and each ray alone would find nothing. Most of a pinhole
+/// image's packets miss a model's box; they need no lanes prepared (callgrind, 1024² images:
+/// 10 % fewer instructions for the bunny's, 6.5 % for the 1M-triangle blob's).
+#[inline(always)]
+pub(super) fn misses<const N: usize, I: Isa>(accel: &WideBvh, rays: &[[f32; 6]]) -> bool {
+    let Some((origin, inv_dir)) = ray_bounds::<N>(rays) else {
+        return false;
+    };
+    accel.wide().first().is_none_or(|root| {
+        root.enter_interval::<I>(&origin, &inv_dir, 0.0, f32::INFINITY, EXIT_SCALE) == 0
+    })
 }
 
 /// The largest bound [`tie_bound`] makes of `t_max` on the lanes of `mask`: at least every
@@ -195,6 +257,37 @@ mod tests {
     fn a_packets_bounds_hold_every_lane() {
         for path in supported_paths() {
             assert!(dispatch(path, Every), "{path:?}");
+        }
+    }
+
+    #[test]
+    fn bounds_taken_from_the_rays_are_their_lanes_bounds() {
+        let mut rng = Rng::new(13, &[]);
+        for k in 0..4000 {
+            let mut u = || rng.uniform() * 2.0 - 1.0;
+            let (spread, cone) = [(0.0, 0.05), (0.02, 0.02), (0.3, 0.3), (1.0, 2.0)][k % 4];
+            let (o0, d0) = ([u() * 2.0, u() * 2.0, u() * 2.0], [u(), u(), u()]);
+            let mut rays: [[f32; 6]; 32] = std::array::from_fn(|_| {
+                let o = o0.map(|c| c + spread * u());
+                let d = d0.map(|c| c + cone * u());
+                [o[0], o[1], o[2], d[0], d[1], d[2]]
+            });
+            // A lane spoilt in one coordinate: not finite, no direction on an axis, a
+            // reciprocal that overflows, the other sign.
+            let (i, c) = (k / 8 % 32, k / 256 % 6);
+            let spoilt = [f32::NAN, f32::INFINITY, 0.0, -0.0, 1e-40, -rays[i][c]];
+            if k % 8 < spoilt.len() {
+                rays[i][c] = spoilt[k % 8];
+            }
+            let origin = std::array::from_fn(|a| std::array::from_fn(|i| rays[i][a]));
+            let inv = std::array::from_fn(|a| std::array::from_fn(|i| 1.0 / rays[i][3 + a]));
+            let finite = rays.as_flattened().iter().all(|x| x.is_finite());
+            let want = if finite {
+                bounds::<32>(&origin, &inv)
+            } else {
+                None
+            };
+            assert_eq!(ray_bounds::<32>(&rays), want, "packet {k}: {rays:?}");
         }
     }
 

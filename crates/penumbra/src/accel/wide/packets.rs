@@ -7,11 +7,12 @@
 //!
 //! A batch is cut into runs of `N` rays; a run goes as a packet when all its rays are valid
 //! and share the watertight test's axis permutation (then every lane runs the same
-//! operations), else one ray at a time. Each wide node is fetched once per packet and its
-//! boxes tested for all lanes, each lane bounded by its own closest hit so far. For closest
-//! hits, the children no lane can enter are first culled by one interval test for the whole
-//! packet (`cull`); of the rest, only the leaves are tested lane by lane, and an inner child
-//! keeps the lanes that reached its node.
+//! operations), else one ray at a time; a run of closest hits whose bounds enter none of the
+//! root's children is answered "no hit" before any lane is prepared (`cull::misses`). Each
+//! wide node is fetched once per packet and its boxes tested for all lanes, each lane bounded
+//! by its own closest hit so far. For closest hits, the children no lane can enter are first
+//! culled by one interval test for the whole packet (`cull`); of the rest, only the leaves are
+//! tested lane by lane, and an inner child keeps the lanes that reached its node.
 //!
 //! Exactness: per lane the box test is the single-ray test (conservative, so it only
 //! prunes), the triangle test is `PreparedRay::hit` operation for operation (a lane whose
@@ -26,7 +27,7 @@
 //! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
 //! the own tree, one ray at a time (`kernels::ClosestPlaced`, `kernels::Counts`).
 
-use super::cull::{bounds, furthest, Bounds};
+use super::cull::{bounds, furthest, misses, Bounds};
 use super::kernels::Control;
 use super::levels::WideLevels;
 use super::node::WIDTH;
@@ -87,6 +88,10 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
             // and so are rays with other bounds than `[0, ∞]`.
             let packets = alpha.is_none() && range == (0.0, f32::INFINITY);
             let wide = &mut packet_stack;
+            if packets && misses::<PACKET, I>(accel, rays) {
+                hits.fill(None);
+                continue;
+            }
             let traced = packets
                 && lanes::<PACKET>(rays)
                     .map(|l| trace::<PACKET, I>(accel, &l, wide, hits))
