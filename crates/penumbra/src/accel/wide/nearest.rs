@@ -10,7 +10,7 @@
 use glam::{DAffine3, DVec3, Vec3};
 
 use super::levels::OWN;
-use super::tree::{Stack, WideBvh};
+use super::tree::{Order, Stack, WideBvh};
 use crate::accel::BvhNode;
 use crate::math::Transform;
 use crate::simd::Isa;
@@ -140,7 +140,7 @@ impl WideBvh {
             if count == 0 {
                 let node = &self.wide()[first as usize];
                 let (mask, near) = node.nearer::<I>(&q32, pad, bound);
-                stack.push_children(self, node, mask, &near, true);
+                stack.push_children(self, node, mask, &near, Order::Nearest);
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {

@@ -4,10 +4,33 @@ use super::node::{WideNode, WIDTH};
 use super::tree::WideBvh;
 use crate::accel::STACK_SIZE;
 
-/// Entries of the wide traversal's stack: a wide node pops one entry and pushes at most
+/// Entries of a depth-first walk's stack: a wide node pops one entry and pushes at most
 /// [`WIDTH`] children, once per level of the binary tree at most (its depth limit keeps it
-/// within the binary walks' [`STACK_SIZE`]).
-const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
+/// within the binary walks' [`STACK_SIZE`]). From a stack of `n` entries, a depth-first walk
+/// holds at most `n + DEPTH_FIRST - 1`.
+const DEPTH_FIRST: usize = (WIDTH - 1) * STACK_SIZE + 1;
+
+/// Entries of the wide traversal's stack. An [`Order::Free`] push reorders the stack only
+/// when it held at most [`DEPTH_FIRST`] entries before the push, so at most
+/// `DEPTH_FIRST + WIDTH` after it; past that the walk goes depth first, adding at most
+/// `DEPTH_FIRST - 1` before it reorders again.
+const WIDE_STACK: usize = 2 * DEPTH_FIRST + WIDTH;
+
+/// The order in which a walk visits the children of a wide node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Order {
+    /// The nearest child first (closest hits, closest points).
+    Nearest,
+    /// The last child in lane order first (occlusion: nearest or farthest first were 1.06–
+    /// 1.07× slower).
+    Lanes,
+    /// Any order, every child entered is visited (counting and listing every crossing): the
+    /// next visit is the entry pushed before the node's children, whose load started a step
+    /// earlier, rather than a child whose load just started. On a 1M-triangle blob (72 MB,
+    /// rays in turns, 2 threads) counting went 1.13× and listing 1.09× as fast, on the bunny
+    /// 1.00–1.01×; occlusion in this order went 0.88× as fast.
+    Free,
+}
 
 /// A stack of the wide traversal, made once per batch and reused from ray to ray: children
 /// still to visit as `(index, count, entry distance)`, `count` 0 for the wide node at
@@ -41,8 +64,8 @@ impl Stack {
         Some(self.entries[self.len])
     }
 
-    /// Pushes the children of `node` in `mask` with their entry distances `near`; when
-    /// `sorted`, the nearest comes off the stack first.
+    /// Pushes the children of `node` in `mask` with their entry distances `near`, to come off
+    /// the stack in `order`.
     #[inline(always)]
     pub(super) fn push_children(
         &mut self,
@@ -50,7 +73,7 @@ impl Stack {
         node: &WideNode,
         mask: u32,
         near: &[f32; WIDTH],
-        sorted: bool,
+        order: Order,
     ) {
         let start = self.len;
         let mut bits = mask;
@@ -61,7 +84,7 @@ impl Stack {
             tree.prefetch_child(index, count);
             let entry = (index, count, near[lane]);
             let mut k = self.len;
-            if sorted {
+            if order == Order::Nearest {
                 // Insertion by decreasing distance among this node's children.
                 while k > start && self.entries[k - 1].2 < entry.2 {
                     self.entries[k] = self.entries[k - 1];
@@ -70,6 +93,9 @@ impl Stack {
             }
             self.entries[k] = entry;
             self.len += 1;
+        }
+        if order == Order::Free && self.len > start && (1..=DEPTH_FIRST).contains(&start) {
+            self.entries.swap(start - 1, self.len - 1);
         }
     }
 }

@@ -21,7 +21,7 @@ use std::sync::OnceLock;
 use super::group::{TriangleGroup, GROUP};
 use super::levels::OWN;
 use super::node::{collapse, WideNode};
-pub(crate) use super::stack::Stack;
+pub(crate) use super::stack::{Order, Stack};
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::{AlphaTests, Bvh};
@@ -243,7 +243,12 @@ impl WideBvh {
     ) -> Option<SlotHit> {
         let mut best = None;
         // A box entered past the closest hit so far cannot hold a closer hit nor a tie.
-        let tests = (t_min, &tie_bound, true, (EdgeRule::Inclusive, &[][..]));
+        let tests = (
+            t_min,
+            &tie_bound,
+            Order::Nearest,
+            (EdgeRule::Inclusive, &[][..]),
+        );
         self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, t| {
             self.keep::<false>(&mut best, alpha, (g, lane, c), t)
         });
@@ -263,7 +268,7 @@ impl WideBvh {
         // The any-hit rule of `keep`, with a flag for the hit: keeping the hit itself cost
         // the one-ray occlusion walk 1.5 % more instructions.
         let mut found = false;
-        let tests = (t_min, &|t| t, false, (EdgeRule::Inclusive, &[][..]));
+        let tests = (t_min, &|t| t, Order::Lanes, (EdgeRule::Inclusive, &[][..]));
         self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
             found = self.keeps(alpha, g.first as usize + lane, &c);
             !found
@@ -309,7 +314,7 @@ impl WideBvh {
     }
 
     /// The one walk of the wide tree every single-ray query is made of: visits the leaves the
-    /// ray enters with `t` in `[t_min, bound(t_max)]` (`sorted`: nearest child first), tests
+    /// ray enters with `t` in `[t_min, bound(t_max)]` (children in `order`), tests
     /// their groups under `rule` (with the border of [`WideBvh::border`] for
     /// [`EdgeRule::Owned`]) for `t` in `[t_min, t_max]`, and calls `hit(group, lane,
     /// crossing, t_max)` for each hit, which may lower `t_max` and returns false to stop:
@@ -320,7 +325,7 @@ impl WideBvh {
         &'a self,
         ray: &PreparedRay,
         t_max: &mut f32,
-        tests: (f32, &impl Fn(f32) -> f32, bool, (EdgeRule, &[Boundary])),
+        tests: (f32, &impl Fn(f32) -> f32, Order, (EdgeRule, &[Boundary])),
         stack: &mut Stack,
         mut hit: impl FnMut(&'a TriangleGroup, usize, Crossing, &mut f32) -> bool,
     ) {
@@ -338,10 +343,10 @@ impl WideBvh {
         &'a self,
         (ray, o, inv): (&PreparedRay, &[f32; 3], &[f32; 3]),
         t_max: &mut f32,
-        (t_min, bound, sorted, (rule, border)): (
+        (t_min, bound, order, (rule, border)): (
             f32,
             &impl Fn(f32) -> f32,
-            bool,
+            Order,
             (EdgeRule, &[Boundary]),
         ),
         stack: &mut Stack,
@@ -360,7 +365,7 @@ impl WideBvh {
         if count == 0 {
             let node = &self.wide[first as usize];
             let (mask, near) = node.enter::<I>(o, inv, t_min, limit, EXIT_SCALE);
-            stack.push_children(self, node, mask, &near, sorted);
+            stack.push_children(self, node, mask, &near, order);
             return true;
         }
         for (group, valid) in self.leaf(first, count) {
@@ -437,7 +442,7 @@ impl WideBvh {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        let tests = (t_min, &|t| t, false, (EdgeRule::Owned, border));
+        let tests = (t_min, &|t| t, Order::Free, (EdgeRule::Owned, border));
         self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
             self.each(alpha, (g, lane, c), f);
             true

@@ -11,7 +11,7 @@
 use glam::Vec3;
 
 use super::group::TriangleGroup;
-use super::tree::{found_hit, tie_bound, Found, SlotHit, Stack, WideBvh};
+use super::tree::{found_hit, tie_bound, Found, Order, SlotHit, Stack, WideBvh};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{Crossing, EdgeRule, PreparedRay};
 use crate::accel::AlphaTests;
@@ -75,7 +75,8 @@ impl WideBvh {
     ) -> [Option<Found<'a>>; K] {
         let mut best = [None; K];
         let bound = |t| if ANY { t } else { tie_bound(t) };
-        let tests = (t_min, &bound, !ANY, (EdgeRule::Inclusive, &[][..]));
+        let order = if ANY { Order::Lanes } else { Order::Nearest };
+        let tests = (t_min, &bound, order, (EdgeRule::Inclusive, &[][..]));
         self.walk_many::<K, I>(rays, &mut [t_max; K], tests, stacks, |k, g, lane, c, t| {
             self.keep::<ANY>(&mut best[k], alpha, (g, lane, c), t)
         });
@@ -94,7 +95,7 @@ impl WideBvh {
         &'a self,
         rays: [&PreparedRay; K],
         t_max: &mut [f32; K],
-        tests: (f32, &impl Fn(f32) -> f32, bool, (EdgeRule, &[Boundary])),
+        tests: (f32, &impl Fn(f32) -> f32, Order, (EdgeRule, &[Boundary])),
         stacks: [&mut Stack; K],
         mut hit: impl FnMut(usize, &'a TriangleGroup, usize, Crossing, &mut f32) -> bool,
     ) {
@@ -130,7 +131,7 @@ impl WideBvh {
         stacks: [&mut Stack; K],
         f: &mut impl FnMut(usize, SlotHit),
     ) {
-        let tests = (t_min, &|t| t, false, (EdgeRule::Owned, border));
+        let tests = (t_min, &|t| t, Order::Free, (EdgeRule::Owned, border));
         self.walk_many::<K, I>(rays, &mut [t_max; K], tests, stacks, |k, g, lane, c, _| {
             self.each(alpha, (g, lane, c), &mut |hit| f(k, hit));
             true
