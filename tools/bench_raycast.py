@@ -21,6 +21,8 @@ items with the same result (primitive ids, counts, flags, occupancy; distances a
 within 1e-4 of the box's size; for (f), whether the ray hits at all, as a ray at a shared edge
 may report either triangle, with each library's misses on stderr). --only NAME[,NAME] keeps the calls named (e.g. list_intersections).
 --scale shrinks every batch on a busy machine. Progress on stderr, table on stdout.
+Open3D comes from `pip install open3d`; its 0.20 wheel needs libusb-1.0 (Debian:
+`apt-get install libusb-1.0-0`), without which `import open3d` fails and only penumbra runs.
 """
 
 from __future__ import annotations
