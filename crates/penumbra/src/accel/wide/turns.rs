@@ -3,10 +3,10 @@
 //!
 //! An incoherent ray's walk through such a tree waits on memory more than it computes: each
 //! node and leaf it visits is a cache miss whose address depends on the visit before.
-//! [`INTERLEAVED`] independent walks side by side keep as many misses in flight. The visit of each ray is
-//! exactly the one it makes alone (its own stack, `t_max` and hits), so every answer is the
-//! single-ray query's, bit for bit, whatever `K`; only the order in which the rays' steps run
-//! changes.
+//! [`INTERLEAVED`] independent walks side by side keep as many misses in flight. The visit of
+//! each ray is exactly the one it makes alone (its own stack, `t_max` and hits), so every
+//! answer is the single-ray query's, bit for bit, whatever `K`; only the order in which the
+//! rays' steps run changes.
 
 use glam::Vec3;
 
