@@ -411,7 +411,7 @@ mod tests {
                     rays: &rays,
                 },
             );
-            let eight = dispatch(
+            let interleaved = dispatch(
                 path,
                 Occlusions::<INTERLEAVED> {
                     tree: &tree,
@@ -419,7 +419,7 @@ mod tests {
                 },
             );
             assert_eq!(one, four, "{path:?}");
-            assert_eq!(one, eight, "{path:?}");
+            assert_eq!(one, interleaved, "{path:?}");
             assert!(!one[5] && !one[402]);
             assert!(one.iter().filter(|&&b| b).count() > 200);
         }
