@@ -14,8 +14,7 @@ use glam::Vec3;
 use super::levels::{Borders, WideLevels};
 use super::nearest::Nearest;
 use super::tree::{SlotHit, Stack};
-use super::turns::{in_turns, prepare, Turns, INTERLEAVED};
-use crate::accel::prim::watertight::PreparedRay;
+use super::turns::{prepare, stream, Turns, INTERLEAVED};
 
 use super::packets::{count_parallel, CastPackets};
 use crate::simd::{dispatch, Isa, Kernel, SimdPath};
@@ -67,6 +66,17 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
         let (accel, range) = (self.accel, self.range);
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let interleave = accel.own().interleaves();
+        if !PLACED && interleave {
+            let Some(stacks) = turns.of::<INTERLEAVED>() else {
+                return;
+            };
+            let options = self.options;
+            let rays = (self.rays.iter().map(prepare).enumerate())
+                .take_while(|(i, _)| !i.is_multiple_of(CHECK) || !options.cancelled());
+            let out = &mut *self.out;
+            accel.occluded_own_stream::<INTERLEAVED, I>(rays, range, stacks, |i, o| out[i] = o);
+            return;
+        }
         for (rays, out) in self.rays.chunks(CHECK).zip(self.out.chunks_mut(CHECK)) {
             if self.options.cancelled() {
                 return;
@@ -75,32 +85,14 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
                 for (ray, o) in rays.iter().zip(out) {
                     *o = *o || accel.occluded_placed::<I>(ray, range, &mut stack);
                 }
-            } else if interleave {
-                let stacks = (&mut stack, &mut turns);
-                occluded_in_turns::<INTERLEAVED, I>(accel, range, rays, out, stacks);
             } else {
-                let stacks = (&mut stack, &mut turns);
-                occluded_in_turns::<1, I>(accel, range, rays, out, stacks);
+                for (ray, o) in rays.iter().zip(out) {
+                    *o = prepare(ray)
+                        .is_some_and(|r| accel.occluded_own::<I>(&r, range, &mut stack));
+                }
             }
         }
     }
-}
-
-/// [`WideLevels::occluded_own`] of each ray of `rays`, `K` at a time ([`in_turns`]).
-#[inline(always)]
-fn occluded_in_turns<const K: usize, I: Isa>(
-    accel: &WideLevels,
-    range: (f32, f32),
-    rays: &[[f32; 6]],
-    out: &mut [bool],
-    stacks: (&mut Stack, &mut Turns),
-) {
-    in_turns::<K, _>(
-        (rays, out),
-        stacks,
-        |r, stacks, out| out.copy_from_slice(&accel.occluded_own_many::<K, I>(r, range, stacks)),
-        |r, stack, o| *o = r.is_some_and(|r| accel.occluded_own::<I>(&r, range, stack)),
-    );
 }
 
 /// The closest of each hit of `hits` (the own tree's, from `packets::CastPackets`) and the
@@ -203,7 +195,6 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let (accel, border, range) = (self.accel, self.border, self.range);
-        let own = (range, border);
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let interleave = accel.own().interleaves();
         let mut packet_stack = Vec::new();
@@ -211,10 +202,12 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
         // such rays share most of their walk (occupancy on the bunny: 1.15x the points per
         // second of 16 lanes with AVX2, and of 16 with AVX-512 before that).
         let packets = !PLACED && accel.own_alpha().is_none();
-        for (rays, out) in self
-            .rays
-            .chunks(PARALLEL)
+        // On a tree larger than the caches, the runs left to single rays go after, as one
+        // stream of walks in turn.
+        let mut streamed = Vec::new();
+        for (c, (rays, out)) in (self.rays.chunks(PARALLEL))
             .zip(self.out.chunks_mut(PARALLEL))
+            .enumerate()
         {
             if packets {
                 if self.options.cancelled() {
@@ -229,6 +222,10 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                     continue;
                 }
             }
+            if !PLACED && interleave {
+                streamed.push(c);
+                continue;
+            }
             for (rays, out) in rays.chunks(CHECK).zip(out.chunks_mut(CHECK)) {
                 if self.options.cancelled() {
                     return;
@@ -240,44 +237,30 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                         accel.each_hit_placed::<I>(ray, range, border, &mut stack, tally);
                         *count = count.saturating_add(n);
                     }
-                } else if interleave {
-                    let stacks = (&mut stack, &mut turns);
-                    counted_in_turns::<INTERLEAVED, I>(accel, own, rays, out, stacks);
                 } else {
-                    let stacks = (&mut stack, &mut turns);
-                    counted_in_turns::<1, I>(accel, own, rays, out, stacks);
+                    for (ray, count) in rays.iter().zip(out) {
+                        let Some(r) = prepare(ray) else { continue };
+                        let mut n = 0i32;
+                        let tally = &mut |_| n = n.saturating_add(1);
+                        accel.each_hit_own::<I>(&r, range, border, &mut stack, tally);
+                        *count = n;
+                    }
                 }
             }
         }
+        let stacks = (!streamed.is_empty()).then(|| turns.of::<INTERLEAVED>());
+        let Some(Some(stacks)) = stacks else {
+            return;
+        };
+        let options = self.options;
+        let rays = stream(self.rays, (streamed.iter().copied(), PARALLEL), || {
+            options.cancelled()
+        });
+        let tally = |n: &mut i32, _| *n = n.saturating_add(1);
+        let out = &mut *self.out;
+        let calls = (|_| 0, tally, |i, n| out[i] = n);
+        accel.each_hit_own_stream::<INTERLEAVED, i32, I>(rays, range, border, stacks, calls);
     }
-}
-
-/// The own tree's crossings of each ray of `rays` with `t` in `range` (`border`: the
-/// borders), written to `out` (left alone for a ray that hits nothing), `K` rays at a time
-/// ([`in_turns`]).
-#[inline(always)]
-fn counted_in_turns<const K: usize, I: Isa>(
-    accel: &WideLevels,
-    (range, border): ((f32, f32), &Borders),
-    rays: &[[f32; 6]],
-    out: &mut [i32],
-    stacks: (&mut Stack, &mut Turns),
-) {
-    let many = |r: [&PreparedRay; K], stacks: [&mut Stack; K], out: &mut [i32]| {
-        let mut n = [0i32; K];
-        let tally = &mut |k: usize, _| n[k] = n[k].saturating_add(1);
-        accel.each_hit_own_many::<K, I>(r, range, border, stacks, tally);
-        out.copy_from_slice(&n);
-    };
-    let one = |r: Option<PreparedRay>, stack: &mut Stack, count: &mut i32| {
-        if let Some(r) = r {
-            let mut n = 0i32;
-            let tally = &mut |_| n = n.saturating_add(1);
-            accel.each_hit_own::<I>(&r, range, border, stack, tally);
-            *count = n;
-        }
-    };
-    in_turns::<K, _>((rays, out), stacks, many, one);
 }
 
 /// The hits of each ray of `rays` from `t = 0` on, one per crossing, sorted by `t` then ids:
@@ -307,69 +290,99 @@ impl<C: Control> Kernel for Listing<'_, C> {
 }
 
 impl<C: Control> Listing<'_, C> {
-    /// [`Listing`] with the own tree's walks `K` rays at a time (see `turns`).
+    /// [`Listing`] with the own tree's walks one ray at a time (`K` of 1) or `K` in turn
+    /// (see `turns`).
     #[inline(always)]
     pub(super) fn list<const K: usize, I: Isa>(self) -> Listed<C::Error> {
-        let (accel, border, options) = (self.accel, self.border, self.options);
-        let (mut counts, mut all) = (Vec::new(), Vec::new());
-        let mut ones: [Vec<SlotHit>; K] = std::array::from_fn(|_| Vec::new());
-        let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let (accel, border, options, rays) = (self.accel, self.border, self.options, self.rays);
         let what = "the intersections";
-        options.grow(&mut counts, self.rays.len(), what)?;
-        for (c, rays) in self.rays.chunks(K).enumerate() {
-            if (c * K).is_multiple_of(CHECK) && options.cancelled() {
-                return Err(options.cancel_error());
+        let mut counts = Vec::new();
+        options.grow(&mut counts, rays.len(), what)?;
+        counts.resize(rays.len(), 0u32);
+        // Every crossing with its ray, in the order the walks find them; a ray may cross
+        // millions of triangles, so grown fallibly.
+        let mut found: Vec<(u32, SlotHit)> = Vec::new();
+        let mut full = Ok(());
+        let mut push = |i: u32, h| {
+            if full.is_ok() {
+                full = options.grow(&mut found, 1, what);
             }
-            ones.iter_mut().for_each(Vec::clear);
-            let mut full = Ok(());
-            // A ray may cross millions of triangles: grown fallibly.
-            let mut push = |k: usize, h| {
-                if full.is_ok() {
-                    full = options.grow(&mut ones[k], 1, what);
-                }
-                if full.is_ok() {
-                    ones[k].push(h);
-                }
-            };
-            let prepared: [Option<PreparedRay>; K] =
-                std::array::from_fn(|i| rays.get(i).and_then(prepare));
-            let refs = prepared.each_ref().map(Option::as_ref);
-            let range = (0.0, f32::INFINITY);
-            match (refs[0], turns.of::<K>()) {
-                (Some(first), Some(stacks)) if K > 1 && refs.iter().all(Option::is_some) => {
-                    let refs = refs.map(|r| r.unwrap_or(first));
-                    accel.each_hit_own_many::<K, I>(refs, range, border, stacks, &mut push);
-                }
-                _ => {
-                    for (k, r) in refs.iter().enumerate() {
-                        if let Some(r) = r {
-                            let f = &mut |h| push(k, h);
-                            accel.each_hit_own::<I>(r, range, border, &mut stack, f);
-                        }
+            if full.is_ok() {
+                found.push((i, h));
+                counts[i as usize] += 1;
+            }
+        };
+        let range = (0.0, f32::INFINITY);
+        let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        match turns.of::<K>() {
+            Some(stacks) if K > 1 => {
+                let chunks = 0..rays.len().div_ceil(CHECK);
+                let stream = stream(rays, (chunks, CHECK), || options.cancelled());
+                let calls = (|i| i as u32, |i: &mut u32, h| push(*i, h), |_, _| {});
+                accel.each_hit_own_stream::<K, u32, I>(stream, range, border, stacks, calls);
+            }
+            _ => {
+                for (i, ray) in rays.iter().enumerate() {
+                    if i.is_multiple_of(CHECK) && options.cancelled() {
+                        break;
+                    }
+                    if let Some(r) = prepare(ray) {
+                        let f = &mut |h| push(i as u32, h);
+                        accel.each_hit_own::<I>(&r, range, border, &mut stack, f);
                     }
                 }
             }
-            for (k, (ray, r)) in rays.iter().zip(&refs).enumerate() {
-                if r.is_some() {
-                    let f = &mut |h| push(k, h);
+        }
+        if options.cancelled() {
+            return Err(options.cancel_error());
+        }
+        if accel.has_placements() {
+            for (i, ray) in rays.iter().enumerate() {
+                if prepare(ray).is_some() {
+                    let f = &mut |h| push(i as u32, h);
                     accel.each_hit_placed::<I>(ray, range, border, &mut stack, f);
                 }
             }
-            full?;
-            for one in ones.iter_mut().take(rays.len()) {
-                one.sort_by(|a: &SlotHit, b: &SlotHit| {
-                    a.crossing
-                        .t
-                        .total_cmp(&b.crossing.t)
-                        .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
-                });
-                counts.push(one.len() as u32);
-                options.grow(&mut all, one.len(), what)?;
-                all.extend_from_slice(one);
-            }
         }
+        full?;
+        let all = by_ray(&counts, found, options)?;
         Ok((counts, all))
     }
+}
+
+/// The crossings `found` (each with its ray) one ray after the other, `counts[i]` of ray `i`,
+/// each ray's sorted by `t` then ids.
+fn by_ray<C: Control>(
+    counts: &[u32],
+    found: Vec<(u32, SlotHit)>,
+    options: &C,
+) -> Result<Vec<SlotHit>, C::Error> {
+    let mut all = Vec::new();
+    options.grow(&mut all, found.len(), "the intersections")?;
+    all.extend(found.iter().map(|&(_, h)| h));
+    let mut next: Vec<usize> = (counts.iter())
+        .scan(0, |start, &n| {
+            let here = *start;
+            *start += n as usize;
+            Some(here)
+        })
+        .collect();
+    for (i, h) in found {
+        all[next[i as usize]] = h;
+        next[i as usize] += 1;
+    }
+    let mut start = 0;
+    for &n in counts {
+        let one = &mut all[start..start + n as usize];
+        one.sort_by(|a: &SlotHit, b: &SlotHit| {
+            a.crossing
+                .t
+                .total_cmp(&b.crossing.t)
+                .then((a.geometry, a.primitive).cmp(&(b.geometry, b.primitive)))
+        });
+        start += n as usize;
+    }
+    Ok(all)
 }
 
 /// The closest hits of `rays` with `t` in `range` on `path`, written to `hits`: the own tree

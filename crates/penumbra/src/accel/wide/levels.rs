@@ -232,16 +232,19 @@ impl WideLevels {
         self.own.occluded::<I>(prepared, range, own, stack)
     }
 
-    /// [`WideLevels::occluded_own`] of `K` rays, their walks interleaved.
+    /// [`WideLevels::occluded_own`] of a stream of rays, `K` walks at a time:
+    /// `done(index, occluded)`.
     #[inline(always)]
-    pub fn occluded_own_many<const K: usize, I: Isa>(
+    pub fn occluded_own_stream<const K: usize, I: Isa>(
         &self,
-        prepared: [&PreparedRay; K],
+        rays: impl Iterator<Item = (usize, Option<PreparedRay>)>,
         range: (f32, f32),
         stacks: [&mut Stack; K],
-    ) -> [bool; K] {
+        done: impl FnMut(usize, bool),
+    ) {
         let own = self.own_alpha.as_deref();
-        self.own.occluded_many::<K, I>(prepared, range, own, stacks)
+        self.own
+            .occluded_stream::<K, I>(rays, range, own, stacks, done);
     }
 
     /// True when a triangle of a placement meets `ray` with `t` in `range`.
@@ -280,20 +283,26 @@ impl WideLevels {
         self.own.each_hit::<I>(prepared, range, own, stack, f);
     }
 
-    /// [`WideLevels::each_hit_own`] of `K` rays, their walks interleaved: `f(k, hit)` for
-    /// ray `k`'s hits.
+    /// [`WideLevels::each_hit_own`] of a stream of rays, `K` walks at a time: `f(found, hit)`
+    /// for each hit of a ray into its `found` (`start(index)` at first), then
+    /// `done(index, found)`.
+    #[allow(clippy::type_complexity)]
     #[inline(always)]
-    pub fn each_hit_own_many<const K: usize, I: Isa>(
+    pub fn each_hit_own_stream<const K: usize, S, I: Isa>(
         &self,
-        prepared: [&PreparedRay; K],
+        rays: impl Iterator<Item = (usize, Option<PreparedRay>)>,
         range: (f32, f32),
         borders: &Borders,
         stacks: [&mut Stack; K],
-        f: &mut impl FnMut(usize, SlotHit),
+        calls: (
+            impl Fn(usize) -> S,
+            impl FnMut(&mut S, SlotHit),
+            impl FnMut(usize, S),
+        ),
     ) {
         let own = (borders.own, self.own_alpha.as_deref());
         self.own
-            .each_hit_many::<K, I>(prepared, range, own, stacks, f);
+            .each_hit_stream::<K, S, I>(rays, range, own, stacks, calls);
     }
 
     /// [`WideLevels::each_hit_own`] of the placements: every crossing of `ray` with each placed

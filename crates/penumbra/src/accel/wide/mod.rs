@@ -27,5 +27,7 @@ pub(crate) mod rays;
 mod stack;
 mod tree;
 pub(crate) mod turns;
+#[cfg(test)]
+mod turns_tests;
 
 pub(crate) use tree::{tie_bound, WideBvh};

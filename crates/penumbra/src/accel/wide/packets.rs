@@ -33,11 +33,10 @@ use super::levels::WideLevels;
 use super::node::WIDTH;
 use super::rays::{lanes, Lanes};
 use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
-use super::turns::{in_turns, Turns, INTERLEAVED};
+use super::turns::{prepare, stream, Turns, INTERLEAVED};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, T_LIMIT};
-use crate::accel::AlphaTests;
 use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray.
@@ -80,7 +79,11 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         let (mut stack, mut turns) = (Stack::default(), Turns::default());
         let interleave = accel.interleaves();
         let mut packet_stack = Vec::new();
-        for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+        // On a tree larger than the caches, the packets' rays left to single rays go after,
+        // as one stream of walks in turn.
+        let mut streamed = Vec::new();
+        let all = (rays.chunks(PACKET).zip(hits.chunks_mut(PACKET))).enumerate();
+        for (c, (rays, hits)) in all {
             if options.cancelled() {
                 return;
             }
@@ -97,34 +100,24 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
                     .map(|l| trace::<PACKET, I>(accel, &l, wide, hits))
                     .is_some();
             if !traced && interleave {
-                let stacks = (&mut stack, &mut turns);
-                closest_in_turns::<INTERLEAVED, I>(accel, (range, alpha), rays, hits, stacks);
+                streamed.push(c);
             } else if !traced {
-                let stacks = (&mut stack, &mut turns);
-                closest_in_turns::<1, I>(accel, (range, alpha), rays, hits, stacks);
+                for (ray, hit) in rays.iter().zip(hits) {
+                    let ray = prepare(ray);
+                    *hit = ray.and_then(|r| accel.closest::<I>(&r, range, alpha, &mut stack));
+                }
             }
         }
+        let stacks = (!streamed.is_empty()).then(|| turns.of::<INTERLEAVED>());
+        let Some(Some(stacks)) = stacks else {
+            return;
+        };
+        let stream = stream(rays, (streamed.iter().copied(), PACKET), || {
+            options.cancelled()
+        });
+        let done = |i, hit| hits[i] = hit;
+        accel.closest_stream::<INTERLEAVED, I>(stream, range, alpha, stacks, done);
     }
-}
-
-/// The closest hit of each ray of `rays` with `t` in `range` on `accel` (cut out by `alpha`),
-/// written to `hits`, `K` rays at a time ([`in_turns`]).
-#[inline(always)]
-fn closest_in_turns<const K: usize, I: Isa>(
-    accel: &WideBvh,
-    (range, alpha): ((f32, f32), Option<&AlphaTests>),
-    rays: &[[f32; 6]],
-    hits: &mut [ClosestHit],
-    stacks: (&mut Stack, &mut Turns),
-) {
-    in_turns::<K, _>(
-        (rays, hits),
-        stacks,
-        |r, stacks, hits| {
-            hits.copy_from_slice(&accel.closest_many::<K, I>(r, range, alpha, stacks))
-        },
-        |r, stack, hit| *hit = r.and_then(|r| accel.closest::<I>(&r, range, alpha, stack)),
-    );
 }
 
 /// Counts the crossings of `rays` with `t` in `range` as one packet, as

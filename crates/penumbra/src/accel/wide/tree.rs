@@ -22,6 +22,7 @@ use super::group::{TriangleGroup, GROUP};
 use super::levels::OWN;
 use super::node::{collapse, WideNode};
 pub(crate) use super::stack::{Order, Stack};
+use super::turns::INTERLEAVE_BYTES;
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::{AlphaTests, Bvh};
@@ -75,6 +76,8 @@ pub(crate) struct WideBvh {
     /// Each leaf slot's part of the surface's border, for the counting rule: made by the
     /// first counting query ([`WideBvh::border`]), which the others do not need.
     border: OnceLock<Vec<Boundary>>,
+    /// Whether the single-ray walks go in turn ([`WideBvh::interleaves`]).
+    interleave: bool,
 }
 
 /// A hit of the closest-hit or every-hit traversal: where, and which triangle.
@@ -152,7 +155,7 @@ impl WideBvh {
             }
             index
         });
-        WideBvh {
+        let mut tree = WideBvh {
             bvh,
             wide,
             groups,
@@ -160,13 +163,21 @@ impl WideBvh {
             ids,
             normals,
             border: OnceLock::new(),
-        }
+            interleave: false,
+        };
+        tree.interleave = tree.walked_bytes() > INTERLEAVE_BYTES;
+        tree
     }
 
     /// True unless the triangle in leaf slot `slot` is cut out where `crossing` meets it by
     /// `alpha`, the alpha tests of the tree's triangles (by triangle index), if any.
     #[inline(always)]
-    fn keeps(&self, alpha: Option<&AlphaTests>, slot: usize, crossing: &Crossing) -> bool {
+    pub(super) fn keeps(
+        &self,
+        alpha: Option<&AlphaTests>,
+        slot: usize,
+        crossing: &Crossing,
+    ) -> bool {
         match alpha {
             None => true,
             Some(alpha) => {
@@ -396,6 +407,22 @@ impl WideBvh {
     /// The bytes of the wide nodes and triangle groups that the walks read.
     pub(super) fn walked_bytes(&self) -> usize {
         self.wide.len() * size_of::<WideNode>() + self.groups.len() * size_of::<TriangleGroup>()
+    }
+
+    /// True when the single-ray walks of this tree go in turn ([`WideBvh::walk_stream`]):
+    /// when its nodes and triangles take more than [`INTERLEAVE_BYTES`].
+    pub(crate) fn interleaves(&self) -> bool {
+        self.interleave
+    }
+
+    /// This tree with its single-ray walks in turn whatever its size, for tests of the
+    /// queries that walk so on large trees only.
+    #[cfg(test)]
+    pub(crate) fn interleaved(self) -> WideBvh {
+        WideBvh {
+            interleave: true,
+            ..self
+        }
     }
 
     /// The wide tree.
