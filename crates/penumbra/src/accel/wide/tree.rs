@@ -484,9 +484,10 @@ impl WideBvh {
         (g, lane, c): Found,
         f: &mut impl FnMut(SlotHit),
     ) {
-        let slot = g.first as usize + lane;
-        if self.keeps(alpha, slot, &c) {
-            f(self.slot_hit(slot, c));
+        // The ids from the group, in the caches: from the array by slot, they were a cache
+        // miss a crossing on trees larger than the caches.
+        if self.keeps(alpha, g.first as usize + lane, &c) {
+            f(found_hit((g, lane, c)));
         }
     }
 }
