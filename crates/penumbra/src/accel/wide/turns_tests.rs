@@ -282,3 +282,65 @@ fn the_kernels_answer_alike_in_turns_and_one_ray_at_a_time() {
 fn only_trees_larger_than_the_caches_interleave() {
     assert!(!tree().interleaves());
 }
+
+/// A query cancelled from its second look at the flag on.
+#[derive(Default)]
+struct CancelledOnSecondLook(std::cell::Cell<usize>);
+
+impl crate::accel::wide::kernels::Control for CancelledOnSecondLook {
+    type Error = crate::RaycastError;
+
+    fn cancelled(&self) -> bool {
+        self.0.set(self.0.get() + 1);
+        self.0.get() > 1
+    }
+
+    fn cancel_error(&self) -> crate::RaycastError {
+        crate::RaycastError::Cancelled
+    }
+
+    fn grow<T>(&self, v: &mut Vec<T>, n: usize, _: &'static str) -> Result<(), Self::Error> {
+        v.reserve(n);
+        Ok(())
+    }
+}
+
+/// A listing whose walks go in turn stops at the first look at the flag past the start of
+/// a cancelled query, and says it was cancelled; so does a count, which leaves the rays past
+/// that look uncounted.
+#[test]
+fn a_stream_stops_when_its_query_is_cancelled() {
+    use crate::accel::wide::kernels::Counts;
+    let levels = WideLevels::new(tree().interleaved(), None, Vec::new(), Vec::new(), None);
+    let border = levels.borders(test_pool());
+    let rays: Vec<[f32; 6]> = rays(2001).iter().map(as_array).collect();
+    for path in supported_paths() {
+        let options = CancelledOnSecondLook::default();
+        let listing = Listing {
+            accel: &levels,
+            border: &border,
+            rays: &rays,
+            options: &options,
+        };
+        let listed = dispatch(path, listing);
+        assert!(
+            matches!(listed, Err(crate::RaycastError::Cancelled)),
+            "{path:?}"
+        );
+        let (mut out, options) = (vec![-1; rays.len()], CancelledOnSecondLook::default());
+        let counts = Counts::<_, false> {
+            accel: &levels,
+            range: (0.0, f32::INFINITY),
+            border: &border,
+            options: &options,
+            rays: &rays,
+            out: &mut out,
+        };
+        dispatch(path, counts);
+        let counted = out.iter().filter(|&&n| n >= 0).count();
+        assert!(
+            counted < rays.len() / 4,
+            "{counted} rays counted on {path:?}"
+        );
+    }
+}
