@@ -13,7 +13,6 @@ use crate::accel::wide::levels::{Borders, WideLevels};
 use crate::accel::Bvh;
 use crate::geometry::{Geometry, Triangle};
 use crate::pool::test_pool;
-use crate::raycast::QueryOptions;
 use crate::sampling::Rng;
 use crate::simd::Isa;
 use crate::simd::{dispatch, supported_paths, Kernel};
@@ -182,7 +181,7 @@ impl<const K: usize> Kernel for Lists<'_, K> {
     type Output = (Vec<u32>, Vec<SlotHit>);
 
     fn run<const N: usize, I: Isa>(self) -> (Vec<u32>, Vec<SlotHit>) {
-        let options = QueryOptions::default();
+        let options = Flag::never();
         let (accel, border, rays) = (self.levels, self.border, self.rays);
         let listing = Listing {
             accel,
@@ -237,7 +236,7 @@ fn the_kernels_answer_alike_in_turns_and_one_ray_at_a_time() {
     let mut rays: Vec<[f32; 6]> = rays(3001).iter().map(as_array).collect();
     rays[7] = [0.0; 6];
     rays[1500][3] = f32::NAN;
-    let options = QueryOptions::default();
+    let options = Flag::never();
     for path in supported_paths() {
         let answers = |levels: &WideLevels| {
             let border = levels.borders(test_pool());
@@ -283,23 +282,36 @@ fn only_trees_larger_than_the_caches_interleave() {
     assert!(!tree().interleaves());
 }
 
-/// A query cancelled from its second look at the flag on.
-#[derive(Default)]
-struct CancelledOnSecondLook(std::cell::Cell<usize>);
+/// A query's flag, raised from look `.1` on (counting from 1): `usize::MAX` never.
+struct Flag(std::cell::Cell<usize>, usize);
 
-impl crate::accel::wide::kernels::Control for CancelledOnSecondLook {
-    type Error = crate::RaycastError;
+/// What a cancelled query gives.
+#[derive(Debug, PartialEq)]
+struct Cancelled;
+
+impl Flag {
+    fn never() -> Flag {
+        Flag(std::cell::Cell::new(0), usize::MAX)
+    }
+
+    fn from_second_look() -> Flag {
+        Flag(std::cell::Cell::new(0), 2)
+    }
+}
+
+impl crate::accel::wide::kernels::Control for Flag {
+    type Error = Cancelled;
 
     fn cancelled(&self) -> bool {
         self.0.set(self.0.get() + 1);
-        self.0.get() > 1
+        self.0.get() >= self.1
     }
 
-    fn cancel_error(&self) -> crate::RaycastError {
-        crate::RaycastError::Cancelled
+    fn cancel_error(&self) -> Cancelled {
+        Cancelled
     }
 
-    fn grow<T>(&self, v: &mut Vec<T>, n: usize, _: &'static str) -> Result<(), Self::Error> {
+    fn grow<T>(&self, v: &mut Vec<T>, n: usize, _: &'static str) -> Result<(), Cancelled> {
         v.reserve(n);
         Ok(())
     }
@@ -315,7 +327,7 @@ fn a_stream_stops_when_its_query_is_cancelled() {
     let border = levels.borders(test_pool());
     let rays: Vec<[f32; 6]> = rays(2001).iter().map(as_array).collect();
     for path in supported_paths() {
-        let options = CancelledOnSecondLook::default();
+        let options = Flag::from_second_look();
         let listing = Listing {
             accel: &levels,
             border: &border,
@@ -323,11 +335,8 @@ fn a_stream_stops_when_its_query_is_cancelled() {
             options: &options,
         };
         let listed = dispatch(path, listing);
-        assert!(
-            matches!(listed, Err(crate::RaycastError::Cancelled)),
-            "{path:?}"
-        );
-        let (mut out, options) = (vec![-1; rays.len()], CancelledOnSecondLook::default());
+        assert!(listed == Err(Cancelled), "{path:?}");
+        let (mut out, options) = (vec![-1; rays.len()], Flag::from_second_look());
         let counts = Counts::<_, false> {
             accel: &levels,
             range: (0.0, f32::INFINITY),
