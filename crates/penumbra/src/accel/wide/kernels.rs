@@ -70,9 +70,8 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
             let Some(stacks) = turns.of::<INTERLEAVED>() else {
                 return;
             };
-            let options = self.options;
-            let rays = (self.rays.iter().map(prepare).enumerate())
-                .take_while(|(i, _)| !i.is_multiple_of(CHECK) || !options.cancelled());
+            let (options, chunks) = (self.options, 0..self.rays.len().div_ceil(CHECK));
+            let rays = stream(self.rays, (chunks, CHECK), || options.cancelled());
             let out = &mut *self.out;
             accel.occluded_own_stream::<INTERLEAVED, I>(rays, range, stacks, |i, o| out[i] = o);
             return;
