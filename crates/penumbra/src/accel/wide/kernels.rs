@@ -64,12 +64,11 @@ impl<C: Control, const PLACED: bool> Kernel for Occlusions<'_, C, PLACED> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let (accel, range) = (self.accel, self.range);
-        let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let mut stack = Stack::default();
         let interleave = accel.own().interleaves();
         if !PLACED && interleave {
-            let Some(stacks) = turns.of::<INTERLEAVED>() else {
-                return;
-            };
+            let mut turns = Turns::<INTERLEAVED>::new();
+            let stacks = turns.stacks();
             let (options, chunks) = (self.options, 0..self.rays.len().div_ceil(CHECK));
             let rays = stream(self.rays, (chunks, CHECK), || options.cancelled());
             let out = &mut *self.out;
@@ -194,7 +193,7 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
     #[inline(always)]
     fn run<const N: usize, I: Isa>(self) {
         let (accel, border, range) = (self.accel, self.border, self.range);
-        let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let mut stack = Stack::default();
         let interleave = accel.own().interleaves();
         let mut packet_stack = Vec::new();
         // Runs of parallel rays go as packets of 32 through the own tree (without cut-outs):
@@ -247,11 +246,11 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
                 }
             }
         }
-        let stacks = (!streamed.is_empty()).then(|| turns.of::<INTERLEAVED>());
-        let Some(Some(stacks)) = stacks else {
+        if streamed.is_empty() {
             return;
-        };
-        let options = self.options;
+        }
+        let mut turns = Turns::<INTERLEAVED>::new();
+        let (stacks, options) = (turns.stacks(), self.options);
         let rays = stream(self.rays, (streamed.iter().copied(), PARALLEL), || {
             options.cancelled()
         });
@@ -312,15 +311,9 @@ impl<C: Control> Listing<'_, C> {
             }
         };
         let range = (0.0, f32::INFINITY);
-        let (mut stack, mut turns) = (Stack::default(), Turns::default());
-        match turns.of::<K>() {
-            Some(stacks) if K > 1 => {
-                let chunks = 0..rays.len().div_ceil(CHECK);
-                let stream = stream(rays, (chunks, CHECK), || options.cancelled());
-                let calls = (|i| i as u32, |i: &mut u32, h| push(*i, h), |_, _| {});
-                accel.each_hit_own_stream::<K, u32, I>(stream, range, border, stacks, calls);
-            }
-            _ => {
+        let mut stack = Stack::default();
+        match K {
+            1 => {
                 for (i, ray) in rays.iter().enumerate() {
                     if i.is_multiple_of(CHECK) && options.cancelled() {
                         break;
@@ -330,6 +323,14 @@ impl<C: Control> Listing<'_, C> {
                         accel.each_hit_own::<I>(&r, range, border, &mut stack, f);
                     }
                 }
+            }
+            _ => {
+                let mut turns = Turns::<K>::new();
+                let stacks = turns.stacks();
+                let chunks = 0..rays.len().div_ceil(CHECK);
+                let stream = stream(rays, (chunks, CHECK), || options.cancelled());
+                let calls = (|i| i as u32, |i: &mut u32, h| push(*i, h), |_, _| {});
+                accel.each_hit_own_stream::<K, u32, I>(stream, range, border, stacks, calls);
             }
         }
         if options.cancelled() {

@@ -76,7 +76,7 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
         } = self;
         let (accel, alpha) = (levels.own(), levels.own_alpha());
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
-        let (mut stack, mut turns) = (Stack::default(), Turns::default());
+        let mut stack = Stack::default();
         let interleave = accel.interleaves();
         let mut packet_stack = Vec::new();
         // On a tree larger than the caches, the packets' rays left to single rays go after,
@@ -108,10 +108,11 @@ impl<C: Control> Kernel for CastPackets<'_, C> {
                 }
             }
         }
-        let stacks = (!streamed.is_empty()).then(|| turns.of::<INTERLEAVED>());
-        let Some(Some(stacks)) = stacks else {
+        if streamed.is_empty() {
             return;
-        };
+        }
+        let mut turns = Turns::<INTERLEAVED>::new();
+        let stacks = turns.stacks();
         let stream = stream(rays, (streamed.iter().copied(), PACKET), || {
             options.cancelled()
         });

@@ -220,19 +220,19 @@ pub(crate) fn stream<'r>(
         .map(|i| (i, prepare(&rays[i])))
 }
 
-/// The stacks of a stream's walks ([`WideBvh::walk_stream`]), made on first use: a query on
-/// a tree that walks one ray at a time never needs them.
-#[derive(Default)]
-pub(crate) struct Turns(Vec<Stack>);
+/// The stacks of a stream's `K` walks ([`WideBvh::walk_stream`]), on the heap: a query
+/// makes them only where it streams.
+pub(crate) struct Turns<const K: usize>(Vec<Stack>);
 
-impl Turns {
-    /// The stacks of `K` walks in turn (`K` at most [`INTERLEAVED`]).
-    pub(crate) fn of<const K: usize>(&mut self) -> Option<[&mut Stack; K]> {
-        const { assert!(K >= 1 && K <= INTERLEAVED) };
-        if self.0.is_empty() {
-            self.0 = (0..INTERLEAVED).map(|_| Stack::default()).collect();
-        }
-        let (stacks, _) = self.0.split_first_chunk_mut::<K>()?;
-        Some(stacks.each_mut())
+impl<const K: usize> Turns<K> {
+    pub(crate) fn new() -> Turns<K> {
+        const { assert!(K >= 1) };
+        Turns((0..K).map(|_| Stack::default()).collect())
+    }
+
+    /// The stacks, one per walk.
+    pub(crate) fn stacks(&mut self) -> [&mut Stack; K] {
+        let stacks: &mut [Stack; K] = (self.0.as_mut_slice().try_into()).expect("K stacks");
+        stacks.each_mut()
     }
 }

@@ -95,27 +95,17 @@ impl<const K: usize> Kernel for Answers<'_, K> {
                 tree.each_hit::<I>(&r, range, (border, None), &mut stack, f);
             }
         } else {
-            let mut turns = Turns::default();
+            let mut turns = Turns::<K>::new();
             // Chunks of 7 rays, for a stream that crosses them.
             let rays = || stream(rays, (0..rays.len().div_ceil(7), 7), || false);
-            tree.closest_stream::<K, I>(rays(), range, None, turns.of::<K>().unwrap(), |i, h| {
-                out[i].0 = h
-            });
-            tree.occluded_stream::<K, I>(rays(), range, None, turns.of::<K>().unwrap(), |i, o| {
-                out[i].1 = o
-            });
+            tree.closest_stream::<K, I>(rays(), range, None, turns.stacks(), |i, h| out[i].0 = h);
+            tree.occluded_stream::<K, I>(rays(), range, None, turns.stacks(), |i, o| out[i].1 = o);
             let calls = (
                 |_| Vec::new(),
                 |found: &mut Vec<_>, h| found.push(key(h)),
                 |i: usize, found| out[i].2 = found,
             );
-            tree.each_hit_stream::<K, _, I>(
-                rays(),
-                range,
-                (border, None),
-                turns.of::<K>().unwrap(),
-                calls,
-            );
+            tree.each_hit_stream::<K, _, I>(rays(), range, (border, None), turns.stacks(), calls);
         }
         for o in &mut out {
             o.2.sort_unstable();
