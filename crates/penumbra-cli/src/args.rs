@@ -1,11 +1,12 @@
 //! The command line's grammar: subcommands, flags and the parsers of their values. Nothing
 //! here loads or renders.
 
-use std::path::PathBuf;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{ArgAction, Parser, Subcommand};
-use penumbra::{OutputFormat, Override, PixelBounds, Sampler};
+use penumbra::{OutputFormat, Override, PixelBounds, Sampler, MAX_THREADS};
 
 use crate::aov::Passes;
 
@@ -16,16 +17,37 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// The command line with `render` put in front of a first argument that names a scene or a
+/// model file (`penumbra scene.toml -o out.png`, as `mitsuba scene.xml` renders): a path
+/// alone means render. Anything else (a subcommand, a flag, a typo) is left to clap.
+pub fn with_subcommand(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
+    let mut args: Vec<OsString> = args.into_iter().collect();
+    let names_file = args.get(1).is_some_and(|a| {
+        let path = Path::new(a);
+        let known = ["render", "check", "completions", "help"];
+        !known.iter().any(|k| a == k)
+            && (a == "-"
+                || penumbra::SceneFormat::from_path(path).is_some()
+                || penumbra::ModelFormat::from_path(path).is_some()
+                || path.is_file())
+    });
+    if names_file {
+        args.insert(1, OsString::from("render"));
+    }
+    args
+}
+
 #[derive(Subcommand)]
 pub enum Command {
-    /// Render a scene file to an image (.png, .jpg, .exr or .pfm).
-    #[command(version)]
+    /// Render a scene file or a model to an image (.png, .jpg, .exr or .pfm); `penumbra
+    /// SCENE` alone means `penumbra render SCENE`.
+    #[command(version, display_name = "penumbra")]
     Render(Box<RenderArgs>),
-    /// Validate a scene file (or a bare .obj or .ply mesh) and print a summary.
-    #[command(version)]
+    /// Validate a scene file (or a bare .obj, .ply, .gltf or .glb model) and print a summary.
+    #[command(version, display_name = "penumbra")]
     Check(CheckArgs),
     /// Print a shell completion script: source it, or save it where the shell looks.
-    #[command(version)]
+    #[command(version, display_name = "penumbra")]
     Completions {
         /// bash, zsh, fish, elvish or powershell.
         #[arg(value_enum)]
@@ -36,7 +58,8 @@ pub enum Command {
 /// `penumbra check`.
 #[derive(clap::Args)]
 pub struct CheckArgs {
-    /// The scene file (.toml or .json; - reads standard input), or a Wavefront .obj or .ply mesh.
+    /// The scene file (.toml or .json; - reads standard input), or a model: a Wavefront .obj,
+    /// .ply, .gltf or .glb file.
     pub scene: PathBuf,
     /// Override a scene key: KEY.PATH=VALUE (repeatable).
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
@@ -50,13 +73,15 @@ pub struct CheckArgs {
 #[derive(clap::Args)]
 pub struct RenderArgs {
     /// The scene file (.toml or .json). - reads it from standard input (TOML, or JSON when it
-    /// starts with `{`), with relative paths in it relative to the current folder. A .obj or
-    /// .ply mesh is rendered as a scene of its own: a camera framing it and a default light rig.
+    /// starts with `{`), with relative paths in it relative to the current folder. A model
+    /// (.obj, .ply, .gltf or .glb) is rendered as a scene of its own: its cameras and lights,
+    /// or a camera framing it and a default light rig.
     pub scene: PathBuf,
     /// Output image; the extension picks the format; - writes to standard output (needs
-    /// --format). {camera}, {scene}, {spp} and {seed} are replaced; missing folders are made.
-    /// Default: film.output, else <scene stem>.png (<scene stem>_{camera}.png for several
-    /// cameras) next to the scene.
+    /// --format). {camera}, {frame} (or {frame:04}), {scene}, {spp} and {seed} are replaced;
+    /// missing folders are made. Default: film.output, else <scene stem>.png next to a scene
+    /// file, in the current folder for a model (<scene stem>_{camera}.png for several cameras,
+    /// <scene stem>_{frame:04}.png for several frames).
     #[arg(short, long, visible_alias = "outfile", value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Image format: required with -o -, else it must agree with the extension.
@@ -67,6 +92,9 @@ pub struct RenderArgs {
     /// else taken as a string.
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
     pub set: Vec<Override>,
+    /// Film width and height in pixels, WIDTHxHEIGHT (f3d's flag): --resolution 640x480.
+    #[arg(long, visible_alias = "res", value_name = "WxH", value_parser = parse_resolution, conflicts_with_all = ["width", "height"])]
+    pub resolution: Option<(u32, u32)>,
     /// Film width in pixels.
     #[arg(long, value_name = "W")]
     pub width: Option<u32>,
@@ -86,7 +114,8 @@ pub struct RenderArgs {
     pub light_samples: Option<u32>,
     /// The camera(s) to render: a name, a comma list, `all`, or name patterns with * and ?
     /// (several cameras render one after another from one loaded scene; -o then needs
-    /// {camera}).
+    /// {camera}). `auto` (unless the scene has a camera of that name) frames the whole scene
+    /// as a bare model's default camera does.
     #[arg(long, value_name = "NAMES")]
     pub camera: Option<String>,
     /// Frames of path cameras ([[cameras.NAME.keys]] or an orbit) to render: A:B (both
@@ -126,12 +155,16 @@ pub struct RenderArgs {
     #[arg(long, value_name = "F", default_value = "penumbra", value_parser = ["penumbra", "nerf"], requires = "poses")]
     pub poses_format: String,
     /// Worker threads (0: all cores).
+    // Hyphen values are taken so that "-1" is answered with the range, not with clap's
+    // "use -- -1" tip.
     #[arg(
         short,
         long,
         visible_alias = "nthreads",
         value_name = "N",
-        default_value_t = 0
+        default_value_t = 0,
+        value_parser = parse_threads,
+        allow_hyphen_values = true
     )]
     pub threads: usize,
     /// Seed for every random choice.
@@ -176,7 +209,8 @@ pub struct RenderArgs {
     /// unless given. Without a viewer there the render goes on as usual.
     #[arg(long, value_name = "HOST[:PORT]")]
     pub display_server: Option<String>,
-    /// Print the summary as one JSON object on stdout.
+    /// Print the summary as one JSON object on stdout (per image), instead of the line on
+    /// stderr.
     #[arg(long)]
     pub json: bool,
     /// No progress bar and no summary on stderr.
@@ -225,6 +259,24 @@ fn parse_crop(s: &str) -> Result<CropWindow, String> {
         }
         _ => Err(expected.to_owned()),
     }
+}
+
+/// `--threads`: 0 (all cores) or 1 to [`MAX_THREADS`].
+fn parse_threads(s: &str) -> Result<usize, String> {
+    let range = format!("expected 0 (all cores) or a number of threads from 1 to {MAX_THREADS}");
+    match s.trim().parse::<i64>() {
+        Ok(n) if (0..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
+        Ok(n) => Err(format!("{range}, not {n}")),
+        Err(_) => Err(format!("{range}, not `{s}`")),
+    }
+}
+
+/// `--resolution WxH` (f3d's flag): the film's width and height.
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let expected = || format!("expected WIDTHxHEIGHT in pixels, such as 640x480, not `{s}`");
+    let (w, h) = s.split_once(['x', 'X', '*']).ok_or_else(expected)?;
+    let size = |t: &str| t.trim().parse::<u32>().ok().filter(|&n| n > 0);
+    size(w).zip(size(h)).ok_or_else(expected)
 }
 
 fn parse_override(s: &str) -> Result<Override, String> {

@@ -13,7 +13,7 @@ use crate::check_obj;
 use crate::failure::{invalid, note, say, Failure};
 use crate::input;
 use crate::summary::{bounds_json, bounds_text, light_samples};
-use crate::warnings::{light_warnings, unused_warnings, view_warnings};
+use crate::warnings::{light_warnings, no_light_warning, unused_warnings, view_warnings};
 
 pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let path: &Path = &args.scene;
@@ -36,7 +36,10 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
     let objects = objects(world, &file.desc, &scene.objects);
     let bounds: Vec<(String, Aabb)> = objects.iter().map(|o| (o.key.clone(), o.bounds)).collect();
     let aspect = scene.settings.width as f32 / scene.settings.height as f32;
-    let mut warnings = light_warnings(world, scene.settings.light_model);
+    let mut warnings: Vec<String> = no_light_warning(world, scene.settings.ambient)
+        .into_iter()
+        .collect();
+    warnings.extend(light_warnings(world, scene.settings.light_model));
     warnings.extend(unused_warnings(&file.desc));
     warnings.extend(view_warnings(world, aspect, &bounds));
     for w in &warnings {

@@ -43,7 +43,7 @@ use args::{Cli, Command};
 use failure::note;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(args::with_subcommand(std::env::args_os()));
     let result = match &cli.command {
         Command::Render(args) => simd_env().and_then(|()| render::run(args)),
         Command::Check(args) => simd_env().and_then(|()| check::run(args)),

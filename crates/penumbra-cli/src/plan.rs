@@ -4,7 +4,9 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use penumbra::{PixelBounds, RenderSettings, Scene, SceneFile, SettingsError, View, World};
+use penumbra::{
+    ModelFormat, PixelBounds, RenderSettings, Scene, SceneFile, SettingsError, View, World,
+};
 
 use crate::args::RenderArgs;
 use crate::cameras;
@@ -134,8 +136,9 @@ fn job(
 }
 
 /// The output name before expansion and the flag or key it comes from: `-o`, else
-/// `film.output`, else `<scene stem>.png` beside the scene (with `_{camera}` for several
-/// cameras and `_{frame:04}` for several frames).
+/// `film.output`, else `<scene stem>.png` beside a scene file, as Mitsuba writes it, or in the
+/// current folder for a bare model (whose folder, an asset's, may be read-only or shared), with
+/// `_{camera}` for several cameras and `_{frame:04}` for several frames.
 fn output_pattern(
     args: &RenderArgs,
     scene: &Scene,
@@ -162,6 +165,9 @@ fn output_pattern(
         name.push("_{frame:04}");
     }
     name.push(".png");
+    if ModelFormat::from_path(&args.scene).is_some() {
+        return Ok((PathBuf::from(name), "-o"));
+    }
     Ok((args.scene.with_file_name(name), "-o"))
 }
 

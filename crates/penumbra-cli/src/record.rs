@@ -13,7 +13,7 @@
 
 use std::path::{Path, PathBuf};
 
-use penumbra::{CameraPose, Scene, SceneFile, StagedFile, View, World};
+use penumbra::{CameraPose, Scene, SceneFile, StagedFile, World};
 use serde_json::{json, Value};
 
 use crate::aov::Passes;
@@ -48,11 +48,7 @@ pub fn settings(job: &Job, digest: &str, passes: Option<&Passes>, gamma: Option<
 
 /// The camera of a job, for its pose.
 pub fn camera_of(job: &Job, world: &World) -> Option<penumbra::Camera> {
-    match &job.settings.view {
-        View::Camera(c) => Some(*c),
-        View::Named(n) => world.camera(n).copied(),
-        View::First => world.cameras().first().map(|(_, c)| *c),
-    }
+    job.settings.view.camera(world).ok()
 }
 
 /// The pose of a job's image (of its region, when it has one).

@@ -7,26 +7,19 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use penumbra::MAX_THREADS;
-
 use crate::args::RenderArgs;
 use crate::display::Preview;
-use crate::failure::{invalid, note, runtime, say, Failure};
+use crate::failure::{invalid, note, runtime, say, say_beside, Failure};
 use crate::input::{self, is_stdin};
 use crate::manifest::{Manifest, Status};
 use crate::plan::{self, Job};
 use crate::signals::Interrupt;
 use crate::summary::Report;
+use crate::warnings::no_light_warning;
 use crate::{poses, record, task};
 
 pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let interrupt = Interrupt::install();
-    if args.threads > MAX_THREADS {
-        return Err(invalid(format!(
-            "--threads: at most {MAX_THREADS} worker threads, not {}",
-            args.threads
-        )));
-    }
     if args.json && args.output.as_deref() == Some(Path::new("-")) {
         return Err(invalid(
             "--json: standard output carries the image with -o -; drop --json",
@@ -36,6 +29,12 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let file = input::load(&args.scene, &args.set, input::Reader::Render)?;
     let file_time = load_start.elapsed();
     let scene = file.build(args.threads).map_err(invalid)?;
+    if let Some(w) = no_light_warning(&scene.world, scene.settings.ambient) {
+        note(&format!(
+            "warning: {}: {w}",
+            scene_name(&args.scene).display()
+        ));
+    }
     // The scene file, then its meshes and textures: everything of loading but the BVH.
     let parse_time = file_time + scene.load_time;
     let all = plan::plan(args, &file, &scene)?;
@@ -144,11 +143,12 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             load_time,
             parse_time,
         };
-        if !args.quiet {
+        // --json is the summary, on stdout: the line for people stays off stderr.
+        if !args.quiet && !args.json {
             note(&report.line());
         }
         if args.json {
-            say(&report.json().to_string())?;
+            say_beside(&report.json().to_string())?;
         }
     }
     match &failed[..] {
@@ -218,7 +218,7 @@ fn dry_run(
 
 /// Reports a task `--resume` skips: its image is there, made with the same settings.
 fn skipped(args: &RenderArgs, job: &Job, count: usize) -> Result<(), Failure> {
-    if !args.quiet {
+    if !args.quiet && !args.json {
         note(&format!(
             "penumbra: [{}/{count}] done before, skipped -> {}",
             job.task + 1,
@@ -233,7 +233,7 @@ fn skipped(args: &RenderArgs, job: &Job, count: usize) -> Result<(), Failure> {
             "output": job.output.display(),
             "status": "skipped",
         });
-        say(&line.to_string())?;
+        say_beside(&line.to_string())?;
     }
     Ok(())
 }

@@ -10,11 +10,14 @@ use crate::args::{CropWindow, RenderArgs};
 /// `--set`), looking through `camera` (`None`: the file's default); apply it with the file's
 /// samples.
 ///
-/// `--width`/`--height`, then `--quick` (a quarter of each side, as pbrt: `max(1, side / 4)`;
+/// `--width`/`--height` (or `--resolution`), then `--quick` (a quarter of each side, as pbrt: `max(1, side / 4)`;
 /// center sampling with 1 spp unless `--spp` is given, 1 light sample per area light), then
 /// `--sampler`, `--spp`, `--light-samples` and `--seed`.
 pub fn patch(args: &RenderArgs, base: &RenderSettings, camera: Option<&str>) -> SettingsPatch {
-    let (mut width, mut height) = (args.width, args.height);
+    let (mut width, mut height) = match args.resolution {
+        Some((w, h)) => (Some(w), Some(h)),
+        None => (args.width, args.height),
+    };
     let (mut sampler, mut light_samples) = (args.sampler, args.light_samples);
     if args.quick {
         let quarter = |side: Option<u32>, of: u32| Some((side.unwrap_or(of) / 4).max(1));

@@ -1,10 +1,28 @@
 //! Scene mistakes that are not errors (the scene renders) but almost surely not meant: found by
-//! `penumbra check`, printed as warnings on stderr: lights that cannot light anything,
+//! `penumbra check`, printed as warnings on stderr: no light at all (which `penumbra render`
+//! warns of too), lights that cannot light anything,
 //! materials and textures never used, objects no camera sees.
 
 use glam::Vec3;
 use penumbra::desc::{InstancesDesc, ShapeDesc, TransformsDesc};
-use penumbra::{Aabb, Camera, Light, LightModel, SceneDesc, World};
+use penumbra::{Aabb, Camera, Light, LightModel, Rgb, SceneDesc, World};
+
+/// The warning for a world with no light at all (no `[[lights]]`, and none from a model
+/// file): only the ambient term lights it, and with `ambient` 0 the image is black (but for
+/// the background). `None` when there is a light.
+pub fn no_light_warning(world: &World, ambient: Rgb) -> Option<String> {
+    if !world.lights().is_empty() {
+        return None;
+    }
+    let effect = if ambient == Rgb::ZERO {
+        "with render.ambient 0 every surface renders black"
+    } else {
+        "only render.ambient lights it, evenly and without shadows"
+    };
+    Some(format!(
+        "the scene has no light (no [[lights]] entry, and none from a model file): {effect}"
+    ))
+}
 
 /// The warnings of `world` under `model`, each naming the light (`lights[i]`).
 pub fn light_warnings(world: &World, model: LightModel) -> Vec<String> {

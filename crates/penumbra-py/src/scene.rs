@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use numpy::PyReadonlyArray2;
-use penumbra::{ObjectIndex, RenderSettings, SceneFile, SceneFormat, World};
+use penumbra::{ObjectIndex, RenderSettings, SceneFile, SceneFormat, View, World};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -180,10 +180,8 @@ impl CoreScene {
     /// frame's, the camera a render of the name uses.
     #[pyo3(signature = (name = None))]
     fn camera(&self, name: Option<&str>) -> Option<CameraArgs> {
-        let camera = match name {
-            Some(name) => self.world.camera(name)?,
-            None => &self.world.cameras().first()?.1,
-        };
+        let view = name.map_or(View::First, |n| View::Named(n.to_owned()));
+        let camera = view.camera(&self.world).ok()?;
         let [p, l, u] = [camera.position(), camera.look_at(), camera.up()].map(|v| v.to_array());
         Some((p, l, u, camera.fov_y_deg()))
     }

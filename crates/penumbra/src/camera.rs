@@ -1,9 +1,19 @@
 //! The pinhole camera of SPEC §3 (docs/spec.md): a [`Camera`] is a pose and a field of view; paired with a
 //! film size it becomes a [`PinholeCamera`] that turns film points into rays from the eye.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
-use crate::math::{unit, Ray};
+use crate::math::{unit, Aabb, Ray};
+
+/// Vertical field of view of the framing camera ([`Camera::framing`]), in degrees.
+pub const FRAMING_FOV_DEG: f64 = 40.0;
+/// Direction from the framed bounds' centre to the framing camera (normalized before use):
+/// front-right-above.
+const FRAMING_DIR: [f64; 3] = [1.0, 0.8, 1.4];
+
+/// The name under which a render asks for the framing camera ([`Camera::framing`]) of a world
+/// that has no camera of that name: `--camera auto`, f3d's and Blender's "frame all".
+pub const FRAMING_CAMERA: &str = "auto";
 
 /// Where a pinhole camera stands and what it sees: a checked pose and vertical field of view,
 /// independent of any film. A [`World`](crate::World) keeps its cameras in this form; a render
@@ -100,12 +110,39 @@ impl Camera {
         self.fov_y_deg
     }
 
+    /// The camera that frames `bounds`, the one a bare model file gets: fov
+    /// [`FRAMING_FOV_DEG`], up +y, looking at the centre c of the bounding sphere (radius r,
+    /// half the diagonal; 1 for bounds of no extent) from c + d·normalize(1, 0.8, 1.4)
+    /// (front-right-above), with d = r / sin(fov/2) the distance at which the sphere fills
+    /// the vertical field of view. Empty bounds are framed as the unit sphere at the origin;
+    /// `None` only where the camera would stand beyond f32's range.
+    pub fn framing(bounds: Aabb) -> Option<Camera> {
+        let (position, look_at) = framing_view(bounds);
+        Camera::new(
+            position.as_vec3(),
+            look_at.as_vec3(),
+            Vec3::Y,
+            FRAMING_FOV_DEG as f32,
+        )
+        .ok()
+    }
+
     /// The camera's orthonormal frame as rays are made from it (SPEC §3): forward
     /// f = normalize(look_at − position), right r = normalize(f × up) and the true up r × f.
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
         // `Camera::new` checked the frame, so it exists.
         frame(self.position, self.look_at, self.up).unwrap_or((Vec3::NEG_Z, Vec3::X, Vec3::Y))
     }
+}
+
+/// The framing camera's (position, look_at) for `bounds`, in double precision (see
+/// [`Camera::framing`]). Empty or non-finite bounds are framed as the unit sphere at the
+/// origin.
+pub(crate) fn framing_view(bounds: Aabb) -> (DVec3, DVec3) {
+    let (centre, radius) = bounds.bounding_sphere().unwrap_or((DVec3::ZERO, 1.0));
+    let distance = radius / (FRAMING_FOV_DEG.to_radians() / 2.0).sin();
+    let dir = DVec3::from(FRAMING_DIR).normalize();
+    (centre + distance * dir, centre)
 }
 
 /// A [`Camera`] projected onto a film of `width × height` pixels: turns film points into rays.

@@ -85,7 +85,7 @@ pub use accel::prim::moller_trumbore::intersect_triangle;
 pub use accel::{
     intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
 };
-pub use camera::{Camera, CameraError, PinholeCamera};
+pub use camera::{Camera, CameraError, PinholeCamera, FRAMING_CAMERA, FRAMING_FOV_DEG};
 pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::encode_8bit;
 pub use files::Files;

@@ -163,6 +163,23 @@ impl Aabb {
         e.x * e.y + e.y * e.z + e.z * e.x
     }
 
+    /// Centre and radius (half the diagonal) of the box's bounding sphere, in double
+    /// precision; radius 1 for a box of no extent (one point). `None` for the empty box or one
+    /// with a non-finite corner.
+    pub fn bounding_sphere(&self) -> Option<(glam::DVec3, f64)> {
+        let (min, max) = (self.min.as_dvec3(), self.max.as_dvec3());
+        if self.is_empty() || !min.is_finite() || !max.is_finite() {
+            return None;
+        }
+        let radius = (max - min).length() / 2.0;
+        let radius = if radius > 0.0 && radius.is_finite() {
+            radius
+        } else {
+            1.0
+        };
+        Some(((min + max) / 2.0, radius))
+    }
+
     /// True when `p` lies inside or on the boundary.
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()

@@ -63,6 +63,24 @@ pub fn perfect_square_root(samples: u32) -> Option<u32> {
     (n >= 1 && n * n == samples as u64).then_some(n as u32)
 }
 
+/// What a message about a sample count `samples` that is not a perfect square from 1 to `max`
+/// adds after the count: the counts nearest to it that are, as " (the nearest are 4 and 9)".
+/// `samples` may be any integer a user typed (negative, beyond `u32`).
+pub fn nearest_squares(samples: i64, max: u32) -> String {
+    if samples < 1 {
+        return " (the smallest is 1)".to_owned();
+    }
+    if samples > max as i64 {
+        return format!(" (the largest is {max})");
+    }
+    let below = (samples as f64).sqrt().floor() as i64;
+    let (low, high) = (below * below, (below + 1) * (below + 1));
+    match high <= max as i64 {
+        true => format!(" (the nearest are {low} and {high})"),
+        false => format!(" (the nearest is {low})"),
+    }
+}
+
 /// Offset of grid cell `(k, l)` of `n × n` from the pixel center, in `[-½, ½)²`.
 pub fn grid_offset(n: u32, k: u32, l: u32) -> Vec2 {
     jittered_offset(n, k, l, Vec2::splat(0.5))
@@ -251,6 +269,20 @@ mod tests {
             Rng::new(1, &[2, 3]).next_u64(),
             Rng::new(1, &[3, 2]).next_u64()
         );
+    }
+
+    #[test]
+    fn a_count_that_is_no_square_is_told_its_neighbours() {
+        assert_eq!(nearest_squares(5, 65536), " (the nearest are 4 and 9)");
+        assert_eq!(nearest_squares(2, 65536), " (the nearest are 1 and 4)");
+        assert_eq!(
+            nearest_squares(65535, 65536),
+            " (the nearest are 65025 and 65536)"
+        );
+        assert_eq!(nearest_squares(0, 65536), " (the smallest is 1)");
+        assert_eq!(nearest_squares(-3, 65536), " (the smallest is 1)");
+        assert_eq!(nearest_squares(70000, 65536), " (the largest is 65536)");
+        assert_eq!(nearest_squares(10, 12), " (the nearest is 9)");
     }
 
     #[test]

@@ -6,11 +6,11 @@ use std::str::FromStr;
 
 use thiserror::Error;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, FRAMING_CAMERA};
 use crate::integrator::{LightModel, Shading, ShadingSettings};
 use crate::math::Rgb;
 use crate::names::{escape_controls, parse_name, UnknownName};
-use crate::sampling::{perfect_square_root, Sampler};
+use crate::sampling::{nearest_squares, perfect_square_root, Sampler};
 use crate::world::World;
 
 /// Largest film: 2^28 pixels (16384 × 16384), 3 GiB of float RGB.
@@ -26,7 +26,8 @@ pub enum View {
     /// The world's first camera.
     #[default]
     First,
-    /// The world's camera of this name.
+    /// The world's camera of this name; `auto` ([`FRAMING_CAMERA`]), when the world has no
+    /// camera of that name, is the camera framing the world's bounds ([`Camera::framing`]).
     Named(String),
     /// An explicit pinhole camera, whether or not the world has it.
     Camera(Camera),
@@ -84,7 +85,8 @@ impl Default for RenderSettings {
 pub enum SettingsError {
     /// Samples per pixel is not a perfect square in range.
     #[error(
-        "samples per pixel must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {0}"
+        "samples per pixel must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {0}{nearest}",
+        nearest = nearest_squares(*.0 as i64, MAX_SPP)
     )]
     Spp(u32),
     /// The center sampler with more than one sample.
@@ -135,21 +137,7 @@ impl RenderSettings {
     /// Checks every setting and returns the camera to look through.
     pub fn check(&self, world: &World) -> Result<Camera, SettingsError> {
         self.check_values()?;
-        match &self.view {
-            View::Camera(camera) => Ok(*camera),
-            View::First => world
-                .cameras()
-                .first()
-                .map(|(_, c)| *c)
-                .ok_or(SettingsError::NoCamera),
-            View::Named(name) => world.camera(name).copied().ok_or_else(|| {
-                let known: Vec<&str> = world.cameras().iter().map(|(n, _)| n.as_str()).collect();
-                SettingsError::UnknownCamera {
-                    name: name.clone(),
-                    known: known.join(", "),
-                }
-            }),
-        }
+        self.view.camera(world)
     }
 
     /// Checks every setting but the view, which only a world can check: film size, samples
@@ -186,6 +174,37 @@ impl RenderSettings {
             light_samples: self.light_samples,
         }
     }
+}
+
+impl View {
+    /// The camera this view looks through in `world`.
+    pub fn camera(&self, world: &World) -> Result<Camera, SettingsError> {
+        match self {
+            View::Camera(camera) => Ok(*camera),
+            View::First => world
+                .cameras()
+                .first()
+                .map(|(_, c)| *c)
+                .ok_or(SettingsError::NoCamera),
+            View::Named(name) => world
+                .camera(name)
+                .copied()
+                .or_else(|| framing(name, world))
+                .ok_or_else(|| {
+                    let known: Vec<&str> =
+                        world.cameras().iter().map(|(n, _)| n.as_str()).collect();
+                    SettingsError::UnknownCamera {
+                        name: name.clone(),
+                        known: known.join(", "),
+                    }
+                }),
+        }
+    }
+}
+
+/// The framing camera of `world` when `name` asks for it ([`FRAMING_CAMERA`]).
+fn framing(name: &str, world: &World) -> Option<Camera> {
+    (name == FRAMING_CAMERA).then(|| Camera::framing(world.bounds()))?
 }
 
 // The names of the shading choices, as scene files spell them (`render.shading`,

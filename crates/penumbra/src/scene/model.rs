@@ -39,12 +39,9 @@ use super::obj::obj_bounds;
 use super::parse::Source;
 use super::ply::ply_bounds;
 use super::{inspect_gltf, Override, SceneError, SceneFile, SceneFormat};
+use crate::camera::{framing_view, FRAMING_FOV_DEG};
 use crate::math::Aabb;
 
-/// Vertical field of view of the default camera, in degrees.
-const MODEL_FOV_DEG: f64 = 40.0;
-/// Direction from the bounds' centre to the default camera (normalized before use).
-const MODEL_CAMERA_DIR: [f64; 3] = [1.0, 0.8, 1.4];
 /// Direction from the bounds' centre to the default area light (normalized before use).
 const MODEL_LIGHT_DIR: [f64; 3] = [-1.0, 2.0, 1.0];
 
@@ -145,46 +142,25 @@ fn mesh_error(path: &Path, message: String) -> SceneError {
     }
 }
 
-/// The default camera for `bounds`: (position, look_at), with fov [`MODEL_FOV_DEG`] and up +y.
-/// A box of no extent (one point) is framed as if its radius were 1.
-pub(crate) fn model_camera(bounds: Aabb) -> (DVec3, DVec3) {
-    let (centre, radius) = sphere(bounds);
-    let distance = radius / (MODEL_FOV_DEG.to_radians() / 2.0).sin();
-    let dir = DVec3::from(MODEL_CAMERA_DIR).normalize();
-    (centre + distance * dir, centre)
-}
-
 /// The default area light for `bounds`: (center, side). The square is horizontal (u along
 /// +x, v along +z, so it faces −y), of side 2r/3, at 3r from the centre toward
 /// [`MODEL_LIGHT_DIR`].
 pub(crate) fn model_light(bounds: Aabb) -> (DVec3, f64) {
-    let (centre, radius) = sphere(bounds);
+    let (centre, radius) = bounds.bounding_sphere().unwrap_or((DVec3::ZERO, 1.0));
     let dir = DVec3::from(MODEL_LIGHT_DIR).normalize();
     (centre + 3.0 * radius * dir, 2.0 * radius / 3.0)
-}
-
-/// Centre and radius of the bounding sphere of `bounds` (radius 1 when it has no extent).
-fn sphere(bounds: Aabb) -> (DVec3, f64) {
-    let (min, max) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
-    let radius = (max - min).length() / 2.0;
-    let radius = if radius > 0.0 && radius.is_finite() {
-        radius
-    } else {
-        1.0
-    };
-    ((min + max) / 2.0, radius)
 }
 
 /// The TOML text of the scene of the mesh file `file_name` (relative to the scene's folder)
 /// whose bounds are `bounds`, with the file's own cameras and lights when `imports` says so.
 pub(crate) fn model_scene_text(file_name: &str, bounds: Aabb, imports: Imports) -> String {
-    let (position, look_at) = model_camera(bounds);
+    let (position, look_at) = framing_view(bounds);
     let (light, side) = model_light(bounds);
     let file = toml::Value::String(file_name.to_owned());
     let camera = match imports.cameras {
         true => String::new(),
         false => format!(
-            "[camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov = {MODEL_FOV_DEG:?}\n\n",
+            "[camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov = {FRAMING_FOV_DEG:?}\n\n",
             vector(position),
             vector(look_at),
         ),
@@ -238,7 +214,7 @@ mod tests {
 
     #[test]
     fn the_camera_sees_the_bounding_sphere_exactly_fill_the_vertical_fov() {
-        let (position, look_at) = model_camera(unit_box());
+        let (position, look_at) = framing_view(unit_box());
         assert_eq!(look_at, DVec3::ZERO);
         let r = 3f64.sqrt();
         // The sphere's silhouette half-angle asin(r/d) is half the fov.
@@ -264,7 +240,7 @@ mod tests {
     #[test]
     fn a_point_is_framed_as_a_unit_sphere() {
         let point = Aabb::EMPTY.grow(Vec3::new(2.0, 0.0, 0.0));
-        let (position, look_at) = model_camera(point);
+        let (position, look_at) = framing_view(point);
         assert_eq!(look_at, DVec3::new(2.0, 0.0, 0.0));
         let d = (position - look_at).length();
         assert!((d - 1.0 / 20f64.to_radians().sin()).abs() < 1e-9);

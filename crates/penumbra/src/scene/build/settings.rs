@@ -9,7 +9,7 @@ use crate::camera::{Camera, CameraError};
 use crate::camera_path::CameraPath;
 use crate::image_format::OutputFormat;
 use crate::render::{implied_spp, RenderSettings, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
-use crate::sampling::{perfect_square_root, Sampler};
+use crate::sampling::{nearest_squares, perfect_square_root, Sampler};
 use crate::scene::desc::{CameraDesc, Num, StillCameraDesc};
 use crate::scene::error::{ErrorKind, KeyPath};
 
@@ -181,7 +181,8 @@ impl Builder<'_> {
                         self.bad(
                             &path.key("samples"),
                             format!(
-                                "samples must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {s}"
+                                "samples must be a perfect square (1, 4, 9, 16, ...) up to {MAX_SPP}, not {s}{}",
+                                nearest_squares(s, MAX_SPP)
                             ),
                         )
                     })?,
