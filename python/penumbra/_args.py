@@ -86,6 +86,11 @@ def finite(
     return v
 
 
+def gamma(call: str, value: Any) -> Optional[float]:
+    """An 8-bit encoding's gamma: None (the sRGB curve) or a positive finite number."""
+    return None if value is None else finite(call, "gamma", value, positive=True)
+
+
 def size(call: str, name: str, value: Any) -> int:
     """A size in pixels (a width, a height, a longest side): an integer from 1 to
     :data:`U32_MAX`, checked as :func:`integer` checks."""

@@ -56,7 +56,7 @@ def picture(image: Any, gamma: Optional[float] = None, max_side: int = MAX_SIDE)
     if isinstance(image, tuple):
         image = image[0]
     a = _shrink(_rgb(image), _args.size("picture", "max_side", max_side))
-    return Picture(_core.encode_png(a, gamma), a.shape[1], a.shape[0])
+    return Picture(_core.encode_png(a, _args.gamma("picture", gamma)), a.shape[1], a.shape[0])
 
 
 def _shell() -> Any:

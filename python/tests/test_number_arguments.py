@@ -61,7 +61,12 @@ CASES = [
     (lambda s: orbit(center=(0, math.nan, 0)), ValueError, "orbit: center[1] must be a finite number, not nan"),
     (lambda s: orbit(up={0, 1, 2}), TypeError, "orbit: up must be a list, tuple or array"),
     (lambda s: orbit(fov=math.nan), ValueError, "orbit: fov must be a finite number, not nan"),
-    (lambda s: orbit(fov=200), ValueError, "fov must be between 0 and 180 degrees"),
+    (lambda s: orbit(fov=200), ValueError, "Camera: fov must be between 0 and 180 degrees"),
+    (lambda s: penumbra.Camera((0, 0, 1), (0, 0, 0), (0, 1, 0), math.nan), ValueError, "Camera: fov"),
+    (lambda s: penumbra.to_srgb8(IMAGE, gamma="2.2"), TypeError, "to_srgb8: gamma must be a number, not str '2.2'"),
+    (lambda s: penumbra.write_image("x.png", IMAGE, gamma=[2.2]), TypeError, "write_image: gamma must be a number"),
+    (lambda s: penumbra.picture(IMAGE, gamma=math.nan), ValueError, "picture: gamma must be a finite number, not nan"),
+    (lambda s: penumbra.picture(IMAGE, gamma=-1), ValueError, "picture: gamma must be positive, not -1"),
     (lambda s: views.path(s, "turn", frames=[1.0]), TypeError, "path: frames[0] must be an integer, not float 1.0"),
 ]
 
