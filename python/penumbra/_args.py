@@ -72,38 +72,88 @@ def real(call: str, name: str, value: Any) -> float:
     return float(value)
 
 
+def finite(
+    call: str, name: str, value: Any, low: float = -math.inf, positive: bool = False
+) -> float:
+    """:func:`real`, refusing NaN and infinities, values below ``low`` and, with
+    ``positive``, zero and below (each a ``ValueError`` naming the argument)."""
+    v = real(call, name, value)
+    if not math.isfinite(v):
+        raise ValueError(f"{call}: {name} must be a finite number, not {value!r}")
+    if v < low or (positive and v <= 0):
+        least = "positive" if positive else f"at least {low:g}"
+        raise ValueError(f"{call}: {name} must be {least}, not {value!r}")
+    return v
+
+
+def gamma(call: str, value: Any) -> Optional[float]:
+    """An 8-bit encoding's gamma: None (the sRGB curve) or a positive finite number."""
+    return None if value is None else finite(call, "gamma", value, positive=True)
+
+
+def size(call: str, name: str, value: Any) -> int:
+    """A size in pixels (a width, a height, a longest side): an integer from 1 to
+    :data:`U32_MAX`, checked as :func:`integer` checks."""
+    return integer(call, name, value, 1, U32_MAX)
+
+
 def vector(call: str, name: str, value: Any) -> Tuple[float, float, float]:
     """Three real numbers, from an ordered sequence (see :func:`sequence`)."""
     x, y, z = (real(call, f"{name}[{i}]", c) for i, c in enumerate(sequence(call, name, value, 3)))
     return (x, y, z)
 
 
-def first_non_finite(value: Any, key: str = "") -> Optional[Tuple[str, float]]:
-    """The key path (as scene errors spell it: ``objects[2].center[1]``) and value of the
-    first NaN or infinite number in a scene dict, or None."""
+def finite_vector(call: str, name: str, value: Any) -> Tuple[float, float, float]:
+    """:func:`vector`, refusing NaN and infinities as :func:`finite` does."""
+    x, y, z = (finite(call, f"{name}[{i}]", c) for i, c in enumerate(vector(call, name, value)))
+    return (x, y, z)
+
+
+#: How deep a scene dict may nest: far deeper than the scene format's few levels, and far
+#: below Python's recursion limit.
+MAX_DEPTH = 100
+
+
+def scene_dict_problem(
+    value: Any, key: str = "", parents: Tuple[int, ...] = ()
+) -> Optional[Tuple[str, str]]:
+    """The key path (as scene errors spell it: ``objects[2].center[1]``) and what is wrong
+    there, for the first value of a scene dict that JSON cannot hold as it is meant: a NaN or
+    infinite number, a set (it has no order to take a vector from), or a dict or list that
+    contains itself (or nests deeper than :data:`MAX_DEPTH`); None when there is none."""
+    where = key or "the top level"
     if isinstance(value, (float, np.floating)):
-        return None if math.isfinite(value) else (key, float(value))
+        if math.isfinite(value):
+            return None
+        return key, f"{float_name(float(value))} is not a finite number"
     if isinstance(value, np.ndarray):
         if value.dtype.kind in "fc":
             bad = np.argwhere(~np.isfinite(value))
             if len(bad):
                 index = tuple(int(i) for i in bad[0])
-                return key + "".join(f"[{i}]" for i in index), float(value[index].real)
+                at = key + "".join(f"[{i}]" for i in index)
+                return at, f"{float_name(float(value[index].real))} is not a finite number"
             return None
         if value.dtype.kind != "O":
             return None
         value = value.tolist()
-    if isinstance(value, Mapping):
-        for k, v in value.items():
-            found = first_non_finite(v, f"{key}.{k}" if key else str(k))
-            if found:
-                return found
+    if isinstance(value, (set, frozenset)):
+        return where, "a set has no order: give a list or a tuple"
+    if not isinstance(value, (Mapping, list, tuple)):
         return None
-    if isinstance(value, (list, tuple, set, frozenset)):
-        for i, v in enumerate(value):
-            found = first_non_finite(v, f"{key}[{i}]")
-            if found:
-                return found
+    if id(value) in parents:
+        return where, "contains itself (a dict or list that refers to one that holds it)"
+    if len(parents) >= MAX_DEPTH:
+        return where, f"nests deeper than {MAX_DEPTH} levels"
+    inside = parents + (id(value),)
+    if isinstance(value, Mapping):
+        items = ((f"{key}.{k}" if key else str(k), v) for k, v in value.items())
+    else:
+        items = ((f"{key}[{i}]", v) for i, v in enumerate(value))
+    for at, v in items:
+        found = scene_dict_problem(v, at, inside)
+        if found:
+            return found
     return None
 
 

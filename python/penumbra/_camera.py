@@ -35,7 +35,10 @@ class Camera:
         self._look_at = _args.vector("Camera", "look_at", look_at)
         self._up = _args.vector("Camera", "up", up)
         self._fov = _args.real("Camera", "fov", fov)
-        _core.check_camera(self._position, self._look_at, self._up, self._fov)
+        try:
+            _core.check_camera(self._position, self._look_at, self._up, self._fov)
+        except ValueError as e:
+            raise ValueError(f"Camera: {e}") from None
 
     @property
     def position(self) -> Vector:

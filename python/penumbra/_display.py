@@ -10,7 +10,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._image import _rgb
 
 #: The longest side :func:`display` shows; a larger image is shrunk by a whole factor (the
@@ -55,10 +55,8 @@ def picture(image: Any, gamma: Optional[float] = None, max_side: int = MAX_SIDE)
     :meth:`Scene.render`'s ``(image, aovs)``, shrunk to ``max_side`` pixels at most."""
     if isinstance(image, tuple):
         image = image[0]
-    if int(max_side) < 1:
-        raise ValueError(f"max_side must be at least 1, not {max_side}")
-    a = _shrink(_rgb(image), int(max_side))
-    return Picture(_core.encode_png(a, gamma), a.shape[1], a.shape[0])
+    a = _shrink(_rgb(image), _args.size("picture", "max_side", max_side))
+    return Picture(_core.encode_png(a, _args.gamma("picture", gamma)), a.shape[1], a.shape[0])
 
 
 def _shell() -> Any:

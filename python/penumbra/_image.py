@@ -7,7 +7,7 @@ from typing import Optional, Union
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 
 
 def _rgb(array: "np.typing.ArrayLike") -> np.ndarray:
@@ -30,7 +30,7 @@ def write_image(
     Raises ``ValueError`` for an unknown extension or a bad shape, ``OSError`` when the file
     cannot be written.
     """
-    _core.write_image(os.fspath(path), _rgb(array), gamma)
+    _core.write_image(os.fspath(path), _rgb(array), _args.gamma("write_image", gamma))
 
 
 def to_srgb8(array: "np.typing.ArrayLike", gamma: Optional[float] = None) -> np.ndarray:
@@ -42,4 +42,4 @@ def to_srgb8(array: "np.typing.ArrayLike", gamma: Optional[float] = None) -> np.
     >>> to_srgb8(np.array([[[0.0, 0.5, 1.0]]], dtype=np.float32))
     array([[[  0, 188, 255]]], dtype=uint8)
     """
-    return _core.to_srgb8(_rgb(array), gamma)
+    return _core.to_srgb8(_rgb(array), _args.gamma("to_srgb8", gamma))

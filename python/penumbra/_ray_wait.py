@@ -11,7 +11,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import ray
 
-from ._scene import tqdm_class
+from ._scene import progress_bar
 
 
 def gather(
@@ -111,7 +111,4 @@ def _bar(progress: Any, total: int, unit: str) -> Any:
     if progress is not True:
         return None
     # _bar <- gather <- render_frame or render_views <- the caller's line.
-    tqdm = tqdm_class(stacklevel=4)
-    if tqdm is None:
-        return None
-    return tqdm(total=total, unit=unit, desc="penumbra", leave=False)
+    return progress_bar(stacklevel=4, total=total, unit=unit, desc="penumbra", leave=False)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import warnings
 from typing import (
     Any,
@@ -40,16 +41,21 @@ NO_TQDM = (
 )
 
 
-def tqdm_class(stacklevel: int) -> Any:
-    """tqdm's bar class, or None with a warning naming the install command when tqdm is
-    missing (``progress=True`` then shows no bar, and says so). The warning points at the
-    caller ``stacklevel`` frames up from the caller of this function."""
+def progress_bar(stacklevel: int, **options: Any) -> Any:
+    """A tqdm bar (``tqdm.auto``: a widget in a notebook) with ``options``, or None with a
+    warning naming the install command when tqdm is missing (``progress=True`` then shows no
+    bar, and says so; the warning points at the caller ``stacklevel`` frames up from the
+    caller of this function). The bar is drawn on stderr when it is a terminal, and in
+    IPython or a notebook; to a file or a pipe it draws nothing, as tqdm's ``disable=None``
+    does, since there each redraw would be one more line."""
     try:
         from tqdm.auto import tqdm
     except ImportError:
         warnings.warn(NO_TQDM, RuntimeWarning, stacklevel=stacklevel + 1)
         return None
-    return tqdm
+    ipython = sys.modules.get("IPython")
+    shell = ipython is not None and ipython.get_ipython() is not None
+    return tqdm(disable=False if shell else None, **options)
 
 
 class _Bar:
@@ -57,10 +63,9 @@ class _Bar:
     when tqdm is not installed."""
 
     def __init__(self) -> None:
-        tqdm = tqdm_class(stacklevel=3)  # _Bar() <- Scene.render <- the caller's line
-        self._bar = None
-        if tqdm is not None:
-            self._bar = tqdm(total=0, unit="px", unit_scale=True, desc="render", leave=False)
+        # _Bar() <- Scene.render <- the caller's line
+        options = dict(total=0, unit="px", unit_scale=True, desc="render", leave=False)
+        self._bar = progress_bar(stacklevel=3, **options)
 
     def __call__(self, done: int, total: int) -> None:
         if self._bar is not None:
@@ -243,8 +248,10 @@ class Scene:
           film; the result has the region's size and its pixels equal the full image's.
         - ``threads``: worker threads of a pool of the render's own (0: one per core).
           The image does not depend on it.
-        - ``progress``: ``True`` for a tqdm bar on stderr (tqdm is an optional dependency:
-          ``pip install tqdm``; without it, a ``RuntimeWarning`` says so and no bar shows),
+        - ``progress``: ``True`` for a tqdm bar on stderr when it is a terminal, or in a
+          notebook; none to a file or a pipe, where each redraw would be a line (tqdm is an
+          optional dependency: ``pip install tqdm``; without it, a ``RuntimeWarning`` says
+          so and no bar shows),
           or a callable receiving (pixels done, pixels in all), called from this thread, or
           ``"notebook"``: in Jupyter or IPython, render progressively (as with ``passes``)
           and show one image that each pass replaces in place, the final image last.
@@ -397,13 +404,11 @@ def load_dict(
     1
     """
     threads = _args.threads("load_dict", threads)
-    bad = _args.first_non_finite(scene)
-    if bad is not None:
-        # JSON has no NaN or infinity: reported at its key, as a scene file's would be.
-        key, value = bad
-        raise _scene_error(
-            f"<dict>: {key}: {_args.float_name(value)} is not a finite number", key, "bad_value"
-        )
+    problem = _args.scene_dict_problem(scene)
+    if problem is not None:
+        # JSON has no NaN, infinity, set or cycle: reported at its key, as a file's would be.
+        key, what = problem
+        raise _scene_error(f"<dict>: {key}: {what}", key, "bad_value")
     text = json.dumps(_with_placements(scene), indent=1, default=_to_json)
     return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
 
@@ -479,7 +484,7 @@ def _to_json(value: Any) -> Any:
         return value.tolist()
     if isinstance(value, np.generic):
         return value.item()
-    if isinstance(value, (tuple, set, frozenset)):
+    if isinstance(value, tuple):
         return list(value)
     if isinstance(value, os.PathLike):
         return os.fspath(value)

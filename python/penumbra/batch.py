@@ -2,7 +2,7 @@
 
     python -m penumbra.batch JOBS.toml [--address local|auto|HOST:PORT] [--num-cpus N]
                              [--cpus-per-task N] [--force] [--manifest FILE.jsonl]
-                             [--meta] [--coco FILE.json] [--json] [--quiet]
+                             [--no-meta] [--coco FILE.json] [--json] [--quiet]
 
 A jobs file (TOML; relative paths are relative to its folder)::
 
@@ -32,16 +32,20 @@ A jobs file (TOML; relative paths are relative to its folder)::
     frames = 24
     height = 0.5
 
-Views whose image exists already are skipped (``--force`` renders them again). With
-``--manifest FILE.jsonl`` each view's line (task, camera, seed, seconds, peak memory and host
-of its task, outputs, status) is appended to FILE as it ends, as ``penumbra render
---manifest`` writes it. ``--meta`` writes each image's record beside it (``out/a.png`` →
-``out/a.meta.json``, as ``penumbra render --meta``: see :mod:`penumbra.record`), and ``--coco
-FILE.json`` COCO annotations of every view's ``object_id`` AOV at the end (see
-:mod:`penumbra.coco`; needs pycocotools). Each view's
-line (name, image, time) is printed as soon as it is done, skipped views first, so that an
-interrupted batch has told what it finished: on stdout, or with ``--json`` on stderr while
-stdout gets the whole summary as one JSON object at the end. A mistake names its view (its
+Each image gets its record beside it (``out/a.png`` → ``out/a.meta.json``, as ``penumbra
+render --meta`` writes it: see :mod:`penumbra.record`), and a view is skipped when its image
+exists and its record says it was made with exactly the settings it would be rendered with
+now (the scene's digest, penumbra's version, the camera, the render settings, the AOVs, the
+gamma, the format): the rule of ``penumbra render --resume``. An interrupted batch, run
+again, renders what is missing; another scene or other settings writing to the same files
+render them all again. ``--force`` renders every view; ``--no-meta`` writes no records, so
+that every view renders. With ``--manifest FILE.jsonl`` each view's line (task, camera, seed,
+seconds, peak memory and host of its task, outputs, status) is appended to FILE as it ends, as
+``penumbra render --manifest`` writes it. ``--coco FILE.json`` writes COCO annotations of
+every view's ``object_id`` AOV at the end (see :mod:`penumbra.coco`; needs pycocotools).
+Each view's line (name, image, time) is printed as soon as it is done, skipped views first,
+so that an interrupted batch has told what it finished: on stdout, or with ``--json`` on
+stderr while stdout gets the whole summary as one JSON object at the end. A mistake names its view (its
 name, else its place) with its key path in the file (``views[3]``) and the line of its
 ``[[views]]`` table. Exit status: 0 done, 1 a runtime failure (cluster unreachable, a task
 failed, a file not written), 2 a mistake in the jobs file or the scene, 130 interrupted.
@@ -176,7 +180,7 @@ def read_jobs(path: str) -> Dict[str, Any]:
         try:
             orbit = v.orbit(**jobs["orbit"])
         except (TypeError, ValueError) as e:
-            raise JobsError(f"{path}: orbit: {e}") from None
+            raise JobsError(f"{path}: {e}") from None  # "orbit: radius must be ..."
     specs += from_file + orbit
     if not specs:
         raise JobsError(f"{path}: no views (give [[views]], views_file or [orbit])")
@@ -217,7 +221,7 @@ def view_line(r: Dict[str, Any]) -> str:
     if r.get("error"):
         how = f"failed: {r['error']}"
     elif r["skipped"]:
-        how = "skipped (exists)"
+        how = "skipped (done before: its record matches)"
     else:
         how = f"{r['seconds']:.2f} s, {r['rays_per_second'] / 1e6:.1f} Mrays/s"
     return f"{r['name']}\t{r['path']}\t{how}"
@@ -276,7 +280,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     )
     parser.add_argument("--num-cpus", type=int, help="CPUs of a local instance (default: all)")
     parser.add_argument("--cpus-per-task", type=float, help="CPUs (threads) per view")
-    parser.add_argument("--force", action="store_true", help="render views whose image exists")
+    parser.add_argument(
+        "--force", action="store_true", help="render every view, even those done before"
+    )
     parser.add_argument(
         "--json",
         action="store_true",
@@ -292,8 +298,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     )
     parser.add_argument(
         "--meta",
-        action="store_true",
-        help="write each image's record beside it (OUT.meta.json), as `penumbra render --meta`",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="write each image's record beside it (OUT.meta.json), as `penumbra render --meta` "
+        "does, and skip the views whose record matches (the default); --no-meta writes none "
+        "and renders every view",
     )
     parser.add_argument(
         "--coco",

@@ -33,7 +33,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._camera import Camera
 
 #: The id of pixels that show no object.
@@ -103,19 +103,21 @@ def amodal_areas(
     (:meth:`penumbra.Scene.raycasting_scene`). With ``object_id`` (the image's id AOV) its
     visible pixels count too, so that an amodal area is never less than the visible one
     where ray casting and rendering disagree at a silhouette's edge."""
+    width = _args.size("amodal_areas", "width", width)
+    height = _args.size("amodal_areas", "height", height)
     if not isinstance(camera, Camera):
         camera = scene.camera(camera)
-    rays = _core.camera_rays(*camera._args(), int(width), int(height))
-    pixels = int(width) * int(height)
+    rays = _core.camera_rays(*camera._args(), width, height)
+    pixels = width * height
     hits = scene.raycasting_scene().list_intersections(rays.reshape(-1, 6))
     keys = np.asarray(hits["geometry_ids"], np.int64) * pixels + np.asarray(
         hits["ray_ids"], np.int64
     )
     if object_id is not None:
         ids = _ids(object_id)
-        if ids.shape != (int(height), int(width)):
+        if ids.shape != (height, width):
             raise ValueError(
-                f"object_id has shape {ids.shape}, not the image's ({int(height)}, {int(width)})"
+                f"object_id has shape {ids.shape}, not the image's ({height}, {width})"
             )
         flat = ids.reshape(-1)
         seen = np.nonzero(flat != NO_ID)[0]

@@ -14,8 +14,9 @@ the package does not import it.
 - **Threads.** A task renders with as many threads as CPUs Ray gave it (``num_cpus``, 1 by
   default), never more, so workers do not oversubscribe their node.
 - **Faults.** A task whose worker dies is retried by Ray (up to :data:`MAX_RETRIES` times)
-  and gives the same bytes. Images are written by the driver, atomically; a view whose image
-  exists is skipped unless ``force``. Ctrl-C cancels the outstanding tasks.
+  and gives the same bytes. Images are written by the driver, atomically, each with its
+  record; a view whose image and record (the settings it was made with) match what it would
+  render now is skipped unless ``force``. Ctrl-C cancels the outstanding tasks.
 
 Call ``ray.init(...)`` first (or let :func:`connect` do it).
 """
@@ -27,11 +28,12 @@ from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Seque
 import numpy as np
 import ray
 
+from . import _args
 from ._cluster import check_num_cpus, connect
 from ._ray_tasks import CACHED_WORLDS, MAX_RETRIES, render_task, ship
 from ._ray_wait import gather
 from ._scene import Scene
-from ._view_files import complete, write_view
+from ._view_files import done, write_view
 from .record import record
 from .views import (
     RENDER_KEYS,
@@ -73,13 +75,14 @@ def tile_regions(
     """The regions ``(x0, x1, y0, y1)`` of ``tiles``: an int n gives n horizontal bands of
     (nearly) equal height, ``(columns, rows)`` a grid. Tiles are never empty: there are at
     most as many bands as rows and columns as pixels."""
-    cols, rows = (1, tiles) if isinstance(tiles, int) else tiles
-    cols, rows = int(cols), int(rows)
-    if cols < 1 or rows < 1:
-        raise ValueError(f"tiles must be at least 1, not {tiles!r}")
-    for name, side in (("width", width), ("height", height)):
-        if side < 1:
-            raise ValueError(f"{name} must be at least 1 pixel, not {side}")
+    call = "tile_regions"
+    width, height = _args.size(call, "width", width), _args.size(call, "height", height)
+    if hasattr(tiles, "__len__") and not isinstance(tiles, (str, bytes)):
+        cols, rows = _args.sequence(call, "tiles (columns, rows)", tiles, 2)
+        cols = _args.size(call, "tiles' columns", cols)
+        rows = _args.size(call, "tiles' rows", rows)
+    else:
+        cols, rows = 1, _args.size(call, "tiles", tiles)
     cols, rows = min(cols, width), min(rows, height)
     xs = [width * i // cols for i in range(cols + 1)]
     ys = [height * j // rows for j in range(rows + 1)]
@@ -164,7 +167,7 @@ def render_views(
     progress: Any = None,
     on_view: Optional[Callable[[Dict[str, Any]], Any]] = None,
     keep_going: bool = False,
-    meta: bool = False,
+    meta: bool = True,
 ) -> List[Dict[str, Any]]:
     """Render every view (see :mod:`penumbra.views`: camera names, :class:`penumbra.Camera`
     objects, view dicts, :func:`penumbra.views.orbit`) as one task each and write its image to
@@ -172,14 +175,20 @@ def render_views(
     extension, written atomically by this process; AOVs beside it as ``.aovs.npz``). The
     keyword settings are defaults for views that do not set their own.
 
-    With ``meta``, each image gets its record beside it (``out/front.png`` →
-    ``out/front.meta.json``, see :mod:`penumbra.record`): the layout of ``penumbra render
-    --meta``, with K, the poses, the object ids' entries and the scene's digest; it is
-    renamed into place right after the image, and the old one removed before.
+    Each image gets its record beside it (``out/front.png`` → ``out/front.meta.json``, see
+    :mod:`penumbra.record`): the layout of ``penumbra render --meta``, with K, the poses, the
+    object ids' entries, the scene's digest and the resolved settings; it is renamed into
+    place right after the image, and the old one removed before.
 
-    A view whose image exists already (with its AOVs, and its record with ``meta``) is
-    skipped (not rendered again) unless ``force``: an interrupted batch, run again, does only
-    what is missing. Returns one dict per view, in
+    A view is skipped (not rendered again) when its image exists (with its AOVs) and its
+    record says it was made with exactly the settings it would be rendered with now: the
+    scene's digest (its text and every file it read), penumbra's version, the camera (its
+    pose to the bit), the render settings, the AOVs, the gamma and the format. That is the
+    rule of ``penumbra render --resume``: an interrupted batch, run again, does only what is
+    missing, and a batch of another scene or other settings writing to the same files
+    renders them all again. ``force`` renders every view; ``meta=False`` writes no records
+    (and removes old ones), so nothing is known to be done and every view renders. Returns
+    one dict per view, in
     order: ``name``, ``path``, ``skipped``, and for rendered views ``seconds`` (the render's),
     ``rays_per_second``, ``node`` (Ray node id), ``host``, ``peak_memory_bytes`` (the task's
     process's), ``pid`` and ``built`` (whether that task built
@@ -202,10 +211,19 @@ def render_views(
     summary: List[Dict[str, Any]] = [
         {"name": v["name"], "path": p, "skipped": True} for v, p in zip(batch, paths)
     ]
+    records: Dict[int, Dict[str, Any]] = {}
+    if meta:
+        # Made before any task starts: a view the record cannot describe fails now.
+        scene_digest = scene.scene_digest
+        for i, (v, p) in enumerate(zip(batch, paths)):
+            try:
+                records[i] = record(scene, v, p, scene_digest=scene_digest)
+            except ValueError as e:
+                raise ViewError(i, v["name"], str(e)) from None
     todo = [
         i
         for i, (v, p) in enumerate(zip(batch, paths))
-        if force or not complete(p, bool(v["aovs"]), meta)
+        if force or not meta or not done(p, bool(v["aovs"]), records[i]["settings"])
     ]
     if on_view is not None:
         skipped = set(range(len(batch))) - set(todo)
@@ -213,15 +231,6 @@ def render_views(
             on_view(summary[i])
     if not todo:
         return summary
-    records: Dict[int, Dict[str, Any]] = {}
-    if meta:
-        # Made before any task starts: a view the record cannot describe fails now.
-        scene_digest = scene.scene_digest
-        for i in todo:
-            try:
-                records[i] = record(scene, batch[i], paths[i], scene_digest=scene_digest)
-            except ValueError as e:
-                raise ViewError(i, batch[i]["name"], str(e)) from None
     digest, boxed = ship(scene)
     task = render_task.options(num_cpus=num_cpus, scheduling_strategy="SPREAD")
     refs = []

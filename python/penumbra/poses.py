@@ -20,7 +20,7 @@ from typing import Any, Dict, List, Mapping, Sequence, Union
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._camera import Camera
 from .views import output_path, views as normalized
 
@@ -33,8 +33,10 @@ def camera_pose(camera: Camera, width: int, height: int) -> Dict[str, np.ndarray
     (4×4, float64) of ``camera`` on a ``width`` × ``height`` film."""
     if not isinstance(camera, Camera):
         raise TypeError(f"camera_pose takes a penumbra.Camera, not {type(camera).__name__}")
+    width = _args.size("camera_pose", "width", width)
+    height = _args.size("camera_pose", "height", height)
     k, c2w, gl, w2c = _core.camera_pose(
-        camera.position, camera.look_at, camera.up, camera.fov, int(width), int(height)
+        camera.position, camera.look_at, camera.up, camera.fov, width, height
     )
     return {
         "K": np.array(k),
@@ -56,6 +58,8 @@ def poses(
     name), ``file`` (``output`` formatted as :func:`penumbra.views.output_path` does),
     ``width``, ``height`` (the view's own, else these), ``fov``, ``K`` and the poses as lists
     of rows, and the camera's ``position``, ``look_at`` and ``up``."""
+    width = _args.size("poses", "width", width)
+    height = _args.size("poses", "height", height)
     frames = []
     for i, v in enumerate(normalized(specs)):
         camera = v["camera"]

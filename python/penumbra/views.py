@@ -30,8 +30,9 @@ import numbers
 import os
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
-from . import _core
+from . import _args, _core
 from ._camera import Camera
+from ._pose_views import pose_views
 
 #: Keys a view may have.
 VIEW_KEYS = (
@@ -190,19 +191,21 @@ def orbit(
     ``settings`` (spp, seed, width, ...) go into every view; ``name`` is formatted with
     ``index``."""
     # Checked before anything is made: a typo of 1e8 frames fails at once, in no memory.
-    if not _is_int(frames) or not 1 <= frames <= MAX_FRAMES:
-        raise ValueError(
-            f"an orbit's frames must be a whole number from 1 to {MAX_FRAMES}, not {frames!r}"
-        )
-    if not radius > 0:
-        raise ValueError(f"an orbit's radius must be positive, not {radius}")
+    call = "orbit"
+    frames = _args.integer(call, "frames", frames, 1, MAX_FRAMES)
+    center = _args.finite_vector(call, "center", center)
+    radius = _args.finite(call, "radius", radius, positive=True)
+    height = _args.finite(call, "height", height)
+    fov = _args.finite(call, "fov", fov)
+    start_degrees = _args.finite(call, "start_degrees", start_degrees)
+    up = _args.finite_vector(call, "up", up)
     axis = [i for i, c in enumerate(up) if c != 0]
     if len(axis) != 1:
-        raise ValueError(f"an orbit's up must be an axis such as (0, 1, 0), not {tuple(up)}")
+        raise ValueError(f"orbit: up must be an axis such as (0, 1, 0), not {up}")
     try:
         name.format(index=0)
     except (AttributeError, IndexError, KeyError, ValueError) as e:
-        raise ValueError(f"an orbit's name {name!r} is a pattern of {{index}} only: {e}") from None
+        raise ValueError(f"orbit: name {name!r} is a pattern of {{index}} only: {e}") from None
     a = axis[0]
     sign = 1.0 if up[a] > 0 else -1.0
     # The circle's plane: the two other axes, in right-handed order (for y up: z, then x),
@@ -245,6 +248,10 @@ def path(
             f"{', '.join(scene.cameras)})"
         )
     picked = list(cameras) if frames is None else list(frames)
+    picked = [
+        _args.integer("path", f"frames[{i}]", f, -(2**63), 2**63 - 1)
+        for i, f in enumerate(picked)
+    ]
     for f in picked:
         if f not in cameras:
             first, last = min(cameras), max(cameras)
@@ -257,16 +264,24 @@ def path(
 
 def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
     """The views of a JSON file: a list of view objects (see the module's docs), such as
-    ``[{"name": "a", "position": [0, 1, 5], "look_at": [0, 1, 0], "fov": 40}, ...]``."""
+    ``[{"name": "a", "position": [0, 1, 5], "look_at": [0, 1, 0], "fov": 40}, ...]``, or
+    a poses file as ``penumbra render --poses`` (or :func:`penumbra.poses.write_poses`)
+    writes it, in penumbra's layout or NeRF's ``transforms.json``: one view per frame, of its
+    camera and its size, named by its image's file name without the extension
+    (``out/front.png`` gives ``front``), so that a batch renders the same images again."""
+    where = os.fspath(path)
     with open(path, encoding="utf-8") as f:
         try:
             data = json.load(f)
         except json.JSONDecodeError as e:
-            raise ValueError(
-                f"{os.fspath(path)}: line {e.lineno}, column {e.colno}: {e.msg}"
-            ) from None
+            raise ValueError(f"{where}: line {e.lineno}, column {e.colno}: {e.msg}") from None
+    if isinstance(data, dict) and "frames" in data:
+        return pose_views(data, where)
     if not isinstance(data, list):
-        raise ValueError(f"{os.fspath(path)}: expected a list of views")
+        raise ValueError(
+            f"{where}: expected a list of views or a poses file (an object with frames, as "
+            f"`penumbra render --poses` writes)"
+        )
     return [dict(v) if isinstance(v, dict) else v for v in data]
 
 

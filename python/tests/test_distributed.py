@@ -5,6 +5,7 @@ worker killed mid-batch changes nothing; a second run skips what is done."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import sys
@@ -65,6 +66,21 @@ def test_progress_true_without_tqdm_warns_how_to_install_it(cluster, monkeypatch
     with pytest.warns(RuntimeWarning, match="pip install tqdm") as caught:
         image = distributed.render_frame(scene, tiles=2, width=8, height=6, progress=True)
     assert image.shape == (6, 8, 3) and caught[0].filename == __file__
+
+
+def test_tiles_and_connect_take_whole_numbers_naming_the_argument():
+    # Issue 63, class 6: int(2.5) made 2 tiles; NaN failed inside int().
+    for tiles, error in [(2.5, TypeError), ((2, math.nan), TypeError), ({1, 2}, TypeError),
+                         (0, ValueError), ((3, -1), ValueError)]:
+        with pytest.raises(error, match="tile_regions: tiles"):
+            distributed.tile_regions(8, 6, tiles)
+    with pytest.raises(TypeError, match="tile_regions: width must be an integer, not float 8.0"):
+        distributed.tile_regions(8.0, 6, 2)
+    assert distributed.tile_regions(np.int64(8), 6, (np.int32(2), 1)) == [(0, 4, 0, 6), (4, 8, 0, 6)]
+    with pytest.raises(TypeError, match="connect: num_cpus must be an integer, not float 2.5"):
+        distributed.connect("local", num_cpus=2.5)
+    with pytest.raises(ValueError, match="connect: timeout must be a finite number, not nan"):
+        distributed.connect("auto", timeout=math.nan)
 
 
 def test_tiles_cover_the_frame_once():
@@ -141,6 +157,43 @@ def test_a_second_run_skips_complete_views_and_force_renders_them(cluster, tmp_p
     assert not any(r["skipped"] for r in third)
 
 
+def test_a_view_is_done_only_when_its_record_says_it_was_made_so(cluster, tmp_path):
+    # The rule of `penumbra render --resume`: the image there and its record's settings
+    # those of the render it would be now; anything else renders the view again.
+    room = penumbra.load(SCENES / "cornell.toml")
+    warm = penumbra.load(SCENES / "cornell_warm.toml")
+    batch = ["front", {"name": "hi", "camera": "high", "aovs": ["depth"]}]
+    kw = dict(output=str(tmp_path / "{name}.png"), width=16, height=12, spp=1)
+
+    def skipped(scene, **change):
+        return [r["skipped"] for r in distributed.render_views(scene, batch, **{**kw, **change})]
+
+    assert skipped(room) == [False, False]
+    assert skipped(room) == [True, True]
+    # Another scene into the same files (issue 62): both render again, and the images are its.
+    assert skipped(warm) == [False, False]
+    penumbra.write_image(tmp_path / "expected.png", warm.render(camera="front", width=16,
+                                                                height=12, spp=1))
+    assert (tmp_path / "front.png").read_bytes() == (tmp_path / "expected.png").read_bytes()
+    assert skipped(warm) == [True, True]
+    # Other settings, and another camera under the same name.
+    assert skipped(warm, spp=4) == [False, False]
+    assert skipped(warm, spp=4, seed=9) == [False, False]
+    moved = [{"name": "front", "camera": "left"}, batch[1]]
+    assert [r["skipped"] for r in distributed.render_views(
+        warm, moved, **{**kw, "spp": 4, "seed": 9})] == [False, True]
+    # A record that is unreadable, or an AOV file that is missing: that view alone.
+    (tmp_path / "front.meta.json").write_text("{")
+    (tmp_path / "hi.aovs.npz").unlink()
+    batch[0] = moved[0]
+    assert skipped(warm, spp=4, seed=9) == [False, False]
+    assert skipped(warm, spp=4, seed=9) == [True, True]
+    # Without records nothing is known to be done, and no old record is left behind.
+    assert skipped(warm, spp=4, seed=9, meta=False) == [False, False]
+    assert not list(tmp_path.glob("*.meta.json"))
+    assert skipped(warm, spp=4, seed=9) == [False, False]
+
+
 def running_task_pids(title: str) -> list:
     """Processes whose title Ray set to ``ray::TITLE``: workers running that task now."""
     pids = []
@@ -191,9 +244,10 @@ def test_a_worker_killed_mid_batch_changes_nothing(cluster, tmp_path):
         expected = tmp_path / "expected.png"
         penumbra.write_image(expected, local)
         assert Path(r["path"]).read_bytes() == expected.read_bytes(), r["name"]
-    # Every image whole, and nothing else (no temporary file) in the folder.
+    # Every image whole with its record, and nothing else (no temporary file) in the folder.
     names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == sorted([f"{v['name']}.png" for v in batch] + ["expected.png"])
+    written = [f"{v['name']}{ext}" for v in batch for ext in (".png", ".meta.json")]
+    assert names == sorted(written + ["expected.png"])
 
 
 def test_every_public_name_is_documented():
@@ -273,15 +327,17 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
     batch = [{"name": "hi", "camera": "high", "aovs": ["depth"]}]
     distributed.render_views(scene, batch, output=out, width=16, height=12)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    assert sorted(before) == ["hi.aovs.npz", "hi.png"]
+    assert sorted(before) == ["hi.aovs.npz", "hi.meta.json", "hi.png"]
 
     def full_disk(path, image, gamma=None):
         raise OSError(28, "No space left on device", str(path))
 
     # The disk fills while the image is written, after its AOVs: nothing changes.
     monkeypatch.setattr(_view_files, "write_image", full_disk)
-    with pytest.raises(OSError, match="No space left"):
+    with pytest.raises(OSError, match="No space left") as info:
         distributed.render_views(scene, batch, output=out, width=8, height=6, force=True)
+    # Named as the image asked for, not its temporary file (issue 63, class 7).
+    assert str(tmp_path / "hi.png") in str(info.value) and ".tmp-" not in str(info.value)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
     # A new view: neither file, and no temporary file.
     with pytest.raises(OSError, match="No space left"):

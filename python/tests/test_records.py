@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import shutil
 
+import numpy as np
 import pytest
 
 import penumbra
@@ -112,3 +113,21 @@ def test_a_record_holds_the_pose_of_each_kind_of_view(tmp_path):
         record.record(scene, "front", "out.bmp")
     with pytest.raises(ValueError, match="unknown camera 'nowhere'"):
         record.record(scene, "nowhere", "out.png")
+
+
+def test_a_view_that_cannot_be_written_names_its_image_not_a_temporary_file(tmp_path):
+    # Issue 63, class 7: the message named `.a.png.tmp-22127-0.png`.
+    from penumbra._view_files import write_view
+
+    wide = np.zeros((1, 70_000, 3), np.float32)  # beyond JPEG's 65535 pixels a side
+    image = tmp_path / "a.jpg"
+    with pytest.raises(ValueError) as info:
+        write_view(str(image), wide, {"depth": np.zeros((1, 70_000), np.float32)})
+    assert str(image) in str(info.value) and ".tmp-" not in str(info.value), str(info.value)
+    # An image whose place is taken by a folder: the rename names the image.
+    (tmp_path / "b.png").mkdir()
+    with pytest.raises(OSError) as info:
+        write_view(str(tmp_path / "b.png"), np.zeros((2, 2, 3), np.float32), {})
+    assert str(tmp_path / "b.png") in str(info.value) and ".tmp-" not in str(info.value)
+    # Nothing is left behind: no temporary file, no AOV file without its image.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.png"]

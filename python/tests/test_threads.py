@@ -3,11 +3,13 @@ about 0.1 s of Ctrl-C, and report progress on the calling thread."""
 
 from __future__ import annotations
 
+import io
 import os
 import signal
 import sys
 import threading
 import time
+import types
 import _thread
 
 import numpy as np
@@ -106,11 +108,33 @@ def test_an_exception_in_the_progress_callable_stops_the_render(cornell):
     assert time.perf_counter() - start < 5
 
 
-def test_progress_true_shows_a_tqdm_bar(cornell, capsys):
+class Terminal(io.StringIO):
+    """Standard error as a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_true_shows_a_tqdm_bar_on_a_terminal_only(cornell, capsys, monkeypatch):
     pytest.importorskip("tqdm")
+    # To a file or a pipe (pytest's capture): nothing, not one line per redraw.
     image = cornell.render(width=64, height=64, spp=4, progress=True)
     assert image.shape == (64, 64, 3)
-    assert "px" in capsys.readouterr().err
+    assert capsys.readouterr().err == ""
+    terminal = Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    cornell.render(width=64, height=64, spp=4, progress=True)
+    assert "render:" in terminal.getvalue() and "px" in terminal.getvalue()
+
+
+def test_progress_true_shows_a_bar_in_ipython_whatever_its_stderr(cornell, capsys, monkeypatch):
+    # A kernel's stderr is no terminal, and its front end draws tqdm's redraws in place.
+    pytest.importorskip("tqdm")
+    shell = types.ModuleType("IPython")
+    shell.get_ipython = lambda: object()
+    monkeypatch.setitem(sys.modules, "IPython", shell)
+    cornell.render(width=16, height=16, spp=1, progress=True)
+    assert "render:" in capsys.readouterr().err
 
 
 def test_progress_true_without_tqdm_warns_how_to_install_it(cornell, monkeypatch):
