@@ -56,6 +56,8 @@ mod run;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_behind;
+#[cfg(test)]
 mod tests_border;
 #[cfg(test)]
 mod tests_edges;
