@@ -60,6 +60,8 @@ mod tests_behind;
 #[cfg(test)]
 mod tests_border;
 #[cfg(test)]
+mod tests_coincident;
+#[cfg(test)]
 mod tests_edges;
 #[cfg(test)]
 mod tests_instances;
