@@ -166,7 +166,7 @@ class RaycastingScene:
     ``.isfinite()``, ``.isinf()`` and ``.isnan()``.
     """
 
-    __slots__ = ("_core", "_world")
+    __slots__ = ("_core", "_world", "_objects")
 
     #: The geometry and primitive id of a miss: 4294967295.
     INVALID_ID: int = _core.INVALID_ID
@@ -174,14 +174,17 @@ class RaycastingScene:
     def __init__(self, nthreads: int = 0) -> None:
         self._core = _core.CoreRaycastingScene(_threads(nthreads, "RaycastingScene"))
         self._world: Any = None
+        self._objects = 0
 
     @classmethod
     def _wrap(cls, core: "_core.CoreRaycastingScene", world: Any = None) -> "RaycastingScene":
         """A scene around ``core``; ``world``, the core of the :class:`penumbra.Scene` it was
-        made from (``Scene.raycasting_scene()``), answers ``cast_rays``' ``attributes``."""
+        made from (``Scene.raycasting_scene()``), answers ``cast_rays``' ``attributes`` for
+        the geometries ``core`` has now, the world's objects (those added later are none)."""
         scene = cls.__new__(cls)
         scene._core = core
         scene._world = world
+        scene._objects = core.geometry_count if world is not None else 0
         return scene
 
     def __repr__(self) -> str:
@@ -271,7 +274,9 @@ class RaycastingScene:
         reflectance k_d times the texture and vertex colour; ``shading_normal`` (..., 3), the
         interpolated vertex normal of a smooth triangle, else the geometric one, as the mesh
         orients it; ``uv`` (..., 2), the texture coordinates; ``object_id`` (...) uint32, the
-        object's id (``geometry_ids``). All zero (``INVALID_ID``) on a miss."""
+        object's id (``geometry_ids``). All zero (``INVALID_ID``) on a miss, and on a geometry
+        added after ``raycasting_scene()`` (``add_triangles``, ``add_instance``), which is no
+        object of the scene."""
         call = "cast_rays"
         wanted = _attributes(call, attributes, self._world)
         r, lead = _rows(rays, 6, call, "rays")
@@ -280,6 +285,8 @@ class RaycastingScene:
         hits = self._core.cast_rays(r, _threads(nthreads, call), row_length, near, far)
         if wanted:
             g, p = hits["geometry_ids"], hits["primitive_ids"]
+            # The scene's objects are its first geometries; the rest have no object.
+            g = np.where(g < self._objects, g, np.uint32(INVALID_ID)).astype(np.uint32)
             found = {"object_id": g}
             if set(wanted) - {"object_id"}:  # the surface's own, looked up in the scene
                 found.update(self._world.surface_attributes(

@@ -93,3 +93,43 @@ def test_attributes_need_a_loaded_scene_and_known_names():
     # Without attributes, the same dict as before.
     assert set(plain.cast_rays(rays)) == {
         "t_hit", "geometry_ids", "primitive_ids", "primitive_uvs", "primitive_normals"}
+
+
+def test_geometry_added_later_has_no_object_id_nor_surface():
+    # A quad as object 0; then a triangle and a placed copy of the quad added to the
+    # ray-casting scene: their geometry ids are no object's, so object_id is INVALID_ID and
+    # the surface's attributes are zero, as on a miss.
+    scene = penumbra.loads(
+        """
+[film]
+width = 8
+height = 8
+[camera]
+position = [0.5, 0.5, 3]
+look_at = [0.5, 0.5, 0]
+fov = 30
+[[lights]]
+type = "point"
+position = [0, 0, 3]
+[[objects]]
+type = "quad"
+corner = [0, 0, 0]
+u = [1, 0, 0]
+v = [0, 1, 0]
+"""
+    )
+    rc = scene.raycasting_scene()
+    assert rc.add_triangles(np.array([[2, 0, 0], [3, 0, 0], [2, 1, 0]], np.float32),
+                            np.array([[0, 1, 2]], np.uint32)) == 1
+    shift = np.eye(4)
+    shift[0, 3] = 4
+    assert rc.add_instance(0, shift) == 2
+    rays = np.array([[x, 0.25, 1, 0, 0, -1] for x in (0.25, 2.25, 4.25, 9.0)], np.float32)
+    hits = rc.cast_rays(rays, attributes=("object_id", "albedo", "uv", "shading_normal"))
+    invalid = penumbra.RaycastingScene.INVALID_ID
+    assert hits["geometry_ids"].numpy().tolist() == [0, 1, 2, invalid]
+    assert hits["object_id"].numpy().tolist() == [0, invalid, invalid, invalid]
+    assert hits["object_id"].numpy().dtype == np.uint32
+    assert (hits["albedo"].numpy()[0] > 0).all()
+    for name in ("albedo", "uv", "shading_normal"):
+        assert (hits[name].numpy()[1:] == 0).all(), name

@@ -6,7 +6,7 @@
 //! instructions when they are inlined into a kernel that `crate::simd` compiles per
 //! instruction set.
 
-use super::wide::tie_bound;
+use super::wide::{raised, tie_bound};
 use crate::simd::{max, min, Isa};
 
 /// Lane `i` of `v` by axis.
@@ -18,8 +18,8 @@ pub(crate) fn lane<const N: usize>(v: &[[f32; N]; 3], i: usize) -> [f32; 3] {
 /// The lanes (bit `i` for lane `i`) whose ray enters a box with `t` in `[t_min, t_max[i]]`,
 /// and each lane's entry distance (at least `t_min`). `rel(a, i)` is the box's smallest and
 /// largest coordinates along axis `a` less lane `i`'s origin, `inv` the rays' reciprocal
-/// directions; the exit distance is scaled by `exit_scale` (ray casting's `1 + 2γ₃`, Ize
-/// 2013; the renderer passes 1, a multiply the compiler removes).
+/// directions; the exit distance is raised by the margin `exit_scale` ([`raised`]: ray
+/// casting's `1 + 2γ₃`, Ize 2013; the renderer passes 1, which the compiler removes).
 ///
 /// The bound `t_max[i]` is widened by [`tie_bound`], as ray casting widens it: a box whose
 /// computed entry is a few ulps past a lane's closest hit may still hold a triangle at
@@ -51,7 +51,7 @@ pub(crate) fn slab<const N: usize, I: Isa>(
         let [(x0, x1), (y0, y1), (z0, z1)] = t;
         let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), t_min);
         let far = min(
-            min(min(max(x0, x1), max(y0, y1)), max(z0, z1)) * exit_scale,
+            raised(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), exit_scale),
             tie_bound(t_max[i]),
         );
         inside[i] = -((near <= far) as i32);

@@ -9,7 +9,7 @@ use std::ops::Range;
 
 use glam::Vec3A;
 
-use super::wide::tie_bound;
+use super::wide::{raised, tie_bound};
 use super::{Bvh, BvhNode, STACK_SIZE};
 use crate::geometry::Hit;
 use crate::math::Ray;
@@ -238,8 +238,9 @@ pub(super) fn slab(
     slab_scaled(node, origin, inv_dir, (t_min, t_max), 1.0)
 }
 
-/// [`slab`] with the box's exit distance scaled by `exit_scale`: ray casting's top level
-/// passes `wide::EXIT_SCALE` (Ize's conservative test, as its wide nodes do), the renderer 1.
+/// [`slab`] with the box's exit distance raised by the margin `exit_scale` ([`raised`]): ray
+/// casting's top level passes `wide::EXIT_SCALE` (Ize's conservative test, as its wide nodes
+/// do), the renderer 1.
 #[inline(always)]
 pub(super) fn slab_scaled(
     node: &BvhNode,
@@ -254,7 +255,7 @@ pub(super) fn slab_scaled(
     let t0 = (Vec3A::from(node.min) - origin) * inv_dir;
     let t1 = (Vec3A::from(node.max) - origin) * inv_dir;
     let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element() * exit_scale;
+    let far = raised(t0.max(t1).min_element(), exit_scale);
     let near = if near > t_min { near } else { t_min };
     // Widened as `lanes::slab` widens it, so that a box holding a tie is visited in any order.
     let t_max = tie_bound(t_max);

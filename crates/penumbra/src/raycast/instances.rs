@@ -41,14 +41,9 @@ impl RaycastingScene {
     /// (the closest-point queries ignore alpha; see the module doc).
     pub fn from_world(world: &World) -> Result<RaycastingScene, RaycastError> {
         let own = world.geometry();
-        let objects = own
-            .triangles
-            .iter()
-            .map(|t| t.object)
-            .chain(world.placed().iter().map(|p| p.object))
-            .map(|o| o + 1)
-            .max()
-            .unwrap_or(0);
+        // Every object is a geometry, those without triangles too (an empty mesh), so that
+        // the ids of geometries added later are no object's.
+        let objects = world.stats().objects as u32;
         let local_ids = local_ids(own, objects);
         let mut all = Triangles {
             geometry: Geometry {

@@ -56,7 +56,11 @@ mod run;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_behind;
+#[cfg(test)]
 mod tests_border;
+#[cfg(test)]
+mod tests_coincident;
 #[cfg(test)]
 mod tests_edges;
 #[cfg(test)]

@@ -326,3 +326,32 @@ fn a_transform_is_read_by_rows() {
     let t = checked_transform(&rows).unwrap();
     assert_eq!(t.point(Vec3::new(1.0, 1.0, 1.0)), Vec3::new(6.0, 8.0, 6.0));
 }
+
+#[test]
+fn geometries_added_to_a_world_are_numbered_after_all_its_objects() {
+    // Objects 1 and 3 have no triangles (empty meshes), 3 the last one: every object is a
+    // geometry, so the ids of geometries added later name no object (Python's `object_id`
+    // attribute tells them apart by that).
+    let mut b = WorldBuilder::new();
+    let tri = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]];
+    let moved = tri.map(|p| [p[0], p[1], p[2] - 2.0]);
+    for (vertices, triangles) in [(&tri, 1), (&tri, 0), (&moved, 1), (&tri, 0)] {
+        let indices = &[[0, 1, 2]][..triangles];
+        b.add_triangles(vertices, indices, 0).unwrap();
+    }
+    let world = b.build(1);
+    assert_eq!(world.stats().objects, 4);
+    let mut s = RaycastingScene::from_world(&world).unwrap();
+    assert_eq!(s.geometry_count(), 4);
+    let down = |z: f32| [0.0, 0.0, z, 0.0, 0.0, -1.0];
+    let cast = s.cast_rays(&[down(1.0), down(-1.0)], &on(1)).unwrap();
+    assert_eq!(cast.geometry_ids, [0, 2]);
+    let further = tri.map(|p| [p[0], p[1], p[2] - 4.0]);
+    assert_eq!(s.add_triangles(&further, &[[0, 1, 2]]), Ok(4));
+    let below = Transform::from_matrix(Mat4::from_translation(Vec3::new(0.0, 0.0, -6.0)));
+    assert_eq!(s.add_instance(0, &rows(&below)), Ok(5));
+    let rays = [down(1.0), down(-1.0), down(-3.0), down(-5.0)];
+    let cast = s.cast_rays(&rays, &on(1)).unwrap();
+    assert_eq!(cast.geometry_ids, [0, 2, 4, 5]);
+    assert_eq!(cast.t_hit, [1.0; 4]);
+}

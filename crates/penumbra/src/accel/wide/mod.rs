@@ -30,4 +30,4 @@ pub(crate) mod turns;
 #[cfg(test)]
 mod turns_tests;
 
-pub(crate) use tree::{tie_bound, WideBvh};
+pub(crate) use tree::{raised, tie_bound, WideBvh};

@@ -16,6 +16,7 @@
 //! the binary one (see `tree`) and every query visits a superset of the triangles it must
 //! see.
 
+use super::tree::raised;
 use crate::accel::BvhNode;
 use crate::simd::{max, min, Isa};
 
@@ -83,7 +84,7 @@ impl WideNode {
     /// with `t` in `[t_min, t_max]`, and each child's entry distance (at least `t_min`).
     ///
     /// Per lane this is the conservative slab test of Ize (2013), on padded boxes: the exit
-    /// distance is scaled by `exit_scale` (`1 + 2γ₃`). The lanes are plain loops over
+    /// distance is raised by the margin `exit_scale` (`1 + 2γ₃`, [`raised`]). The lanes are plain loops over
     /// `[f32; 8]`, which the compiler turns into one AVX2 vector per coordinate when inlined
     /// into a kernel compiled for AVX2 (`min`/`max` below are `vminps`/`vmaxps` exactly).
     #[inline(always)]
@@ -115,7 +116,7 @@ impl WideNode {
             let near = [0, 1, 2].map(|a| (planes[a].0[i] - origin[a]) * inv_dir[a]);
             let far = [0, 1, 2].map(|a| (planes[a].1[i] - origin[a]) * inv_dir[a]);
             let near = max(max(max(near[0], near[1]), near[2]), t_min);
-            let far = min(min(min(far[0], far[1]), far[2]) * exit_scale, t_max);
+            let far = min(raised(min(min(far[0], far[1]), far[2]), exit_scale), t_max);
             // One vector compare folds the unused lanes into the mask.
             inside[i] = -i32::from((near <= far) & (self.count[i] != UNUSED));
             entry[i] = near;
@@ -163,7 +164,7 @@ impl WideNode {
         }
         let mut inside = [0i32; WIDTH];
         for i in 0..WIDTH {
-            let far = min(far[i] * exit_scale, t_max);
+            let far = min(raised(far[i], exit_scale), t_max);
             inside[i] = -i32::from((near[i] <= far) & (self.count[i] != UNUSED));
         }
         I::mask(&inside)

@@ -10,7 +10,8 @@
 //! which would break watertightness).
 //!
 //! The box test is Ize's ("Robust BVH Ray Traversal", JCGT 2013): the exit distance is
-//! scaled by `1 + 2γ₃`, which covers the rounding of the slab distances, so a box is never
+//! raised by a relative `2γ₃` (scaled by `1 + 2γ₃`, or by `1 − 2γ₃` behind the origin:
+//! [`raised`]), which covers the rounding of the slab distances, so a box is never
 //! skipped by a ray that meets it. The build pads boxes so that `bound − origin` is never zero
 //! for a ray touching the true box, hence no `0·∞` NaN there.
 
@@ -27,7 +28,7 @@ use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::{AlphaTests, Bvh};
 use crate::geometry::Geometry;
-use crate::simd::{prefetch, Isa};
+use crate::simd::{max, prefetch, Isa};
 
 /// `1 + 2⁻¹⁶`: see [`tie_bound`].
 const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
@@ -40,7 +41,18 @@ const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 /// the visit, and the rule for ties does not depend on that order.
 #[inline(always)]
 pub(crate) fn tie_bound(t_max: f32) -> f32 {
-    t_max * TIE_SCALE
+    raised(t_max, TIE_SCALE)
+}
+
+/// `t` raised by the relative margin `scale − 1` (`scale ≥ 1`): `t·scale` where `t ≥ 0` (bit
+/// for bit), `t·(2 − scale)` where `t < 0`. The box tests widen their bounds this way, the
+/// exit distance by [`EXIT_SCALE`] and the closest hit by [`tie_bound`]'s margin: behind the
+/// origin (a query's `tnear < 0`) multiplying by `scale` would move a negative bound down,
+/// narrowing the interval, and a flat box there (its entry and exit a few ulps apart) would
+/// be skipped. `2 − scale` is exact for both scales.
+#[inline(always)]
+pub(crate) fn raised(t: f32, scale: f32) -> f32 {
+    max(t * scale, t * (2.0 - scale))
 }
 
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
