@@ -275,7 +275,7 @@ def check_views(scene: Scene, batch: Sequence[Mapping[str, Any]]) -> None:
     checked: Dict[Any, Optional[str]] = {}
     for i, v in enumerate(batch):
         camera = v["camera"]
-        if isinstance(camera, str) and camera not in scene.cameras:
+        if isinstance(camera, str) and not _has_camera(scene, camera):
             raise ViewError(i, v["name"], unknown_camera(scene, camera))
         settings = {k: v[k] for k in RENDER_KEYS if v[k] is not None}
         key = (camera if isinstance(camera, str) else None, tuple(sorted(settings.items())))
@@ -283,6 +283,15 @@ def check_views(scene: Scene, batch: Sequence[Mapping[str, Any]]) -> None:
             checked[key] = _check_render(scene, camera, settings)
         if checked[key]:
             raise ViewError(i, v["name"], checked[key])
+
+
+def _has_camera(scene: Scene, camera: str) -> bool:
+    """True when ``scene`` renders the camera ``camera``: one of its own, or ``"auto"``."""
+    try:
+        scene.camera(camera)
+    except ValueError:
+        return False
+    return True
 
 
 def unknown_camera(scene: Scene, camera: str) -> str:

@@ -65,3 +65,21 @@ def test_a_model_packs_and_loads_back_as_the_same_scene(models):
     again = penumbra.load_pack(scene.pack(), threads=1)
     assert again.stats["triangles"] == 12
     assert again.settings == scene.settings
+
+
+def test_camera_auto_frames_any_scene_as_a_model_is_framed(models):
+    model = penumbra.load(models / "cube.obj", threads=1)
+    small = dict(spp=1, light_samples=1, width=40, height=30)
+    assert np.array_equal(model.render(**small), model.render(camera="auto", **small))
+    assert model.camera("auto") == model.camera()
+    # A scene whose own camera looks away from the cube: auto frames it all the same.
+    away = penumbra.load_dict({
+        "camera": {"position": [0, 0, 0], "look_at": [-1, 0, 0], "fov": 40},
+        "lights": [{"type": "point", "position": [5, 9, 5]}],
+        "objects": [{"type": "cube", "center": [5, 5, 5], "size": 1}],
+    })
+    assert away.camera("auto").look_at == pytest.approx((5, 5, 5))
+    assert away.render(camera="auto", **small).max() > 0
+    from penumbra import distributed, views
+    distributed.check_views(away, [{"name": "a", "camera": "auto",
+                                    **{k: None for k in views.RENDER_KEYS}}])
