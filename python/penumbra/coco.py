@@ -27,7 +27,6 @@ pixel's center, so masks have hard edges.
 
 from __future__ import annotations
 
-import json
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
@@ -35,6 +34,7 @@ import numpy as np
 
 from . import _args, _core
 from ._camera import Camera
+from ._staged import write_json
 
 #: The id of pixels that show no object.
 NO_ID = _core.NO_ID
@@ -206,12 +206,4 @@ def write_annotations(
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
-    tmp = os.path.join(folder, f".{os.path.basename(path)}.tmp-{os.getpid()}")
-    try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(value, f)
-            f.write("\n")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    write_json(path, value)

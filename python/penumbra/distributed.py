@@ -39,7 +39,7 @@ from .views import (
     RENDER_KEYS,
     ViewError,
     label,
-    output_path,
+    output_paths,
     setting_problem,
     views as normalize_views,
 )
@@ -205,9 +205,7 @@ def render_views(
     batch = normalize_views(views, **defaults)
     check_views(scene, batch)
     check_num_cpus(num_cpus, "render_views: num_cpus")
-    paths = [output_path(output, v, i) for i, v in enumerate(batch)]
-    if len(set(paths)) != len(paths):
-        raise ValueError(f"output pattern {output!r} gives two views the same file")
+    paths = output_paths(output, batch)
     summary: List[Dict[str, Any]] = [
         {"name": v["name"], "path": p, "skipped": True} for v, p in zip(batch, paths)
     ]

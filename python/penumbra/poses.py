@@ -14,7 +14,6 @@ centred camera has cx = (W - 1)/2), ``camera_to_world`` in OpenCV axes (+x right
 
 from __future__ import annotations
 
-import json
 import os
 from typing import Any, Dict, List, Mapping, Sequence, Union
 
@@ -22,6 +21,7 @@ import numpy as np
 
 from . import _args, _core
 from ._camera import Camera
+from ._staged import write_json
 from .views import output_path, views as normalized
 
 #: The layouts :func:`write_poses` writes.
@@ -142,8 +142,4 @@ def write_poses(
     if format == "nerf":
         value = nerf(value, os.path.dirname(os.fspath(path)) or ".")
     path = os.fspath(path)
-    tmp = f"{path}.tmp-{os.getpid()}"
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(value, f, indent=2)
-        f.write("\n")
-    os.replace(tmp, path)
+    write_json(path, value, indent=2)

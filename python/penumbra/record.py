@@ -8,8 +8,9 @@ conventions of K and the poses):
   settings as the command line's record writes them, every number to the bit), ``region``
   (None), ``aovs`` (the AOV names), ``gamma`` (the scene's ``film.gamma``; None: the sRGB curve)
   and ``format`` (``png``, ``jpg``, ``exr`` or ``pfm``);
-- ``image``, ``files`` (the image, then its ``.aovs.npz`` when the view has AOVs), ``width``,
-  ``height``;
+- ``image``, ``files`` (the image, then its ``.aovs.npz`` when the view has AOVs),
+  ``digests`` (for each file, as written: ``bytes``, its size, and ``fnv1a64``, the 64-bit
+  FNV-1a of its bytes as 16 hex digits; :func:`intact` checks them), ``width``, ``height``;
 - ``K`` (3×3, OpenCV: pixel centres at integer coordinates), ``camera_to_world`` (OpenCV
   axes), ``camera_to_world_opengl`` and ``world_to_camera`` (4×4), as lists of rows;
 - ``objects``: each ``[[objects]]`` entry's ``key``, ``type`` and ``ids`` (``[first, end)``
@@ -39,21 +40,22 @@ conventions of K and the poses):
 
 from __future__ import annotations
 
-import itertools
 import json
 import os
+import stat
 from typing import Any, Dict, Mapping, Optional, Union
 
 from . import _core
 from ._camera import Camera
+from ._staged import commit, stage_json
 from .poses import camera_pose
 from .views import RENDER_KEYS, aov_path, view as normalized
 
 #: The format names records give, by image extension (as the command line names them).
 FORMATS = {".png": "png", ".jpg": "jpg", ".jpeg": "jpg", ".exr": "exr", ".pfm": "pfm"}
 
-
-_writes = itertools.count()
+#: The largest record read back: far more than any record penumbra writes.
+MAX_RECORD_BYTES = 1 << 20
 
 
 def record_path(image: Union[str, "os.PathLike[str]"]) -> str:
@@ -120,23 +122,53 @@ def write_record(image: Union[str, "os.PathLike[str]"], value: Mapping[str, Any]
     """Writes the record ``value`` beside ``image`` (at :func:`record_path`), whole or not at
     all (a temporary file renamed into place); returns its path."""
     path = record_path(image)
-    tmp = stage_record(path, value)
-    os.replace(tmp, path)
+    commit(stage_record(path, value), path)
     return path
 
 
 def stage_record(path: str, value: Mapping[str, Any]) -> str:
     """Writes ``value`` as JSON to a temporary file beside ``path`` (flushed to disk) and
-    returns its name, for the caller to rename into place; nothing is left on failure."""
-    folder, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(folder, f".{name}.tmp-{os.getpid()}-{next(_writes)}")
+    returns its name, for the caller to rename into place; nothing is left on failure, and an
+    ``OSError`` names ``path``."""
+    return stage_json(path, value, separators=(",", ":"))
+
+
+def digest(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:
+    """A file's entry in a record's ``digests``: ``bytes`` (its size) and ``fnv1a64`` (the
+    64-bit FNV-1a of its bytes, 16 hex digits), as the command line computes them."""
+    size, fnv = _core.file_digest(os.fspath(path))
+    return {"bytes": size, "fnv1a64": fnv}
+
+
+def read_record(path: Union[str, "os.PathLike[str]"]) -> Optional[Dict[str, Any]]:
+    """The record at ``path`` (a ``.meta.json``), or None when there is none that can be read:
+    missing, not a regular file (a named pipe there is never opened: opening it would wait for
+    a writer), larger than :data:`MAX_RECORD_BYTES`, or not a JSON object."""
+    path = os.fspath(path)
     try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(json.dumps(value, separators=(",", ":")) + "\n")
-            f.flush()
-            os.fsync(f.fileno())
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-    return tmp
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_RECORD_BYTES:
+            return None
+        with open(path, "rb") as f:
+            value = json.loads(f.read(MAX_RECORD_BYTES + 1))
+    except (OSError, ValueError):
+        return None
+    return value if isinstance(value, dict) else None
+
+
+def intact(value: Mapping[str, Any]) -> bool:
+    """True when every file the record ``value`` lists (``files``) is a regular file of the
+    size and digest its ``digests`` keep: False for an image cut short or changed after its
+    record was written, and for a record without digests (from before penumbra kept them)."""
+    files, digests = value.get("files"), value.get("digests")
+    if not isinstance(files, list) or not isinstance(digests, list) or not files:
+        return False
+    if len(files) != len(digests):
+        return False
+    for f, d in zip(files, digests):
+        try:
+            if not isinstance(f, str) or digest(f) != d:
+                return False
+        except OSError:
+            return False
+    return True

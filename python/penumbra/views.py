@@ -289,17 +289,52 @@ def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
     """``pattern`` formatted with the view's ``name`` and ``index``. The name stays one file
     name, by the rule the command line's ``{camera}`` follows: path separators, ``:`` and
     control characters become ``_``, and so does a leading ``.`` or ``-`` (``..`` gives
-    ``_.``), so that no view writes outside the pattern's folder.
+    ``_.``), so that no view writes outside the pattern's folder; a pattern whose ``..``
+    after a field leaves that folder (``out/{name}/../../x.png``) is a ``ValueError``.
 
     >>> output_path("out/{name}/{index}.png", {"name": "../up"}, 3)
     'out/_._up/3.png'
     """
     try:
-        return pattern.format(name=_core.file_name_part(str(v["name"])), index=index)
+        path = pattern.format(name=_core.file_name_part(str(v["name"])), index=index)
     except (KeyError, IndexError, ValueError) as e:
         raise ValueError(
             f"output pattern {pattern!r}: {e} (it may use {{name}} and {{index}})"
         ) from None
+    folder = os.path.normpath(_pattern_folder(pattern) or ".")
+    rel = os.path.relpath(os.path.normpath(path), folder)
+    if rel == os.pardir or rel.startswith(os.pardir + os.sep):
+        raise ValueError(
+            f"output pattern {pattern!r} gives {path}, outside its folder {folder}: "
+            "a `..` after a field leaves it"
+        )
+    return path
+
+
+def _pattern_folder(pattern: str) -> str:
+    """The folder ``pattern`` names: its folders before the first name with a field."""
+    names = pattern.replace("\\", "/").split("/")[:-1]
+    literal = []
+    for n in names:
+        if "{" in n.replace("{{", ""):
+            break
+        literal.append(n)
+    return "/".join(literal).replace("{{", "{").replace("}}", "}")
+
+
+def output_paths(pattern: str, views: Sequence[Mapping[str, Any]]) -> List[str]:
+    """Each view's :func:`output_path` (its ``index`` its place in ``views``); a
+    ``ValueError`` when two views would write one file (``f{index}/../x.png``)."""
+    paths = [output_path(pattern, v, i) for i, v in enumerate(views)]
+    seen: Dict[str, int] = {}
+    for i, p in enumerate(paths):
+        j = seen.setdefault(os.path.normpath(p), i)
+        if j != i:
+            raise ValueError(
+                f"output pattern {pattern!r} gives views {j} and {i} the same file "
+                f"{os.path.normpath(p)}: use {{name}} or {{index}} in it, and no `..` after them"
+            )
+    return paths
 
 
 def aov_path(image_path: str) -> str:

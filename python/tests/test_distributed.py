@@ -333,7 +333,7 @@ def test_an_image_and_its_aovs_are_written_together_or_not_at_all(cluster, tmp_p
         raise OSError(28, "No space left on device", str(path))
 
     # The disk fills while the image is written, after its AOVs: nothing changes.
-    monkeypatch.setattr(_view_files, "write_image", full_disk)
+    monkeypatch.setattr(_view_files._core, "stage_image", full_disk)
     with pytest.raises(OSError, match="No space left") as info:
         distributed.render_views(scene, batch, output=out, width=8, height=6, force=True)
     # Named as the image asked for, not its temporary file (issue 63, class 7).

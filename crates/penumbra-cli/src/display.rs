@@ -19,15 +19,20 @@
 //! # Never in the render's way
 //!
 //! Workers hand each finished tile to a channel and go on; one thread of the preview's own
-//! writes the packets, in batches. A viewer that is absent, closes, or stops reading (a write blocked for
-//! [`STALL`]) is dropped quietly: the render and its files are never affected. At the end the
-//! writer gets at most [`STALL`] to send what is left.
+//! writes the packets, in batches. The viewer never holds the run longer than [`STALL`] in
+//! total: the attempts to connect and, at the end, the wait for it to take what is left share
+//! that one budget (when it runs out the connection is shut, which ends a write in progress).
+//! A viewer that closes, or stops reading for [`STALL`] during the render, or is still behind
+//! when the budget runs out, is dropped with one warning on stderr; the render and its files
+//! are never affected.
 
 use std::io::Write;
-use std::net::{TcpStream, ToSocketAddrs};
-use std::sync::mpsc::{channel, Sender};
+use std::net::{Shutdown, TcpStream, ToSocketAddrs};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use penumbra::{AovPixel, PixelBounds, Rgb};
 
@@ -36,7 +41,8 @@ use crate::aov::{self, Passes};
 /// tev's default port, as pbrt's `--display-server` uses it.
 pub const DEFAULT_PORT: u16 = 14158;
 
-/// How long a connection attempt or one blocked write may take before the viewer is dropped.
+/// The most a viewer may hold the run, in total (connecting, and the wait at the end for it to
+/// take the rest), and the longest one write may stay blocked before the viewer is dropped.
 pub const STALL: Duration = Duration::from_millis(500);
 
 /// The writer's pause between batches.
@@ -138,22 +144,61 @@ pub struct Preview {
     /// The packets on their way to the writer thread (`None` once the render is over).
     packets: Option<Sender<Vec<u8>>>,
     writer: Option<JoinHandle<()>>,
+    /// Closed by the writer thread when it ends (in a mutex: tiles come from many threads).
+    ended: Mutex<Receiver<()>>,
+    /// A handle on the connection, to shut it when the budget runs out.
+    stream: TcpStream,
+    /// Set when the run shut the connection (then the writer says nothing more).
+    cut: Arc<AtomicBool>,
+    /// What is left of [`STALL`] after connecting.
+    budget: Duration,
+    address: String,
     name: String,
     /// R, G, B, then the passes' channels.
     channels: Vec<String>,
     passes: Passes,
 }
 
+/// The first of `address`'s addresses that accepts a connection, each tried for what is left
+/// of `budget`.
+fn connect(address: &str, budget: Duration) -> Option<TcpStream> {
+    let start = Instant::now();
+    address.to_socket_addrs().ok()?.find_map(|a| {
+        let left = budget.saturating_sub(start.elapsed());
+        (!left.is_zero())
+            .then(|| TcpStream::connect_timeout(&a, left).ok())
+            .flatten()
+    })
+}
+
+/// Why the writer stopped sending.
+enum Gone {
+    Closed(std::io::Error),
+    Stalled,
+}
+
+/// Writes all of `bytes`, each write blocked for at most [`STALL`] (the stream's timeout).
+fn send(stream: &mut TcpStream, mut bytes: &[u8]) -> Result<(), Gone> {
+    use std::io::ErrorKind::{Interrupted, TimedOut, WouldBlock};
+    while !bytes.is_empty() {
+        match stream.write(bytes) {
+            Ok(0) => return Err(Gone::Closed(std::io::ErrorKind::WriteZero.into())),
+            Ok(n) => bytes = &bytes[n..],
+            Err(e) if e.kind() == Interrupted => {}
+            Err(e) if matches!(e.kind(), WouldBlock | TimedOut) => return Err(Gone::Stalled),
+            Err(e) => return Err(Gone::Closed(e)),
+        }
+    }
+    Ok(())
+}
+
 impl Preview {
     /// Connects to the viewer at `server` (`HOST[:PORT]`), saying on stderr whether it did;
-    /// `None` when no viewer answers (the render goes on without one).
-    pub fn connect(server: &str, note: impl Fn(&str)) -> Option<Preview> {
+    /// `None` when no viewer answers within [`STALL`] (the render goes on without one).
+    pub fn connect(server: &str, note: fn(&str)) -> Option<Preview> {
+        let start = Instant::now();
         let address = address(server);
-        let stream = address
-            .to_socket_addrs()
-            .ok()
-            .and_then(|mut all| all.find_map(|a| TcpStream::connect_timeout(&a, STALL).ok()));
-        let Some(mut stream) = stream else {
+        let Some(mut stream) = connect(&address, STALL) else {
             note(&format!(
                 "no viewer at {address}: continuing without preview"
             ));
@@ -162,11 +207,16 @@ impl Preview {
         note(&format!("connected to tev at {address}"));
         let _ = stream.set_write_timeout(Some(STALL));
         let _ = stream.set_nodelay(true);
+        let handle = stream.try_clone().ok()?;
         let (tx, rx) = channel::<Vec<u8>>();
+        let (ended_tx, ended) = channel::<()>();
+        let cut = Arc::new(AtomicBool::new(false));
+        let (writer_cut, at) = (cut.clone(), address.clone());
         // Packets waiting together go out in one write (fewer system calls and wake-ups of
-        // the viewer). The first failed or stalled write drops the viewer; the rest is
-        // drained unsent.
+        // the viewer). The first failed or stalled write drops the viewer, with a warning
+        // (none when the run shut the connection: it says why); the rest is drained unsent.
         let writer = std::thread::spawn(move || {
+            let _ended = ended_tx;
             let (mut alive, mut batch) = (true, Vec::new());
             while let Ok(first) = rx.recv() {
                 batch.clear();
@@ -174,7 +224,23 @@ impl Preview {
                 while let Some(next) = (batch.len() < BATCH).then(|| rx.try_recv().ok()).flatten() {
                     batch.extend_from_slice(&next);
                 }
-                alive = alive && stream.write_all(&batch).is_ok();
+                if !alive {
+                    continue;
+                }
+                if let Err(gone) = send(&mut stream, &batch) {
+                    alive = false;
+                    if !writer_cut.load(Ordering::SeqCst) {
+                        note(&match gone {
+                            Gone::Stalled => format!(
+                                "warning: the viewer at {at} stopped reading for {} s: preview dropped",
+                                STALL.as_secs_f32()
+                            ),
+                            Gone::Closed(e) => {
+                                format!("warning: the viewer at {at} went away ({e}): preview dropped")
+                            }
+                        });
+                    }
+                }
                 // A writer that waits in `recv` is woken by every tile; pausing between
                 // batches lets tiles queue without waking anyone (at most every PAUSE).
                 std::thread::sleep(PAUSE);
@@ -183,6 +249,11 @@ impl Preview {
         Some(Preview {
             packets: Some(tx),
             writer: Some(writer),
+            ended: Mutex::new(ended),
+            stream: handle,
+            cut,
+            budget: STALL.saturating_sub(start.elapsed()),
+            address,
             name: String::new(),
             channels: Vec::new(),
             passes: Passes(Vec::new()),
@@ -225,9 +296,21 @@ impl Preview {
 }
 
 impl Drop for Preview {
-    /// Lets the writer send what is queued (each write bounded by [`STALL`]) and waits for it.
+    /// Lets the writer send what is queued within what is left of [`STALL`], then shuts the
+    /// connection (ending a blocked write) and waits for the writer.
     fn drop(&mut self) {
         self.packets.take();
+        let ended = self.ended.get_mut().unwrap_or_else(|e| e.into_inner());
+        let done = ended.recv_timeout(self.budget);
+        if matches!(done, Err(std::sync::mpsc::RecvTimeoutError::Timeout)) {
+            self.cut.store(true, Ordering::SeqCst);
+            let _ = self.stream.shutdown(Shutdown::Both);
+            crate::failure::note(&format!(
+                "warning: the viewer at {} was still behind after {} s: the rest of the preview is not sent",
+                self.address,
+                STALL.as_secs_f32()
+            ));
+        }
         if let Some(writer) = self.writer.take() {
             let _ = writer.join();
         }

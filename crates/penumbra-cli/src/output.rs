@@ -13,6 +13,63 @@ use penumbra::{
 use crate::failure::{invalid, runtime, Failure};
 use crate::signals::Interrupt;
 
+/// `path` with each `.` dropped and each `..` taking off the name before it, as the path would
+/// resolve if no name in it were a link; a `..` with no name before it stays.
+pub fn normalized(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) =>
+            {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The folder `pattern` names: the folders before its first name with a field, normalized
+/// (`out/{scene}/{camera}.png` → `out`; `{camera}.png` → the current folder, empty).
+pub fn folder_of(pattern: &str) -> PathBuf {
+    let path = Path::new(pattern);
+    let mut names: Vec<_> = path.components().collect();
+    names.pop(); // The file's name.
+    let literal = names
+        .iter()
+        .take_while(|c| {
+            !c.as_os_str()
+                .to_string_lossy()
+                .replace("{{", "")
+                .contains('{')
+        })
+        .collect::<PathBuf>();
+    normalized(&literal)
+}
+
+/// An error when `expanded`, a name `pattern` gave, leaves the folder the pattern names (a
+/// `..` after a field: `out/{camera}/../../x.png`).
+pub fn check_inside(pattern: &str, expanded: &Path) -> Result<(), String> {
+    let folder = folder_of(pattern);
+    let inside = normalized(expanded)
+        .strip_prefix(&folder)
+        .is_ok_and(|rest| rest.components().next() != Some(std::path::Component::ParentDir));
+    match inside {
+        true => Ok(()),
+        false => Err(format!(
+            "`{pattern}` gives {}, outside its folder {}: a `..` after a field leaves it",
+            expanded.display(),
+            match folder.as_os_str().is_empty() {
+                true => ".".to_owned(),
+                false => folder.display().to_string(),
+            }
+        )),
+    }
+}
+
 /// The values a pattern's fields take for one render.
 pub struct Fields<'a> {
     /// The camera's name (made one file name by [`file_name_part`]).
@@ -50,7 +107,8 @@ pub fn expand(pattern: &str, f: &Fields) -> Result<String, String> {
             .ok_or_else(|| format!("an unclosed `{{` in `{pattern}` (write {{{{ for a brace)"))?;
         let value = match &tail[1..end] {
             "camera" => file_name_part(f.camera),
-            "scene" => f.scene.to_owned(),
+            // One file name, like a camera's: a scene file `...toml` has the stem `..`.
+            "scene" => file_name_part(f.scene),
             "spp" => f.spp.to_string(),
             "seed" => f.seed.to_string(),
             field if field == "frame" || field.starts_with("frame:") => {
@@ -189,37 +247,26 @@ impl Output {
         }
     }
 
-    /// Writes the image with `extra` files (its AOVs) renamed into place before it and
-    /// `after` (its `--resume` record) after it: files appear complete and together or not at
-    /// all (a signal or a failed write leaves the old files, or none); standard output gets
-    /// the encoded bytes at once.
-    pub fn write(
+    /// Stages the image of a file output under a temporary name beside it (see
+    /// [`StagedFile`]), to be renamed into place by [`commit`] with the files that go with it
+    /// (its AOVs before it, its `--resume` record after it): files appear complete and
+    /// together or not at all (a signal or a failed write leaves the old files, or none).
+    pub fn stage(
         &self,
+        path: &Path,
         film: &Film,
         gamma: Option<f32>,
-        extra: Vec<StagedFile>,
-        after: Vec<StagedFile>,
         interrupt: &Interrupt,
-    ) -> Result<(), Failure> {
-        match &self.target {
-            Target::File(path) => {
-                let image =
-                    stage_image(film, path, gamma, interrupt.flag()).map_err(|e| match e {
-                        ImageError::Cancelled => interrupt.failure(),
-                        e @ ImageError::NonFinite { .. } => invalid(e),
-                        e => runtime(e),
-                    })?;
-                // The image after its passes: it stays as it was if any rename before it fails.
-                let mut files = extra;
-                files.push(image);
-                files.extend(after);
-                commit(files, interrupt)
-            }
-            Target::Stdout => self.write_stdout(film, gamma),
-        }
+    ) -> Result<StagedFile, Failure> {
+        stage_image(film, path, gamma, interrupt.flag()).map_err(|e| match e {
+            ImageError::Cancelled => interrupt.failure(),
+            e @ ImageError::NonFinite { .. } => invalid(e),
+            e => runtime(e),
+        })
     }
 
-    fn write_stdout(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
+    /// Writes the image's encoded bytes to standard output at once.
+    pub fn write_stdout(&self, film: &Film, gamma: Option<f32>) -> Result<(), Failure> {
         let bytes = encode_image(film, self.format, gamma).map_err(runtime)?;
         let mut out = std::io::stdout().lock();
         out.write_all(&bytes)
@@ -293,6 +340,35 @@ mod tests {
         };
         assert_eq!(expand("{frame:04}.png", &negative).unwrap(), "-003.png");
         assert!(e("{camera.png").unwrap_err().contains("unclosed"));
+    }
+
+    #[test]
+    fn field_values_stay_one_name_and_dots_stay_in_the_patterns_folder() {
+        let up = Fields {
+            scene: "..",
+            camera: "..",
+            ..fields()
+        };
+        assert_eq!(
+            expand("out/sub/{scene}/x.png", &up).unwrap(),
+            "out/sub/_./x.png"
+        );
+        assert_eq!(expand("{camera}.png", &up).unwrap(), "_..png");
+        assert_eq!(normalized(Path::new("f1/../x.pfm")), Path::new("x.pfm"));
+        assert_eq!(normalized(Path::new("../a/./b/..")), Path::new("../a"));
+        assert_eq!(
+            folder_of("out/sub/{scene}/{camera}.png"),
+            Path::new("out/sub")
+        );
+        assert_eq!(folder_of("{camera}.png"), Path::new(""));
+        assert_eq!(folder_of("a/{{b}}/c/x.png"), Path::new("a/{{b}}/c"));
+        let inside = |p: &str, e: &str| check_inside(p, Path::new(e));
+        assert!(inside("f{frame}/../x.pfm", "f1/../x.pfm").is_ok());
+        assert!(inside("../out/{camera}.png", "../out/a.png").is_ok());
+        assert!(inside("out/{camera}/../../x.png", "out/a/../../x.png")
+            .unwrap_err()
+            .contains("outside its folder out"));
+        assert!(inside("{camera}/../../x.png", "a/../../x.png").is_err());
     }
 
     #[test]

@@ -12,7 +12,9 @@ use crate::args::RenderArgs;
 use crate::cameras;
 use crate::failure::{invalid, Failure};
 use crate::input::is_stdin;
-use crate::output::{expand, names_camera, names_frame, scene_stem, Fields, Output, Target};
+use crate::output::{
+    check_inside, expand, names_camera, names_frame, normalized, scene_stem, Fields, Output, Target,
+};
 use crate::sequence::{self, Task};
 use crate::settings::{flag_of, patch, region};
 
@@ -56,11 +58,20 @@ pub fn plan(args: &RenderArgs, file: &SceneFile, scene: &Scene) -> Result<Vec<Jo
     for (i, task) in tasks.into_iter().enumerate() {
         let job = job(args, file, scene, &pattern, from, &stem, i, task)?;
         // Camera names that differ only in a path separator (made `_`) meet here, and so do
-        // frames of a pattern without {frame} beside {camera}.
-        if !targets.insert(job.output.target.clone()) {
+        // frames of a pattern without {frame} beside {camera}, and names that a `..` after a
+        // field makes one (`f{frame}/../x.pfm`).
+        let (target, name) = match &job.output.target {
+            Target::File(path) => (
+                Target::File(normalized(path)),
+                normalized(path).display().to_string(),
+            ),
+            Target::Stdout => (Target::Stdout, "-".to_owned()),
+        };
+        if !targets.insert(target) {
             return Err(invalid(format!(
-                "{from}: two renders would write {} (use {{camera}} and {{frame}} in it)",
-                job.output.display()
+                "{from} {}: two renders would write {name} (use {{camera}} and {{frame}} in \
+                 it, and no `..` after them)",
+                pattern.display(),
             )));
         }
         jobs.push(job);
@@ -102,7 +113,10 @@ fn job(
                 seed: settings.seed,
                 frame: task.frame,
             };
-            PathBuf::from(expand(p, &fields).map_err(|e| invalid(format!("{from}: {e}")))?)
+            let name =
+                PathBuf::from(expand(p, &fields).map_err(|e| invalid(format!("{from}: {e}")))?);
+            check_inside(p, &name).map_err(|e| invalid(format!("{from}: {e}")))?;
+            name
         }
         // Not UTF-8: no fields to expand.
         None => pattern.to_owned(),

@@ -12,6 +12,7 @@ use crate::display::Preview;
 use crate::failure::{invalid, note, runtime, say, say_beside, Failure};
 use crate::input::{self, is_stdin};
 use crate::manifest::{Manifest, Status};
+use crate::output::Target;
 use crate::plan::{self, Job};
 use crate::signals::Interrupt;
 use crate::summary::Report;
@@ -60,6 +61,8 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         poses::write(path, &args.poses_format, &all, &scene, &interrupt)?;
     }
     let mut failed: Vec<(&Job, String)> = Vec::new();
+    // With --resume, what a killed run left beside the outputs of this one goes.
+    let mut tidy = record::Tidy::default();
     for job in jobs.iter().map(|&i| &all[i]) {
         interrupt.check()?;
         let start = Instant::now();
@@ -67,7 +70,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             .as_deref()
             .map(|d| record::settings(job, d, args.aov.as_ref(), scene.gamma));
         if let Some(settings) = recorded.as_ref().filter(|_| args.resume) {
-            if record::done(job, settings) {
+            if let Some(mut files) = record::finished(job, settings) {
+                files.extend(files.first().map(|image| record::path_of(image)));
+                tidy.finished(&files);
                 skipped(args, job, count)?;
                 let outputs = [job.output.display()];
                 manifest.write(job, Status::Skipped, 0.0, 0, &outputs, None)?;
@@ -126,6 +131,11 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
                 continue;
             }
         };
+        if let (true, Target::File(image)) = (args.resume, &job.output.target) {
+            let mut files = vec![image.clone(), record::path_of(image)];
+            files.extend(done.aov_files.iter().cloned());
+            tidy.finished(&files);
+        }
         let mut outputs = vec![job.output.display()];
         outputs.extend(done.aov_files.iter().map(|p| p.display().to_string()));
         manifest.write(job, Status::Rendered, seconds, attempts, &outputs, None)?;

@@ -96,49 +96,43 @@ pub fn run(
         e => runtime(e),
     })?;
     interrupt.check()?;
+    let Target::File(path) = &job.output.target else {
+        job.output.write_stdout(&film, scene.gamma)?;
+        return Ok(Done {
+            film,
+            stats,
+            aov_files: Vec::new(),
+        });
+    };
     // With --resume, the old record goes before the image is replaced, and the new one is
     // renamed into place right after it (see `record`).
-    let mut record = match (recorded, &job.output.target) {
-        (Some(settings), Target::File(image)) => {
-            record::remove(image)?;
-            Some((settings, image))
+    if recorded.is_some() {
+        record::remove(path)?;
+    }
+    // The image and the files beside it, each staged whole, then renamed into place
+    // together: its pass files (none for an EXR, which holds them), the image, its record.
+    let (mut files, aov_files) = match (&args.aov, &aovs) {
+        (Some(passes), Some(aovs)) if job.output.format == OutputFormat::Exr => {
+            (vec![aov::stage_exr(path, &film, aovs, passes)?], Vec::new())
         }
-        _ => None,
-    };
-    let mut stage_record = |aov_files: &[PathBuf]| -> Result<Vec<StagedFile>, Failure> {
-        let Some((settings, image)) = record.take() else {
-            return Ok(Vec::new());
-        };
-        let mut files = vec![image.clone()];
-        files.extend(aov_files.iter().cloned());
-        Ok(vec![record::stage(job, settings, &files, file, scene)?])
-    };
-    // The files written beside the image, one per pass (none for an EXR, which holds them).
-    // The image and its pass files are staged, then renamed into place together.
-    let aov_files = match (&args.aov, &aovs, &job.output.target) {
-        (Some(passes), Some(aovs), Target::File(path)) => {
-            if job.output.format == OutputFormat::Exr {
-                let exr = aov::stage_exr(path, &film, aovs, passes)?;
-                let mut files = vec![exr];
-                files.extend(stage_record(&[])?);
-                output::commit(files, interrupt)?;
-                Vec::new()
-            } else {
-                let files = aov::stage_files(path, aovs, passes, interrupt)?;
-                let paths: Vec<PathBuf> = files.iter().map(|f| f.path().to_owned()).collect();
-                let after = stage_record(&paths)?;
-                job.output
-                    .write(&film, scene.gamma, files, after, interrupt)?;
-                paths
-            }
+        (Some(passes), Some(aovs)) => {
+            let mut files = aov::stage_files(path, aovs, passes, interrupt)?;
+            let paths: Vec<PathBuf> = files.iter().map(|f| f.path().to_owned()).collect();
+            files.push(job.output.stage(path, &film, scene.gamma, interrupt)?);
+            (files, paths)
         }
         _ => {
-            let after = stage_record(&[])?;
-            job.output
-                .write(&film, scene.gamma, Vec::new(), after, interrupt)?;
-            Vec::new()
+            let image = job.output.stage(path, &film, scene.gamma, interrupt)?;
+            (vec![image], Vec::new())
         }
     };
+    if let (Some(settings), Some((image, passes))) = (recorded, files.split_last()) {
+        // As the record lists them: the image (staged last), then its pass files.
+        let listed: Vec<&StagedFile> = std::iter::once(image).chain(passes).collect();
+        let staged = record::stage(job, settings, &listed, file, scene)?;
+        files.push(staged);
+    }
+    output::commit(files, interrupt)?;
 
     Ok(Done {
         film,

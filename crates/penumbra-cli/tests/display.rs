@@ -325,3 +325,65 @@ fn a_viewer_that_stops_reading_is_dropped() {
     drop(holder);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_viewer_that_reads_slowly_holds_the_exit_at_most_the_timeout() {
+    // Reads 16 KiB every 50 ms: the 12 MiB of a 1024² image would take it 40 s. The run
+    // must end about 0.5 s after its render (the documented timeout), with one warning.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let reader = thread::spawn(move || {
+        let (mut stream, _) = listener.accept().unwrap();
+        let mut buf = vec![0u8; 16 << 10];
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(60) {
+            match stream.read(&mut buf) {
+                Ok(0) | Err(_) => break,
+                Ok(_) => thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    });
+    let dir = std::env::temp_dir().join(format!("penumbra-slowview-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("big.pfm");
+    let start = Instant::now();
+    let r = ok(run_in(
+        &repository(),
+        [
+            "render",
+            "scenes/cornell.toml",
+            "--width",
+            "1024",
+            "--height",
+            "1024",
+            "--sampler",
+            "center",
+            "--light-samples",
+            "1",
+            "--json",
+            "--display-server",
+            &address,
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ));
+    let took = start.elapsed().as_secs_f64();
+    let report: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let work =
+        report["load_seconds"].as_f64().unwrap() + report["render_seconds"].as_f64().unwrap();
+    assert!(out.is_file());
+    // 0.5 s for the viewer; the rest is starting, writing the file and a loaded machine.
+    assert!(
+        took - work < 5.0,
+        "took {took:.2} s for {work:.2} s of work"
+    );
+    let warnings: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| l.contains("warning: the viewer"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{}", r.stderr);
+    assert!(warnings[0].contains(&address), "{}", r.stderr);
+    reader.join().unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -53,6 +53,38 @@ pub fn write_image(
         .map_err(|e| image_error("write_image", e))
 }
 
+/// Writes an (H, W, 3) float32 linear RGB array for `path` (its extension names the format)
+/// under a temporary name beside it, as the command line stages an image, and returns that
+/// name with the file's size and FNV-1a digest (16 hex digits), for the caller to rename into
+/// place with the files that go with it (a batch's AOVs and record). Errors name `path`.
+#[pyfunction]
+#[pyo3(signature = (path, array, gamma = None))]
+pub fn stage_image(
+    py: Python<'_>,
+    path: PathBuf,
+    array: PyReadonlyArray3<'_, f32>,
+    gamma: Option<f32>,
+) -> PyResult<(PathBuf, u64, String)> {
+    ImageError::check_gamma(gamma).map_err(|e| image_error("write_image", e))?;
+    let film = film(&array)?;
+    py.detach(|| {
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let staged = penumbra::stage_image(&film, &path, gamma, &never)?;
+        let digest = staged.digest()?;
+        Ok((staged.into_temporary(), digest.bytes, digest.hex()))
+    })
+    .map_err(|e| image_error("write_image", e))
+}
+
+/// The size and FNV-1a digest (16 hex digits) of the regular file at `path`, as records keep
+/// them beside `files`.
+#[pyfunction]
+pub fn file_digest(py: Python<'_>, path: PathBuf) -> PyResult<(u64, String)> {
+    py.detach(|| penumbra::FileDigest::of_file(&path))
+        .map(|d| (d.bytes, d.hex()))
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", path.display())))
+}
+
 /// The 8-bit encoding of an (H, W, 3) float32 linear RGB array: clamped to [0, 1], then the
 /// sRGB curve (or `c^(1/gamma)`, for a positive finite gamma), rounded; the bytes the
 /// command line writes to a PNG.

@@ -38,6 +38,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(camera::camera_pose, m)?)?;
     m.add_function(wrap_pyfunction!(camera::camera_rays, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
+    m.add_function(wrap_pyfunction!(image::stage_image, m)?)?;
+    m.add_function(wrap_pyfunction!(image::file_digest, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(image::encode_png, m)?)?;
     m.add(

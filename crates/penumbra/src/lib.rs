@@ -53,6 +53,7 @@ mod distribution;
 mod encode8;
 mod files;
 mod film;
+mod fnv;
 mod geometry;
 mod image_error;
 mod image_format;
@@ -90,6 +91,7 @@ pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::encode_8bit;
 pub use files::Files;
 pub use film::Film;
+pub use fnv::FileDigest;
 pub use geometry::{Geometry, Hit, Mesh, Surface, Triangle, TriangleHit};
 pub use image_error::ImageError;
 pub use image_format::OutputFormat;
@@ -122,7 +124,7 @@ pub use scene::{
     ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
-pub use staged::{commit_all, StagedFile};
+pub use staged::{commit_all, leftovers, staged_for, StagedFile};
 pub use texture::{Filter, Image, ImageTexture, Texture, TextureKind, Wrap};
 pub use texture_file::decode_texture_image;
 pub use world::{

@@ -18,12 +18,18 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::fnv::FileDigest;
 use crate::image_error::ImageError;
+
+/// What a temporary name holds after the destination's file name: `.a.png` + `.tmp-` + the
+/// writer's process id, `-`, a count (`.a.png.tmp-22127-0`).
+const TAG: &str = ".tmp-";
 
 /// A file written beside its destination under a temporary name, not yet in place. Dropping
 /// it without [`commit`](StagedFile::commit) removes the temporary file.
@@ -54,7 +60,7 @@ impl StagedFile {
         // Unique per process and per call, so concurrent writers never share a temporary file.
         static WRITES: AtomicU64 = AtomicU64::new(0);
         let tmp = path.with_file_name(format!(
-            ".{}.tmp-{}-{}",
+            ".{}{TAG}{}-{}",
             name.to_string_lossy(),
             std::process::id(),
             WRITES.fetch_add(1, Ordering::Relaxed)
@@ -81,6 +87,23 @@ impl StagedFile {
         &self.path
     }
 
+    /// The size and digest of the bytes staged (read back from the temporary file), for a
+    /// record of the file; errors name the destination.
+    pub fn digest(&self) -> Result<FileDigest, ImageError> {
+        FileDigest::of_file(&self.tmp).map_err(|e| ImageError::Write {
+            path: self.path.clone(),
+            message: format!("cannot read back what was written: {e}"),
+        })
+    }
+
+    /// Hands the temporary file over to the caller (who renames it into place or removes
+    /// it; dropping the result removes nothing): for a writer that commits files of its own
+    /// beside penumbra's, such as Python's batches.
+    pub fn into_temporary(mut self) -> PathBuf {
+        std::mem::take(&mut self.tmp)
+        // `self.tmp` is now empty: the drop removes nothing.
+    }
+
     /// Renames the file into place.
     pub fn commit(self) -> Result<(), ImageError> {
         std::fs::rename(&self.tmp, &self.path).map_err(|e| ImageError::Write {
@@ -93,8 +116,62 @@ impl StagedFile {
 
 impl Drop for StagedFile {
     fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.tmp);
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
     }
+}
+
+/// The destination's file name and the writer's process id of a temporary name of this
+/// module's scheme (`.a.png.tmp-22127-0` → `("a.png", 22127)`; also `.a.png.tmp-22127-0.png`,
+/// the name Python's batches used to stage images under), or `None` for any other name.
+pub fn staged_for(name: &str) -> Option<(&str, u32)> {
+    let (target, tail) = name.strip_prefix('.')?.rsplit_once(TAG)?;
+    let ext = Path::new(target).extension().and_then(|e| e.to_str());
+    let tail = match ext.and_then(|e| tail.strip_suffix(&format!(".{e}")[..])) {
+        Some(t) => t,
+        None => tail,
+    };
+    let (pid, count) = tail.split_once('-')?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    (!target.is_empty() && digits(pid) && digits(count)).then_some(())?;
+    Some((target, pid.parse().ok()?))
+}
+
+/// True when process `pid` may still be writing: this process, or (where `/proc` tells) a
+/// running one.
+fn may_be_alive(pid: u32) -> bool {
+    pid == std::process::id()
+        || (Path::new("/proc/self").exists() && Path::new("/proc").join(pid.to_string()).exists())
+}
+
+/// The temporary files in `folder` that a run killed before its renames left behind (of this
+/// module's naming scheme, written by a process no longer running), by the file name they were
+/// staged for. A folder that cannot be read has none.
+pub fn leftovers(folder: &Path) -> HashMap<String, Vec<PathBuf>> {
+    let mut found: HashMap<String, Vec<PathBuf>> = HashMap::new();
+    let folder = if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    };
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return found;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some((target, pid)) = name.to_str().and_then(staged_for) else {
+            continue;
+        };
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        if regular && !may_be_alive(pid) {
+            found
+                .entry(target.to_owned())
+                .or_default()
+                .push(entry.path());
+        }
+    }
+    found
 }
 
 /// Renames every staged file into place, in order (stage them all first: see the module docs;
@@ -164,6 +241,53 @@ mod tests {
         let path = dir.join("no/such/folder/x.png");
         let e = StagedFile::write_bytes(&path, b"x").unwrap_err();
         assert!(e.to_string().contains("x.png"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn temporary_names_tell_their_file_and_writer() {
+        assert_eq!(staged_for(".a.png.tmp-22127-0"), Some(("a.png", 22127)));
+        assert_eq!(staged_for(".a.png.tmp-22127-3.png"), Some(("a.png", 22127)));
+        assert_eq!(
+            staged_for(".a.meta.json.tmp-9-12"),
+            Some(("a.meta.json", 9))
+        );
+        for other in [
+            "a.png",
+            ".a.png",
+            ".a.png.tmp-x-0",
+            ".a.png.tmp-1-",
+            ".tmp-1-2",
+            ".a.png.tmp-1-2.jpg",
+        ] {
+            assert_eq!(staged_for(other), None, "{other}");
+        }
+        // A name staged now reads back as this process's.
+        let dir = scratch("names");
+        let staged = StagedFile::write_bytes(&dir.join("b.pfm"), b"x").unwrap();
+        let tmp = staged.into_temporary();
+        let name = tmp.file_name().unwrap().to_str().unwrap().to_owned();
+        assert_eq!(staged_for(&name), Some(("b.pfm", std::process::id())));
+        assert!(tmp.is_file(), "handed over, not removed");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn leftovers_are_those_of_writers_no_longer_running() {
+        let dir = scratch("leftovers");
+        // A process id above Linux's largest (4194304) is no running process.
+        std::fs::write(dir.join(".a.png.tmp-99999999-0"), b"half").unwrap();
+        std::fs::write(dir.join(".a.depth.pfm.tmp-99999999-1"), b"half").unwrap();
+        let mine = StagedFile::write_bytes(&dir.join("a.png"), b"now").unwrap();
+        std::fs::write(dir.join("a.png"), b"old").unwrap();
+        let found = leftovers(&dir);
+        assert_eq!(found.len(), 2, "{found:?}");
+        assert_eq!(found["a.png"], [dir.join(".a.png.tmp-99999999-0")]);
+        assert_eq!(
+            found["a.depth.pfm"],
+            [dir.join(".a.depth.pfm.tmp-99999999-1")]
+        );
+        drop(mine);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -6,22 +6,7 @@
 use std::path::PathBuf;
 
 use super::SceneFile;
-
-/// FNV-1a's 64-bit offset basis and prime (Fowler, Noll and Vo).
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-
-/// 64-bit FNV-1a over byte strings fed in order.
-struct Fnv1a(u64);
-
-impl Fnv1a {
-    fn eat(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= u64::from(b);
-            self.0 = self.0.wrapping_mul(FNV_PRIME);
-        }
-    }
-}
+use crate::fnv::Fnv1a;
 
 impl SceneFile {
     /// The digest of this file's text, the overrides applied to it (in order) and the bytes
@@ -43,7 +28,7 @@ impl SceneFile {
     /// assert_ne!(file.digest(&[]), edited.digest(&[]));
     /// ```
     pub fn digest(&self, read: &[PathBuf]) -> String {
-        let mut hash = Fnv1a(FNV_OFFSET);
+        let mut hash = Fnv1a::new();
         hash.eat(self.text().as_bytes());
         for text in self.source.overrides() {
             hash.eat(b"\0--set\0");
