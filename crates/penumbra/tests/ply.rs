@@ -106,8 +106,8 @@ fn a_textured_coloured_ply_keeps_its_colours_texture_and_texcoords() {
           transparency)"
         ]
     );
-    // A missing texture is an image error naming it.
-    std::fs::remove_file(dir.join("tex/red.png")).unwrap();
+    // A texture that is there but broken is an image error naming it.
+    std::fs::write(dir.join("tex/red.png"), b"not a png").unwrap();
     let e = build(
         &dir,
         "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
@@ -115,6 +115,19 @@ fn a_textured_coloured_ply_keeps_its_colours_texture_and_texcoords() {
     .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Asset(AssetKind::Image), "{e}");
     assert!(e.to_string().contains("red.png"), "{e}");
+    // A missing one is dropped with a warning naming it (as trimesh and MeshLab read it).
+    std::fs::remove_file(dir.join("tex/red.png")).unwrap();
+    let scene = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
+    )
+    .unwrap();
+    assert!(scene.world.textures().is_empty());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("red.png")),
+        "{:?}",
+        scene.warnings
+    );
 }
 
 #[test]
