@@ -14,7 +14,7 @@ fn sky(dir: &TempDir, light: &str) -> Result<Scene, penumbra::SceneError> {
          up = [0, 1, 0]\nfov = 10\n[render]\nsampler = \"center\"\n[[lights]]\n\
          type = \"environment\"\n{light}\n"
     );
-    SceneFile::load(&dir.write("scene.toml", text))?.build(0)
+    SceneFile::load(dir.write("scene.toml", text))?.build(0)
 }
 
 fn film(scene: &Scene) -> Film {
@@ -107,7 +107,7 @@ fn the_decoder_memory_limit_is_the_texel_limit() {
     // The message of a scene names the file and the limit.
     let dir = TempDir::new("hdr-limit");
     dir.write("huge.hdr", header);
-    let e = sky(&dir, "file = \"huge.hdr\"").err().unwrap().to_string();
+    let e = sky(&dir, "file = \"huge.hdr\"").unwrap_err().to_string();
     assert!(
         e.contains("huge.hdr") && e.contains("67108864 texels"),
         "{e}"

@@ -160,8 +160,7 @@ mod tests {
     /// The error of reading `json` as a glTF document.
     fn error(json: &str) -> GltfError {
         let e = gltf::json::deserialize::from_slice::<gltf::json::Root>(json.as_bytes())
-            .err()
-            .expect("an error");
+            .expect_err("an error");
         located(json.as_bytes(), &e)
     }
 
