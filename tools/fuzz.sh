@@ -10,7 +10,8 @@
 # Targets: scene_toml, scene_json, scene_override (a TOML scene with a --set override on its
 # first line), pack (a scene pack: its overrides, scene text and packed files, see the body):
 # parse, build and a 4×4 render; obj, mtl, ply (ASCII and binary), gltf (GLB and JSON),
-# texture (PNG and JPEG decoding). Their
+# texture (PNG and JPEG decoding), hdr (an environment map file, Radiance HDR headers and
+# scanlines above all: decoded and sampled). Their
 # bodies are in crates/penumbra-fuzz-targets. Needs the nightly toolchain
 # (`rustup toolchain install nightly`); installs cargo-fuzz from crates.io when it is missing.
 # Runs one fuzzer process. New inputs go to fuzz/target/corpus/TARGET (kept between runs, not
@@ -21,7 +22,7 @@
 # `cargo test -p penumbra-fuzz-targets` replays it) and fix the library.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-targets=(scene_toml scene_json scene_override obj mtl ply gltf texture pack)
+targets=(scene_toml scene_json scene_override obj mtl ply gltf texture pack hdr)
 
 usage() {
     sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//' >&2

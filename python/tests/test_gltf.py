@@ -102,3 +102,29 @@ def test_a_glb_with_a_camera_renders_through_it(tmp_path):
     hits = scene.raycasting_scene().cast_rays(
         np.array([[0, 0, 2, 0, 0, -1]], dtype=np.float32))
     assert hits["t_hit"].numpy()[0] == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("edit, at, message", [
+    (lambda d: d["accessors"][0].pop("type"), "accessors[0].type", "is missing"),
+    (lambda d: (d.pop("scenes"), d.update(nodes=[{"mesh": 0, "children": [1]},
+                                                 {"children": [0]}])),
+     "nodes[0]", "cycle"),
+])
+def test_bad_json_is_named_by_its_json_path(tmp_path, edit, at, message):
+    doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+    }
+    edit(doc)
+    path = tmp_path / "bad.glb"
+    path.write_bytes(glb(doc, struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)))
+    with pytest.raises(penumbra.SceneError) as info:
+        penumbra.load(path, threads=1)
+    text = str(info.value)
+    assert "bad.glb" in text and f"{at}: " in text and message in text, text
+    assert "column" not in text, text

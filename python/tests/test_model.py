@@ -83,3 +83,15 @@ def test_camera_auto_frames_any_scene_as_a_model_is_framed(models):
     from penumbra import distributed, views
     distributed.check_views(away, [{"name": "a", "camera": "auto",
                                     **{k: None for k in views.RENDER_KEYS}}])
+
+
+def test_a_vcglib_ply_with_extra_face_values_and_no_texture_file_loads(tmp_path):
+    # As VCGlib writes it: a TextureFile that is not there, and values after each face's list.
+    faces = "".join(f"{line} 0 0 0\n" for line in PLY.split("end_header\n")[1].splitlines()[8:])
+    text = PLY.replace("format ascii 1.0\n",
+                       "format ascii 1.0\ncomment TextureFile gone.png\n")
+    text = text.split("end_header\n")[0] + "end_header\n" + CORNERS + faces
+    (tmp_path / "vcg.ply").write_text(text)
+    scene = penumbra.load(tmp_path / "vcg.ply", threads=1)
+    assert scene.stats["triangles"] == 12
+    assert scene.files == [str(tmp_path / "vcg.ply")]

@@ -15,6 +15,10 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod formats;
+
+pub use formats::hdr;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -33,7 +37,7 @@ pub struct Target {
 }
 
 /// Every target.
-pub const TARGETS: [Target; 9] = [
+pub const TARGETS: [Target; 10] = [
     Target {
         name: "scene_toml",
         run: scene_toml,
@@ -69,6 +73,10 @@ pub const TARGETS: [Target; 9] = [
     Target {
         name: "pack",
         run: pack,
+    },
+    Target {
+        name: "hdr",
+        run: hdr,
     },
 ];
 
@@ -276,7 +284,7 @@ pub fn obj(data: &[u8]) {
     check_bounds(&info.bounds, false);
 }
 
-/// A PLY file, ASCII or binary.
+/// A PLY file, ASCII or binary; an ASCII one's rows are lines (see `formats`).
 pub fn ply(data: &[u8]) {
     let Ok(info) = inspect_ply_bytes(data) else {
         return;
@@ -285,15 +293,18 @@ pub fn ply(data: &[u8]) {
     assert!(info.triangles > 0, "a PLY without triangles was accepted");
     assert!(info.vertices > 0);
     check_bounds(&info.bounds, false);
+    formats::check_ply_rows(data, &info);
 }
 
 /// A glTF file, GLB or JSON (by its first bytes), with at most 64 MiB of geometry; its
-/// external files are looked for in a folder that does not exist.
+/// external files are looked for in a folder that does not exist. An error names its JSON
+/// path (see `formats`).
 pub fn gltf(data: &[u8]) {
     const MAX_BYTES: u64 = 64 << 20;
     let dir = repo_dir().join("fuzz/no-such-folder");
-    let Ok(info) = inspect_gltf_bytes(data, &dir, Some(MAX_BYTES)) else {
-        return;
+    let info = match inspect_gltf_bytes(data, &dir, Some(MAX_BYTES)) {
+        Ok(info) => info,
+        Err(message) => return formats::check_gltf_message(&message),
     };
     // A scene without triangles is an error, so the bounds hold at least one vertex.
     assert!(info.triangles > 0, "a glTF without triangles was accepted");

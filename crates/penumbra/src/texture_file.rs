@@ -1,15 +1,27 @@
-//! Texture images: PNG and JPEG files decoded to linear RGB texels (and the alpha channel,
-//! linear as stored, when the file has one), with their size checked against memory before
-//! decoding (a small file can claim a huge image).
+//! Texture images: PNG and JPEG files (and Radiance HDR and OpenEXR, for environment maps)
+//! decoded to linear RGB texels (and the alpha channel, linear as stored, when the file has
+//! one), with their size checked against memory before decoding (a small file can claim a
+//! huge image). The format is the content's (its first bytes), never the file's extension,
+//! and so is the colour curve: 8- and 16-bit PNG and JPEG are sRGB-encoded, Radiance HDR and
+//! OpenEXR hold linear values (as Mitsuba's `Bitmap` reads them: format detected from the
+//! content, the sRGB curve only for integer formats).
+
+mod flat_hdr;
 
 use std::io::Cursor;
 use std::path::Path;
+
+use image::{DynamicImage, ImageFormat};
 
 use crate::files::Files;
 use crate::texture::{srgb_to_linear, Image};
 
 /// Most texels in a texture: 2^26 (8192 × 8192), 768 MiB as linear float RGB.
 pub const MAX_TEXELS: u64 = 1 << 26;
+
+/// Most bytes a decoder may allocate: [`MAX_TEXELS`] of its largest texel (four 32-bit
+/// floats), the `image` crate's limit (its default, 512 MiB, refused a 10240 × 5120 HDR).
+const MAX_DECODER_BYTES: u64 = MAX_TEXELS * 16;
 
 /// Memory decoding takes per texel at its peak: the decoder's buffer (up to 8 bytes for
 /// 16-bit RGBA), its float copy (12, or 16 with alpha), and the texels kept (12, and 4 for
@@ -19,6 +31,7 @@ pub const DECODE_BYTES_PER_TEXEL: u64 = 40;
 /// Reads and decodes the PNG or JPEG `path` of `files` (8 or 16 bits, grey, RGB or RGBA)
 /// to linear RGB, through the sRGB curve when `srgb` is true, else as value/max; an alpha
 /// channel is kept beside the texels as value/max, never through the curve ([`Image::alpha`]).
+/// A Radiance HDR or OpenEXR file is linear already: its values are kept, whatever `srgb`.
 /// With `max_bytes`, an image whose decoding would take more memory than that is refused
 /// before it is decoded.
 pub(crate) fn load_texture_image(
@@ -66,10 +79,17 @@ pub fn decode_texture_image(
 ) -> Result<Image, String> {
     check_png_palette(bytes)?;
     let reader = || {
-        image::ImageReader::new(Cursor::new(bytes))
+        let mut reader = image::ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()
-            .map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())?;
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(MAX_DECODER_BYTES);
+        reader.limits(limits);
+        Ok::<_, String>(reader)
     };
+    let format = reader()?.format();
+    // Float content is linear: the curve is for integer (encoded) content only.
+    let srgb = srgb && !matches!(format, Some(ImageFormat::Hdr | ImageFormat::OpenExr));
     // Read the size from the header first: a small file can claim a huge image.
     let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
     if w as u64 * h as u64 > MAX_TEXELS {
@@ -85,7 +105,14 @@ pub fn decode_texture_image(
             crate::memory::human(max)
         ));
     }
-    let img = reader()?.decode().map_err(|e| e.to_string())?;
+    let flat = match format {
+        Some(ImageFormat::Hdr) => flat_hdr::decode(bytes),
+        _ => None,
+    };
+    let img = match flat {
+        Some(flat) => DynamicImage::from(flat?),
+        None => reader()?.decode().map_err(|e| decode_error(&e))?,
+    };
     let (width, height) = (img.width(), img.height());
     if width == 0 || height == 0 {
         return Err("the image is empty".into());
@@ -122,6 +149,18 @@ pub fn decode_texture_image(
         texels: rgb,
         alpha,
     })
+}
+
+/// The message of a decoder's error; its memory limit named with the texel limit it follows.
+fn decode_error(e: &image::ImageError) -> String {
+    match e {
+        image::ImageError::Limits(_) => format!(
+            "{e}: the decoder may allocate at most {} (the texture limit of {MAX_TEXELS} \
+             texels, 8192 x 8192, at 16 bytes a texel)",
+            crate::memory::human(MAX_DECODER_BYTES)
+        ),
+        _ => e.to_string(),
+    }
 }
 
 /// An empty vector with room for `n` values, or `None` when memory is short.

@@ -106,8 +106,8 @@ fn a_textured_coloured_ply_keeps_its_colours_texture_and_texcoords() {
           transparency)"
         ]
     );
-    // A missing texture is an image error naming it.
-    std::fs::remove_file(dir.join("tex/red.png")).unwrap();
+    // A texture that is there but broken is an image error naming it.
+    std::fs::write(dir.join("tex/red.png"), b"not a png").unwrap();
     let e = build(
         &dir,
         "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
@@ -115,6 +115,19 @@ fn a_textured_coloured_ply_keeps_its_colours_texture_and_texcoords() {
     .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Asset(AssetKind::Image), "{e}");
     assert!(e.to_string().contains("red.png"), "{e}");
+    // A missing one is dropped with a warning naming it (as trimesh and MeshLab read it).
+    std::fs::remove_file(dir.join("tex/red.png")).unwrap();
+    let scene = build(
+        &dir,
+        "[[objects]]\ntype = \"mesh\"\nfile = \"square.ply\"\n",
+    )
+    .unwrap();
+    assert!(scene.world.textures().is_empty());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("red.png")),
+        "{:?}",
+        scene.warnings
+    );
 }
 
 #[test]
@@ -215,4 +228,49 @@ fn the_shared_ply_files_have_their_triangles_and_bounds() {
         );
         assert!(info.closed);
     }
+}
+
+/// A VCGlib ASCII PLY (as MeshLab's "Save As" writes one with face flags): each face line
+/// ends with values its header does not declare.
+const VCGLIB_ASCII: &str = "ply\nformat ascii 1.0\ncomment VCGLIB generated\n\
+    comment TextureFile absent_texture.png\nelement vertex 4\nproperty float x\n\
+    property float y\nproperty float z\nproperty float s\nproperty float t\nelement face 2\n\
+    property list uchar int vertex_indices\nend_header\n\
+    0 0 0 0 0 \n1 0 0 1 0 \n1 1 0 1 1 \n0 1 0 0 1 \n3 0 1 2 0 0 0 \n3 0 2 3 0 0 0 \n";
+
+#[test]
+fn a_vcglib_ascii_file_with_extra_face_values_and_a_missing_texture_file_loads() {
+    let dir = TempDir::new("ply_vcglib");
+    dir.write("vcg.ply", VCGLIB_ASCII);
+    let scene = build(&dir, "[[objects]]\ntype = \"mesh\"\nfile = \"vcg.ply\"\n").unwrap();
+    let g = scene.world.geometry();
+    // Both faces: the extra values at the ends of the lines are not the next face's.
+    assert_eq!(g.triangles.len(), 2);
+    assert_eq!(
+        g.corners(1),
+        [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
+    );
+    let warned = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
+    assert!(
+        warned("6 value(s) at the ends of 2 `face` row(s)") && warned("vcg.ply"),
+        "{:?}",
+        scene.warnings
+    );
+    assert!(
+        warned("absent_texture.png") && warned("read without it"),
+        "{:?}",
+        scene.warnings
+    );
+    // inspect_ply says the same.
+    let info = inspect_ply(&dir.join("vcg.ply")).unwrap();
+    assert_eq!(info.triangles, 2);
+    assert!(info
+        .warnings
+        .iter()
+        .any(|w| w.contains("absent_texture.png")));
+    // With the texture there, it is used.
+    dir.png("absent_texture.png", 2, 2, |_, _| [255, 0, 0]);
+    let scene = build(&dir, "[[objects]]\ntype = \"mesh\"\nfile = \"vcg.ply\"\n").unwrap();
+    assert!(!scene.warnings.iter().any(|w| w.contains("absent_texture")));
+    assert_eq!(scene.world.textures().len(), 1);
 }

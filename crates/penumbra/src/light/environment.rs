@@ -129,12 +129,17 @@ impl EnvironmentMap {
                 j => (PI * j as f32 / (h - 1) as f32).cos(),
             })
             .collect();
+        let peak = rows.iter().fold(Rgb::ZERO, |m, r| m.max(r.peak));
+        let scale = weight_scale(peak.max_element());
         // The bilinear cells row by row, in parallel: a row's weights and distribution depend
         // on its two texel rows alone.
         let cells = (0..h - 1).into_par_iter().map(|j| {
             // Every cell of a row spans the same solid angle: weigh by the band's height.
             let band = cos_rows[j] - cos_rows[j + 1];
-            let lum = |j: usize| texels[j * w..(j + 1) * w].iter().map(|&t| luminance(t));
+            let lum = |j: usize| {
+                let row = texels[j * w..(j + 1) * w].iter();
+                row.map(move |&t| luminance(t * scale))
+            };
             let pairs: Vec<f32> = lum(j).zip(lum(j + 1)).map(|(a, b)| a + b).collect();
             let weights: Vec<f32> = (0..w)
                 .map(|i| {
@@ -153,7 +158,6 @@ impl EnvironmentMap {
             sum += (rows[j].sum + rows[j + 1].sum) * (0.5 * band);
             total += band * w as f64;
         }
-        let peak = rows.iter().fold(Rgb::ZERO, |m, r| m.max(r.peak));
         Ok(EnvironmentMap {
             width,
             height,
@@ -294,6 +298,20 @@ impl EnvironmentMap {
     /// once when the map is made.
     pub fn mean_and_peak(&self) -> (Rgb, Rgb) {
         (self.mean, self.peak)
+    }
+}
+
+/// The power of two the sampling weights of a map whose largest channel is `peak` are
+/// computed at: 1 up to 2^64, else what brings it to 2^64, so that the f32 sums of a cell's
+/// four corners cannot overflow (a map of the largest RGBE texels, 1.7e38, summed to
+/// infinity and sampled NaN). A power of two scales every weight exactly, so the
+/// distribution is the one the unscaled weights would give; only texels under 2^-190 of the
+/// peak (subnormal once scaled) lose precision.
+fn weight_scale(peak: f32) -> f32 {
+    const MOST: i32 = 64;
+    match peak > 2f32.powi(MOST) {
+        true => 2f32.powi(MOST - peak.log2().ceil() as i32),
+        false => 1.0,
     }
 }
 

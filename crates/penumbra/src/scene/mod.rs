@@ -97,7 +97,8 @@ pub struct Scene {
     /// copy for `type = "instances"` (and one per placed mesh of a glTF file).
     pub objects: Vec<std::ops::Range<u32>>,
     /// What the build ignored in the files it read (glTF features penumbra does not render:
-    /// animations, normal maps, …), one sentence each, naming the file.
+    /// animations, normal maps, …; a PLY file's ignored properties, values or missing
+    /// `TextureFile`), one sentence each, naming the file.
     pub warnings: Vec<String>,
     /// The cameras with keys or a path, by name, in file order. The world holds each under
     /// its name at the path's first frame.

@@ -248,8 +248,9 @@ impl Builder<'_> {
         Ok(a)
     }
 
-    /// The map of environment light `e` at `path`: its `file` (Radiance `.hdr` and `.exr`
-    /// linear, other images through the sRGB curve) or its uniform `color`.
+    /// The map of environment light `e` at `path`: its `file` (Radiance HDR and OpenEXR
+    /// content linear, PNG and JPEG content through the sRGB curve, whatever the extension)
+    /// or its uniform `color`.
     fn environment_map(
         &mut self,
         path: &KeyPath,
@@ -278,11 +279,8 @@ impl Builder<'_> {
             }
             (Some(file), None) => {
                 let resolved = self.file.resolve(file);
-                let linear = resolved
-                    .extension()
-                    .and_then(|x| x.to_str())
-                    .is_some_and(|x| ["hdr", "exr"].contains(&&*x.to_ascii_lowercase()));
-                let image = self.image(&path.key("file"), resolved, !linear, "environment map")?;
+                // The content picks the curve, not the extension: see `load_texture_image`.
+                let image = self.image(&path.key("file"), resolved, true, "environment map")?;
                 EnvironmentMap::new(image.width, image.height, image.texels.clone())
             }
         };

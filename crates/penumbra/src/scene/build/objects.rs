@@ -231,7 +231,13 @@ impl Builder<'_> {
                 self.check_obj_size(path, &obj_path)?;
                 // A `.ply` file by its extension; any other is read as OBJ.
                 let model = match is_ply(&obj_path) {
-                    true => load_model(self.file.files(), &obj_path),
+                    true => load_model(self.file.files(), &obj_path).map(|(model, warnings)| {
+                        let shown = warnings
+                            .iter()
+                            .map(|w| format!("{}: {w}", obj_path.display()));
+                        self.warnings.extend(shown);
+                        model
+                    }),
                     false => load_obj(self.file.files(), &obj_path, self.pool.as_ref()),
                 }
                 .map_err(|e| {

@@ -58,8 +58,8 @@ pub struct SpotLightDesc {
 /// An environment light.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvironmentLightDesc {
-    /// The equirectangular map (`.hdr`, `.exr` linear; `.png`, `.jpg` sRGB), relative to the
-    /// scene file's folder; exclusive with `color`.
+    /// The equirectangular map (Radiance HDR, OpenEXR linear; PNG, JPEG sRGB: by content),
+    /// relative to the scene file's folder; exclusive with `color`.
     pub file: Option<String>,
     /// One radiance in every direction, instead of a file.
     pub color: Option<ColorDesc>,

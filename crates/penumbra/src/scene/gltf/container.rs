@@ -1,6 +1,6 @@
 //! The file itself: a GLB container (12-byte header, a JSON chunk, an optional BIN chunk) or
-//! plain JSON; the JSON parsed by the `gltf` crate, its required extensions checked against
-//! those penumbra reads, then every index validated.
+//! plain JSON; the JSON parsed by the `gltf` crate (its errors located at their JSON path),
+//! its required extensions checked against those penumbra reads, then every index validated.
 
 use super::{GltfError, Result};
 
@@ -37,7 +37,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Parsed> {
         ));
     }
     let root: gltf::json::Root = gltf::json::deserialize::from_slice(json)
-        .map_err(|e| GltfError::new("", format!("the JSON cannot be read: {e}")))?;
+        .map_err(|e| super::json_path::located(json, &e))?;
     check_required(&root)?;
     validate(&root)?;
     let document = gltf::Document::from_json_without_validation(root);

@@ -30,6 +30,7 @@ mod accessor;
 mod buffers;
 mod container;
 mod info;
+mod json_path;
 mod materials;
 mod meshes;
 mod nodes;
@@ -38,6 +39,8 @@ pub use info::{inspect_gltf, inspect_gltf_bytes, GltfInfo};
 pub(crate) use nodes::unique;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_graph;
 
 use std::collections::BTreeMap;
 use std::fmt;

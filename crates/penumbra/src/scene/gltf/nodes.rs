@@ -1,6 +1,8 @@
-//! The scene graph: the chosen scene's nodes walked from its roots (iteratively, so a deep
-//! chain cannot overflow the stack; a node reached twice is an error, so a cycle cannot
-//! hang), each node's world matrix the product of its ancestors' and its own.
+//! The scene graph: the node hierarchy checked to be a forest first (every node a child of at
+//! most one node, no cycle), over all the file's nodes whether or not it has scenes, so that a
+//! cycle is the same error with or without `scenes`; then the chosen scene's nodes walked from
+//! its roots (iteratively, so a deep chain cannot overflow the stack; a node reached twice is
+//! an error), each node's world matrix the product of its ancestors' and its own.
 
 use std::collections::HashMap;
 
@@ -14,6 +16,7 @@ impl Reader<'_> {
     /// lights, and the materials and images the used meshes need.
     pub(super) fn scene(&mut self, model: &mut GltfModel) -> Result<()> {
         let doc = self.doc;
+        check_forest(doc)?;
         let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
             Some(scene) => scene.nodes().map(|n| n.index()).collect(),
             None => {
@@ -196,4 +199,84 @@ fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
         }
     }
     (0..child.len()).filter(|&i| !child[i]).collect()
+}
+
+/// Refuses a node hierarchy that is not a forest (glTF 2.0 §3.5.3: "the node hierarchy must be
+/// a set of disjoint strict trees"): a node that is the child of two nodes, or a cycle, named
+/// by its nodes. Every node of the file is checked, used by a scene or not.
+fn check_forest(doc: &gltf::Document) -> Result<()> {
+    let n = doc.nodes().len();
+    let mut parent: Vec<Option<usize>> = vec![None; n];
+    for node in doc.nodes() {
+        for c in node.children() {
+            let (i, c) = (node.index(), c.index());
+            if let Some(p) = parent[c].replace(i) {
+                return Err(GltfError::new(
+                    format!("nodes[{c}]"),
+                    format!(
+                        "the node is a child of both nodes[{p}] and nodes[{i}] (the node \
+                         hierarchy must be a tree)"
+                    ),
+                ));
+            }
+        }
+    }
+    // Each node has one parent at most: a cycle is a walk up the parents that comes back.
+    // `walk[i]` is the node whose walk first reached node i, so every node is passed once.
+    let mut walk: Vec<Option<usize>> = vec![None; n];
+    for start in 0..n {
+        let mut i = start;
+        while walk[i].is_none() {
+            walk[i] = Some(start);
+            match parent[i] {
+                Some(p) => i = p,
+                None => break,
+            }
+        }
+        if walk[i] == Some(start) && parent[i].is_some() && walk_returns(&parent, i) {
+            return Err(cycle_error(&parent, i));
+        }
+    }
+    Ok(())
+}
+
+/// True when the walk up the parents from `i` comes back to `i`.
+fn walk_returns(parent: &[Option<usize>], i: usize) -> bool {
+    let mut at = parent[i];
+    for _ in 0..parent.len() {
+        match at {
+            Some(p) if p == i => return true,
+            Some(p) => at = parent[p],
+            None => return false,
+        }
+    }
+    false
+}
+
+/// The error for the cycle through node `i`: at its lowest node, listing the cycle from there
+/// down its children (the first eight nodes of a long one).
+fn cycle_error(parent: &[Option<usize>], i: usize) -> GltfError {
+    let mut up = vec![i];
+    let mut at = parent[i];
+    while let Some(p) = at.filter(|&p| p != i) {
+        up.push(p);
+        at = parent[p];
+    }
+    // `up` runs child → parent; the message runs parent → child from the lowest index.
+    up.reverse();
+    let low = (0..up.len()).min_by_key(|&k| up[k]).unwrap_or(0);
+    up.rotate_left(low);
+    let mut shown: Vec<String> = up.iter().take(8).map(|k| format!("nodes[{k}]")).collect();
+    shown.push(if up.len() > 8 {
+        "…".into()
+    } else {
+        format!("nodes[{}]", up[0])
+    });
+    GltfError::new(
+        format!("nodes[{}]", up[0]),
+        format!(
+            "the node hierarchy has a cycle ({}): it must be a tree",
+            shown.join(" → ")
+        ),
+    )
 }

@@ -52,7 +52,7 @@ fn file(bin: &[u8], views: Value, accessors: Value, primitive: Value) -> Value {
 }
 
 /// One triangle (0,0,0), (1,0,0), (0,1,0) with u8 indices 0 1 2.
-fn triangle() -> Value {
+pub(super) fn triangle() -> Value {
     let mut bin = floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
     bin.extend([0u8, 1, 2, 0]);
     file(
@@ -69,7 +69,7 @@ fn triangle() -> Value {
     )
 }
 
-fn read(v: &Value) -> Result<GltfModel, GltfError> {
+pub(super) fn read(v: &Value) -> Result<GltfModel, GltfError> {
     parse_gltf(
         v.to_string().as_bytes(),
         Path::new("/nonexistent"),
@@ -102,7 +102,7 @@ fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
     out
 }
 
-fn read_bytes(bytes: &[u8]) -> Result<GltfModel, GltfError> {
+pub(super) fn read_bytes(bytes: &[u8]) -> Result<GltfModel, GltfError> {
     parse_gltf(bytes, Path::new("/nonexistent"), &Files::disk(), None)
 }
 

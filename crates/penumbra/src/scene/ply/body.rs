@@ -146,6 +146,38 @@ impl<'a> Body<'a> {
         }
     }
 
+    /// Passes over the words left on the current line of an ASCII body (values beyond a row's
+    /// properties: each row of an ASCII body is one line, as MeshLab and trimesh read it) and
+    /// returns how many there were, with the line they are on. Nothing for a binary body.
+    pub(super) fn end_row(&mut self) -> (u64, usize) {
+        let line = self.line;
+        let mut extra = 0;
+        if self.format != Format::Ascii {
+            return (0, line);
+        }
+        loop {
+            let bytes = self.bytes;
+            while let Some(&b) = bytes.get(self.pos).filter(|&&b| b != b'\n') {
+                if !b.is_ascii_whitespace() {
+                    break;
+                }
+                self.pos += 1;
+            }
+            match bytes.get(self.pos) {
+                None | Some(b'\n') => return (extra, line),
+                Some(_) => {
+                    extra += 1;
+                    while bytes
+                        .get(self.pos)
+                        .is_some_and(|b| !b.is_ascii_whitespace())
+                    {
+                        self.pos += 1;
+                    }
+                }
+            }
+        }
+    }
+
     /// The next whitespace-separated word of an ASCII body.
     fn word(&mut self) -> Result<&'a [u8], PlyError> {
         let bytes = self.bytes;

@@ -131,9 +131,29 @@ pub(crate) fn load_ply(files: &Files, path: &Path) -> Result<PlyModel, PlyError>
 
 /// [`load_ply`] as the model an OBJ file gives, for the scene's mesh objects: a texture file
 /// becomes one material with it as `map_Kd` (resolved against the PLY file's folder), which
-/// every triangle uses. The error is its message.
-pub(crate) fn load_model(files: &Files, path: &Path) -> Result<ObjModel, String> {
-    Ok(model(load_ply(files, path).map_err(|e| e.to_string())?, path).0)
+/// every triangle uses; a texture file that is not there is dropped with a warning (see
+/// [`drop_missing_textures`]). The error is its message; the warnings come beside the model.
+pub(crate) fn load_model(files: &Files, path: &Path) -> Result<(ObjModel, Vec<String>), String> {
+    let (mut model, mut warnings) = model(load_ply(files, path).map_err(|e| e.to_string())?, path);
+    drop_missing_textures(files, &mut model, &mut warnings);
+    Ok((model, warnings))
+}
+
+/// Drops the material of a `TextureFile` that `files` does not have, with a warning: the
+/// geometry is read without its texture (default material), as trimesh and MeshLab read it,
+/// rather than the whole file refused.
+fn drop_missing_textures(files: &Files, model: &mut ObjModel, warnings: &mut Vec<String>) {
+    model.materials.retain(|m| match &m.diffuse_texture {
+        Some(t) if !files.is_file(t) => {
+            warnings.push(format!(
+                "the texture file \"{}\" (`comment TextureFile`) is not there: the mesh is \
+                 read without it",
+                t.display()
+            ));
+            false
+        }
+        _ => true,
+    });
 }
 
 /// The OBJ model of `ply`, read from `path`, and its warnings.
@@ -160,8 +180,11 @@ fn model(ply: PlyModel, path: &Path) -> (ObjModel, Vec<String>) {
 /// does an OBJ file, with the warnings of what it holds that penumbra ignores. The error says
 /// what is wrong, with the line or byte.
 pub fn inspect_ply(path: &Path) -> Result<ObjInfo, String> {
-    let ply = load_ply(&Files::disk(), path).map_err(|e| e.to_string())?;
-    Ok(summary(ply, path))
+    let (model, warnings) = load_model(&Files::disk(), path)?;
+    Ok(ObjInfo {
+        warnings,
+        ..summarize(&model)
+    })
 }
 
 /// The bounds of the PLY file at `path`: all a model's scene needs (see `obj_bounds`).
@@ -261,7 +284,17 @@ pub(crate) fn read_ply(bytes: &[u8]) -> Result<PlyModel, PlyError> {
             "face" => fast::face_rows(&mut body, element, vertex_count, &mut out),
             _ => 0,
         };
-        read_rows(&mut body, element, &roles, vertex_count, first, &mut out)?;
+        let extra = read_rows(&mut body, element, &roles, vertex_count, first, &mut out)?;
+        if extra.values > 0 {
+            warnings.push(format!(
+                "{} value(s) at the ends of {} {} row(s), beyond the header's properties, are \
+                 ignored (the first on line {})",
+                extra.values,
+                extra.rows,
+                quoted(&element.name),
+                extra.first_line
+            ));
+        }
     }
     let Sink {
         mut mesh,

@@ -29,7 +29,20 @@ pub(super) struct Vertex {
     color: [f32; 3],
 }
 
-/// Reads the rows of `element` from `first` on, each property into its role.
+/// Values found at the ends of an element's ASCII rows beyond its properties, dropped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct Extra {
+    /// How many values, over all rows.
+    pub values: u64,
+    /// How many rows had some.
+    pub rows: u64,
+    /// The line of the first.
+    pub first_line: usize,
+}
+
+/// Reads the rows of `element` from `first` on, each property into its role; returns the
+/// values an ASCII row had beyond its properties (VCGlib writes some after each face), which
+/// are dropped.
 pub(super) fn read_rows(
     body: &mut Body,
     element: &Element,
@@ -37,7 +50,8 @@ pub(super) fn read_rows(
     vertex_count: u64,
     first: u64,
     out: &mut Sink,
-) -> Result<(), PlyError> {
+) -> Result<Extra, PlyError> {
+    let mut extra = Extra::default();
     let mut corners: Vec<u32> = Vec::new();
     let mut texcoords: Vec<f32> = Vec::new();
     let mut v = Vertex::default();
@@ -128,8 +142,16 @@ pub(super) fn read_rows(
         if vertex {
             push_vertex(&mut out.mesh, &v, normals, uvs, colors);
         }
+        let (values, line) = body.end_row();
+        if values > 0 {
+            if extra.rows == 0 {
+                extra.first_line = line;
+            }
+            extra.values += values;
+            extra.rows += 1;
+        }
     }
-    Ok(())
+    Ok(extra)
 }
 
 /// Stores a scalar `value` of type `ty` in its `role`; the error says what is wrong with it.

@@ -226,3 +226,27 @@ fn reservations_follow_the_bytes_not_the_header() {
         50
     );
 }
+
+#[test]
+fn ascii_rows_are_lines_whose_extra_values_are_dropped_with_a_warning() {
+    // VCGlib writes values after each face's list; a row may still run over several lines.
+    let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+                end_header\n0 0 0 9 9\n1 0\n0\n1 1 0\n0 1 0\n3 0 1 2 0 0 0\n3 0 2 3 7\n";
+    let ply = read_ply(text.as_bytes()).unwrap();
+    assert_eq!(ply.mesh.indices, [[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(ply.mesh.positions[1], glam::Vec3::X);
+    assert_eq!(
+        ply.warnings,
+        [
+            "2 value(s) at the ends of 1 `vertex` row(s), beyond the header's properties, are \
+             ignored (the first on line 10)",
+            "4 value(s) at the ends of 2 `face` row(s), beyond the header's properties, are \
+             ignored (the first on line 15)"
+        ]
+    );
+    // A row cut short is still an error.
+    let short = text.replace("3 0 2 3 7\n", "3 0 2\n");
+    let e = read_ply(short.as_bytes()).unwrap_err();
+    assert!(e.message.contains("ends early"), "{e}");
+}

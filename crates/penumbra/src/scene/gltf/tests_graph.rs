@@ -1,0 +1,68 @@
+//! The node hierarchy and the messages of JSON that does not deserialize: the same error
+//! whether or not the file has scenes, at a JSON path rather than a line and column.
+
+use serde_json::json;
+
+use super::tests::{read, read_bytes, triangle};
+
+#[test]
+fn a_cycle_is_the_same_error_with_or_without_scenes() {
+    let cycles = [
+        json!([{"mesh": 0, "children": [1]}, {"children": [0]}]),
+        json!([{"mesh": 0}, {"children": [2]}, {"children": [3]}, {"children": [1]}]),
+        json!([{"mesh": 0, "children": [0]}]),
+    ];
+    for nodes in cycles {
+        let mut with = triangle();
+        with["nodes"] = nodes.clone();
+        let mut without = with.clone();
+        without.as_object_mut().unwrap().remove("scenes");
+        without.as_object_mut().unwrap().remove("scene");
+        let (a, b) = (read(&with).unwrap_err(), read(&without).unwrap_err());
+        assert_eq!(a, b, "{nodes}");
+        assert!(a.message.contains("cycle"), "{nodes}: {a}");
+        assert!(!a.message.contains("no node uses a mesh"), "{a}");
+    }
+    // The cycle of nodes 1 → 2 → 3 → 1 is named from its lowest node.
+    let mut v = triangle();
+    v["nodes"] = json!([{"mesh": 0}, {"children": [2]}, {"children": [3]}, {"children": [1]}]);
+    let e = read(&v).unwrap_err();
+    assert_eq!(e.at, "nodes[1]");
+    assert!(
+        e.message
+            .contains("nodes[1] → nodes[2] → nodes[3] → nodes[1]"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_node_with_two_parents_is_refused_and_a_forest_without_scenes_loads() {
+    let mut v = triangle();
+    v["nodes"] = json!([{"mesh": 0}, {"children": [0]}, {"children": [0]}]);
+    v.as_object_mut().unwrap().remove("scenes");
+    v.as_object_mut().unwrap().remove("scene");
+    let e = read(&v).unwrap_err();
+    assert_eq!(e.at, "nodes[0]");
+    assert!(e.message.contains("nodes[1] and nodes[2]"), "{e}");
+    // Two trees, no scenes: every root is rendered.
+    v["nodes"] = json!([{"mesh": 0}, {"children": [0]}, {"mesh": 0}]);
+    let model = read(&v).unwrap();
+    assert_eq!(model.uses.len(), 2);
+}
+
+#[test]
+fn json_that_does_not_deserialize_names_its_json_path() {
+    let mut v = triangle();
+    v["accessors"][0].as_object_mut().unwrap().remove("type");
+    let e = read(&v).unwrap_err();
+    assert_eq!(e.at, "accessors[0].type", "{e}");
+    assert!(!e.to_string().contains("column"), "{e}");
+    // Pretty-printed, on many lines; and inside a GLB.
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    let e = read_bytes(text.as_bytes()).unwrap_err();
+    assert_eq!(e.at, "accessors[0].type", "{e}");
+    let mut v = triangle();
+    v["meshes"][0]["primitives"][0]["mode"] = json!("TRIANGLES");
+    let e = read(&v).unwrap_err();
+    assert_eq!(e.at, "meshes[0].primitives[0].mode", "{e}");
+}
