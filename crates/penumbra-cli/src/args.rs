@@ -41,6 +41,10 @@ pub struct CheckArgs {
     /// Override a scene key: KEY.PATH=VALUE (repeatable).
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
     pub set: Vec<Override>,
+    /// Let the scene's files also read files in DIR and below (repeatable). By default a scene
+    /// file reads only files in its own folder and below, and a model only in its own folder.
+    #[arg(long = "allow-path", value_name = "DIR", action = ArgAction::Append)]
+    pub allow_path: Vec<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -67,6 +71,10 @@ pub struct RenderArgs {
     /// else taken as a string.
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
     pub set: Vec<Override>,
+    /// Let the scene's files also read files in DIR and below (repeatable). By default a scene
+    /// file reads only files in its own folder and below, and a model only in its own folder.
+    #[arg(long = "allow-path", value_name = "DIR", action = ArgAction::Append)]
+    pub allow_path: Vec<PathBuf>,
     /// Film width in pixels.
     #[arg(long, value_name = "W")]
     pub width: Option<u32>,
