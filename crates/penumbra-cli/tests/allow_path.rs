@@ -19,7 +19,7 @@ fn a_file_outside_the_scene_folder_is_refused_unless_allowed() {
     dir.write("scenes/s.toml", &text);
     let line = line_of(&text, "file = ");
     for command in ["render", "check"] {
-        let r = run_in(dir.path(), [command, "scenes/s.toml", "--quiet"]);
+        let r = run_in(dir.path(), [command, "scenes/s.toml"]);
         let e = error_line(&r, 2);
         assert_eq!(
             e,
@@ -30,13 +30,7 @@ fn a_file_outside_the_scene_folder_is_refused_unless_allowed() {
             ),
             "{command}"
         );
-        let allowed = [
-            command,
-            "scenes/s.toml",
-            "--quiet",
-            "--allow-path",
-            "assets",
-        ];
+        let allowed = [command, "scenes/s.toml", "--allow-path", "assets"];
         ok(run_in(dir.path(), allowed));
     }
     assert!(dir.join("scenes/s.png").exists());
@@ -63,13 +57,13 @@ fn a_model_and_a_scene_on_stdin_have_their_own_roots() {
         format!("mtllib ../shared/lib.mtl\n{TRIANGLE}"),
     );
     for command in ["render", "check"] {
-        let r = run_in(dir.path(), [command, "model/m.obj", "--quiet"]);
+        let r = run_in(dir.path(), [command, "model/m.obj"]);
         let e = error_line(&r, 2);
         assert!(
             e.contains("`mtllib` \"../shared/lib.mtl\" is outside the model's folder model/"),
             "{command}: {e}"
         );
-        let allowed = [command, "model/m.obj", "--quiet", "--allow-path", "shared"];
+        let allowed = [command, "model/m.obj", "--allow-path", "shared"];
         ok(run_in(dir.path(), allowed));
     }
     // Standard input's folder is the current one.

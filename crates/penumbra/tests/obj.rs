@@ -373,11 +373,12 @@ fn mtllib_in_a_subfolder_resolves_map_kd_against_the_mtl_folder() {
         "sub/x.mtl",
         "newmtl a\nmap_Kd tex.png\nnewmtl b\nmap_Kd -s 2 2 1 -clamp on -mm 0 1 maps/with space.png\n",
     );
+    // (In the OBJ's folder or below: a model reads nothing outside it, see tests/reach.rs.)
     dir.write(
-        "models/m.obj",
-        "mtllib ../sub/x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n",
+        "m.obj",
+        "mtllib sub/x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n",
     );
-    let scene = mesh(dir.path(), "models/m.obj");
+    let scene = mesh(dir.path(), "m.obj");
     let size = |i: usize| {
         let m = &scene.world.materials()[scene.world.geometry().triangles[i].material as usize];
         match &scene.world.textures()[m.texture.unwrap() as usize].kind {
