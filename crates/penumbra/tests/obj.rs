@@ -700,10 +700,12 @@ fn spot_with_an_mtl_gets_its_texture() {
     let mut obj = b"mtllib spot.mtl\nusemtl spot\n".to_vec();
     obj.extend_from_slice(&original);
     dir.write("spot.obj", obj);
-    let texture = assets().join("textures/spot_texture.png");
+    // A copy of the texture too: a model reads only in its own folder (see tests/reach.rs).
+    let texture = std::fs::read(assets().join("textures/spot_texture.png")).unwrap();
+    dir.write("spot_texture.png", texture);
     dir.write(
         "spot.mtl",
-        format!("newmtl spot\nKd 1 1 1\nmap_Kd {}\n", texture.display()),
+        "newmtl spot\nKd 1 1 1\nmap_Kd spot_texture.png\n",
     );
     let scene = mesh(dir.path(), "spot.obj");
     assert_eq!(scene.world.stats().triangles, 5_856);
