@@ -125,19 +125,17 @@ fn canonical(path: &Path) -> PathBuf {
             }
             continue;
         };
-        {
-            let rest = path.strip_prefix(ancestor).unwrap_or(Path::new(""));
-            for c in rest.components() {
-                match c {
-                    Component::ParentDir => {
-                        real.pop();
-                    }
-                    Component::Normal(name) => real.push(name),
-                    _ => {}
+        let rest = path.strip_prefix(ancestor).unwrap_or(Path::new(""));
+        for c in rest.components() {
+            match c {
+                Component::ParentDir => {
+                    real.pop();
                 }
+                Component::Normal(name) => real.push(name),
+                _ => {}
             }
-            return real;
         }
+        return real;
     }
     lexical(path)
 }
