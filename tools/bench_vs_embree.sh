@@ -42,7 +42,7 @@ trap 'rm -f "$results"' EXIT
 for scene in "${scenes[@]}"; do
   python3 tools/side_by_side.py "$scene" --threads "${THREADS:-2}" \
     --repeats "${REPEATS:-3}" \
-    --other "$root/target/release/penumbra render {scene} -o {out} --threads {threads} --quiet {args}" |
+    --other "$root/target/release/penumbra render {scene} -o {out} --threads {threads} --quiet --allow-path $root/assets --allow-path $(dirname "$bench") {args}" |
     tee -a "$results"
 done
 if [ ${#scenes[@]} -gt 1 ]; then

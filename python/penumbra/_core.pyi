@@ -1,7 +1,7 @@
 """Type stubs of penumbra._core, the compiled core of the penumbra package. Use the public
 names of ``penumbra`` instead: they wrap these."""
 
-from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -115,13 +115,14 @@ def create_rays_pinhole(
 def create_rays_pinhole_fov(
     fov_deg: float, center: List[float], eye: List[float], up: List[float], width: int, height: int
 ) -> np.ndarray: ...
-def load(path: str, threads: int = 0) -> CoreScene: ...
+def load(path: str, threads: int = 0, allow_paths: Sequence[str] = ()) -> CoreScene: ...
 def loads(
     text: str,
     format: str = "toml",
     base_dir: str = ".",
     name: str = "<string>",
     threads: int = 0,
+    allow_paths: Sequence[str] = (),
 ) -> CoreScene: ...
 def load_pack(pack: Dict[str, Any], threads: int = 0) -> CoreScene: ...
 def file_name_part(name: str) -> str: ...

@@ -14,6 +14,7 @@ from typing import (
     List,
     Mapping,
     Optional,
+    Sequence,
     Tuple,
     Union,
 )
@@ -350,10 +351,15 @@ class Scene:
                 bar.close()
 
 
-def load(path: PathLike, threads: int = 0) -> Scene:
+def load(path: PathLike, threads: int = 0, allow_paths: Sequence[PathLike] = ()) -> Scene:
     """Load and build the ``.toml`` or ``.json`` scene file at ``path`` (meshes and textures
     included), with ``threads`` workers for reading meshes and building the BVH (0: all
     cores). The GIL is released meanwhile.
+
+    A scene file reads only files in its own folder and below, and a model (OBJ, MTL, PLY,
+    glTF) only files in its own folder and below; ``allow_paths`` (folders, like the CLI's
+    ``--allow-path``) widens that for every file of the scene. A file named outside is a
+    :class:`SceneError` naming the file, the reference and the rule.
 
     A bare ``.obj`` or ``.ply`` mesh is a scene too, as ``penumbra render model.obj`` takes
     it: the mesh (with its MTL materials, or the default one), a camera framing its bounds
@@ -364,7 +370,8 @@ def load(path: PathLike, threads: int = 0) -> Scene:
     ``file``, ``line``, ``column`` and ``key``; ``OSError`` (``FileNotFoundError``, ...) when
     the file cannot be read.
     """
-    return Scene(_core.load(os.fspath(path), _args.threads("load", threads)))
+    threads = _args.threads("load", threads)
+    return Scene(_core.load(os.fspath(path), threads, _allow_paths(allow_paths)))
 
 
 def loads(
@@ -372,19 +379,23 @@ def loads(
     format: str = "toml",
     base_dir: PathLike = ".",
     threads: int = 0,
+    allow_paths: Sequence[PathLike] = (),
 ) -> Scene:
     """Load and build a scene from its text in ``format`` (``"toml"`` or ``"json"``).
-    Relative paths in it (meshes, textures) resolve against ``base_dir``. Errors as in
-    :func:`load`, with ``file`` ``"<string>"``.
+    Relative paths in it (meshes, textures) resolve against ``base_dir``, the folder it reads
+    in (and below, and in ``allow_paths``, as for :func:`load`). Errors as in :func:`load`,
+    with ``file`` ``"<string>"``.
     """
     threads = _args.threads("loads", threads)
-    return Scene(_core.loads(text, format, os.fspath(base_dir), "<string>", threads))
+    allowed = _allow_paths(allow_paths)
+    return Scene(_core.loads(text, format, os.fspath(base_dir), "<string>", threads, allowed))
 
 
 def load_dict(
     scene: Mapping[str, Any],
     base_dir: PathLike = ".",
     threads: int = 0,
+    allow_paths: Sequence[PathLike] = (),
 ) -> Scene:
     """Load and build a scene from a dict with the scene file's schema (the JSON form of a
     scene file, Mitsuba's ``load_dict`` habit). Tuples and numpy arrays are taken as lists;
@@ -393,7 +404,8 @@ def load_dict(
     ``{"translate", "rotate", "scale", "material"}`` or ``{"matrix"}`` dicts, or the path
     of a ``.npy`` file of such matrices). Errors as in :func:`load`, with ``file``
     ``"<dict>"``; their ``key`` names the entry, such as ``objects[2].material`` (or
-    ``objects[1].transforms`` for an array of the wrong shape).
+    ``objects[1].transforms`` for an array of the wrong shape). Files it names are read in
+    ``base_dir`` and below, and in ``allow_paths``, as for :func:`load`.
 
     >>> scene = load_dict({
     ...     "film": {"width": 4, "height": 4},
@@ -409,8 +421,17 @@ def load_dict(
         # JSON has no NaN, infinity, set or cycle: reported at its key, as a file's would be.
         key, what = problem
         raise _scene_error(f"<dict>: {key}: {what}", key, "bad_value")
+    allowed = _allow_paths(allow_paths)
     text = json.dumps(_with_placements(scene), indent=1, default=_to_json)
-    return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads))
+    return Scene(_core.loads(text, "json", os.fspath(base_dir), "<dict>", threads, allowed))
+
+
+def _allow_paths(paths: Sequence[PathLike]) -> List[str]:
+    """The ``allow_paths`` argument as a list of paths: one path alone is taken as a list of
+    one, as ``--allow-path DIR`` once is."""
+    if isinstance(paths, (str, bytes, os.PathLike)):
+        paths = [paths]
+    return [os.fsdecode(p) for p in paths]
 
 
 def load_pack(pack: PackedScene, threads: int = 0) -> Scene:

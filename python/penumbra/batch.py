@@ -284,6 +284,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--force", action="store_true", help="render every view, even those done before"
     )
     parser.add_argument(
+        "--allow-path",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="let the scene's files also read files in DIR and below (repeatable), as "
+        "`penumbra render --allow-path` does",
+    )
+    parser.add_argument(
         "--json",
         action="store_true",
         help="print the summary as one JSON object at the end (each view's line goes to stderr)",
@@ -320,7 +328,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 1
     try:
         jobs = read_jobs(args.jobs)
-        scene = penumbra.load(jobs["scene"])
+        scene = penumbra.load(jobs["scene"], allow_paths=args.allow_path)
         check_views(args.jobs, jobs, scene)
     except OSError as e:  # the jobs file or the scene file cannot be read
         what = f"{e.filename}: {e.strerror}" if e.filename and e.strerror else str(e)

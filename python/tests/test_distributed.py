@@ -36,7 +36,7 @@ def cluster():
 @pytest.fixture(scope="module")
 def showcase():
     """Meshes, an MTL and textures: everything a pack must carry."""
-    return penumbra.load(SCENES / "showcase.toml")
+    return penumbra.load(SCENES / "showcase.toml", allow_paths=[SCENES.parent / "assets"])
 
 
 def fresh_room(tag: str) -> penumbra.Scene:

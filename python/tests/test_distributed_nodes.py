@@ -39,7 +39,7 @@ def nodes():
 def test_worker_nodes_render_a_frame_and_views_exactly(nodes, tmp_path):
     assert len([n for n in ray.nodes() if n["Alive"]]) == 3
     head = ray.get_runtime_context().get_node_id()
-    scene = penumbra.load(SCENES / "showcase.toml")
+    scene = penumbra.load(SCENES / "showcase.toml", allow_paths=[SCENES.parent / "assets"])
     kw = dict(width=48, height=36, spp=4)
     image = distributed.render_frame(scene, tiles=8, **kw)
     assert same_bits(image, scene.render(**kw))

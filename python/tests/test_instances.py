@@ -75,7 +75,8 @@ def test_matrix_entries_and_a_npy_file_render_the_same(inline, tmp_path):
     listed = penumbra.load_dict(scene([{"matrix": m.tolist()} for m in rows]))
     assert np.array_equal(listed.render(threads=2), inline)
     np.save(tmp_path / "copies.npy", rows)
-    from_file = penumbra.load_dict(scene("copies.npy"), base_dir=tmp_path)
+    # The mesh is outside tmp_path, the scene's folder: allowed.
+    from_file = penumbra.load_dict(scene("copies.npy"), base_dir=tmp_path, allow_paths=SPOT.parent)
     assert np.array_equal(from_file.render(threads=2), inline)
 
 

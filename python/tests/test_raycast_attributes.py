@@ -23,7 +23,8 @@ def centre_rays(scene: penumbra.Scene) -> np.ndarray:
 @pytest.mark.parametrize("name", ["showcase.toml", "herd.toml"])
 def test_attributes_are_what_the_renderer_sees_through_each_pixel_centre(name):
     # showcase: a textured OBJ, a textured sphere, a smooth scan; herd: instances.
-    scene = penumbra.load(SCENES / name)
+    # The shipped scenes read ../assets: allowed, as `--allow-path assets` allows it.
+    scene = penumbra.load(SCENES / name, allow_paths=[SCENES.parent / "assets"])
     hits = scene.raycasting_scene().cast_rays(
         centre_rays(scene), attributes=("albedo", "shading_normal", "uv", "object_id"))
     # One sample at the pixel's centre: the filtered albedo AOV is the centre ray's.

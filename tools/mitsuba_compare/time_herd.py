@@ -142,7 +142,8 @@ def main():
             "film.height": str(height)}
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "p.pfm")
-        cmd = [args.penumbra, "render", HERD, "-o", out, "--json", "--quiet"]
+        cmd = [args.penumbra, "render", HERD, "-o", out, "--json", "--quiet",
+               "--allow-path", os.path.join(ROOT, "assets")]  # the herd reads ../assets
         cmd += [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
         if args.threads:
             cmd += ["--threads", str(args.threads)]

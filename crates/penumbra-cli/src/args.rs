@@ -64,6 +64,10 @@ pub struct CheckArgs {
     /// Override a scene key: KEY.PATH=VALUE (repeatable).
     #[arg(long = "set", short = 'D', value_name = "KEY.PATH=VALUE", value_parser = parse_override, action = ArgAction::Append)]
     pub set: Vec<Override>,
+    /// Let the scene's files also read files in DIR and below (repeatable). By default a scene
+    /// file reads only files in its own folder and below, and a model only in its own folder.
+    #[arg(long = "allow-path", value_name = "DIR", action = ArgAction::Append)]
+    pub allow_path: Vec<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -95,6 +99,10 @@ pub struct RenderArgs {
     /// Film width and height in pixels, WIDTHxHEIGHT (f3d's flag): --resolution 640x480.
     #[arg(long, visible_alias = "res", value_name = "WxH", value_parser = parse_resolution, conflicts_with_all = ["width", "height"])]
     pub resolution: Option<(u32, u32)>,
+    /// Let the scene's files also read files in DIR and below (repeatable). By default a scene
+    /// file reads only files in its own folder and below, and a model only in its own folder.
+    #[arg(long = "allow-path", value_name = "DIR", action = ArgAction::Append)]
+    pub allow_path: Vec<PathBuf>,
     /// Film width in pixels.
     #[arg(long, value_name = "W")]
     pub width: Option<u32>,

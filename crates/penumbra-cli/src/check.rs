@@ -23,9 +23,9 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
                 "--set {o}: overrides change scene keys, and a mesh file has none (check a scene that places the mesh instead)"
             )));
         }
-        return check_obj::run(path, args.json);
+        return check_obj::run(path, args.json, &args.allow_path);
     }
-    let file = input::load(path, &args.set, input::Reader::Check)?;
+    let file = input::load(path, &args.set, &args.allow_path, input::Reader::Check)?;
     let scene = file.build(0).map_err(invalid)?;
     let world = &scene.world;
     let name = if input::is_stdin(path) {

@@ -6,16 +6,16 @@
 
 use std::path::Path;
 
-use penumbra::{inspect_gltf, SceneFile};
+use penumbra::{inspect_gltf_in, Files, SceneFile};
 use serde_json::json;
 
 use crate::failure::{invalid, note, say, Failure};
 use crate::summary::{bounds_json, bounds_text};
 
-pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
-    let info = inspect_gltf(path)
+pub fn run(path: &Path, json: bool, files: &Files) -> Result<(), Failure> {
+    let info = inspect_gltf_in(files, path)
         .map_err(|e| invalid(format!("{}: cannot load glTF: {e}", path.display())))?;
-    SceneFile::load(path)
+    SceneFile::load_allowing(path, &[], files.allowed().to_vec())
         .and_then(|file| file.build(0))
         .map_err(invalid)?;
     for w in &info.warnings {

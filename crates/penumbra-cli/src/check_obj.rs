@@ -3,9 +3,9 @@
 //! their textures, whether it has normals, uvs and vertex colours, whether it is closed, and
 //! warnings (on stderr) for what the file holds that penumbra ignores.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use penumbra::{inspect_obj, inspect_ply};
+use penumbra::{inspect_obj_in, inspect_ply};
 use serde_json::json;
 
 use crate::failure::{invalid, note, say, Failure};
@@ -22,16 +22,16 @@ fn has_extension(path: &Path, extension: &str) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case(extension))
 }
 
-pub fn run(path: &Path, json: bool) -> Result<(), Failure> {
+pub fn run(path: &Path, json: bool, allowed: &[PathBuf]) -> Result<(), Failure> {
+    let files = crate::input::files(allowed)?;
     if penumbra::ModelFormat::from_path(path) == Some(penumbra::ModelFormat::Gltf) {
-        return crate::check_gltf::run(path, json);
+        return crate::check_gltf::run(path, json, &files);
     }
-    let inspect = match has_extension(path, "ply") {
-        true => inspect_ply,
-        false => inspect_obj,
-    };
-    let info =
-        inspect(path).map_err(|e| invalid(format!("{}: cannot load mesh: {e}", path.display())))?;
+    let info = match has_extension(path, "ply") {
+        true => inspect_ply(path),
+        false => inspect_obj_in(&files, path),
+    }
+    .map_err(|e| invalid(format!("{}: cannot load mesh: {e}", path.display())))?;
     let textures: Vec<String> = info
         .materials
         .iter()

@@ -1,9 +1,9 @@
 //! Where a scene comes from: a file, or standard input when the path is `-`.
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use penumbra::{ModelFormat, Override, SceneFile, SceneFormat, MAX_SCENE_BYTES};
+use penumbra::{Files, ModelFormat, Override, SceneFile, SceneFormat, MAX_SCENE_BYTES};
 
 use crate::failure::{invalid, Failure};
 
@@ -32,9 +32,31 @@ impl Reader {
     }
 }
 
-/// Reads and parses the scene at `path` (`-`: standard input) with `set` applied, for
-/// `reader`. A bare `.obj` or `.ply` mesh is the scene [`SceneFile::for_model`] makes of it.
-pub fn load(path: &Path, set: &[Override], reader: Reader) -> Result<SceneFile, Failure> {
+/// The files of the disk, where a scene's files may also read in the `--allow-path` folders
+/// `allowed`, each checked to be a folder.
+pub fn files(allowed: &[PathBuf]) -> Result<Files, Failure> {
+    for dir in allowed {
+        if !dir.is_dir() {
+            return Err(invalid(format!(
+                "--allow-path {}: not a folder",
+                dir.display()
+            )));
+        }
+    }
+    Ok(Files::disk().allowing(allowed.to_vec()))
+}
+
+/// Reads and parses the scene at `path` (`-`: standard input, whose relative paths are relative
+/// to the current folder, its root) with `set` applied, its files also reading in the folders
+/// `allowed`, for `reader`. A bare `.obj` or `.ply` mesh is the scene
+/// [`SceneFile::for_model`] makes of it.
+pub fn load(
+    path: &Path,
+    set: &[Override],
+    allowed: &[PathBuf],
+    reader: Reader,
+) -> Result<SceneFile, Failure> {
+    let files = files(allowed)?;
     if !is_stdin(path) {
         if SceneFormat::from_path(path).is_none() && ModelFormat::from_path(path).is_none() {
             return Err(invalid(format!(
@@ -43,7 +65,7 @@ pub fn load(path: &Path, set: &[Override], reader: Reader) -> Result<SceneFile, 
                 reader.accepts()
             )));
         }
-        return SceneFile::load_with(path, set).map_err(invalid);
+        return SceneFile::load_allowing(path, set, allowed.to_vec()).map_err(invalid);
     }
     let mut bytes = Vec::new();
     std::io::stdin()
@@ -58,7 +80,9 @@ pub fn load(path: &Path, set: &[Override], reader: Reader) -> Result<SceneFile, 
     }
     let text = String::from_utf8(bytes)
         .map_err(|_| invalid(format!("{STDIN_NAME}: cannot read scene: not UTF-8 text")))?;
-    SceneFile::from_str_with(&text, format_of(&text), STDIN_NAME, "", set).map_err(invalid)
+    SceneFile::from_str_with(&text, format_of(&text), STDIN_NAME, "", set)
+        .map(|file| file.with_files(files))
+        .map_err(invalid)
 }
 
 /// JSON when the text starts with `{` (which no TOML document does), else TOML.

@@ -27,7 +27,12 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         ));
     }
     let load_start = Instant::now();
-    let file = input::load(&args.scene, &args.set, input::Reader::Render)?;
+    let file = input::load(
+        &args.scene,
+        &args.set,
+        &args.allow_path,
+        input::Reader::Render,
+    )?;
     let file_time = load_start.elapsed();
     let scene = file.build(args.threads).map_err(invalid)?;
     if let Some(w) = no_light_warning(&scene.world, scene.settings.ambient) {

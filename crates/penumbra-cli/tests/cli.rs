@@ -545,11 +545,12 @@ fn files_that_are_not_files_are_refused_at_once() {
     if made {
         scenes.push((fifo, "not a regular file"));
     }
-    // /dev/zero as a mesh and a folder as a texture.
+    // /dev/zero as a mesh (outside the scene's folder: refused before anything opens it; a
+    // device allowed is refused by `files::read_bounded`) and a folder as a texture.
     let mesh = sb.write("mesh.toml", with_mesh("/dev/zero"));
     std::fs::create_dir_all(sb.join("tex.png")).unwrap();
     let texture = sb.write("texture.toml", with_texture("tex.png"));
-    scenes.push((mesh, "not a regular file"));
+    scenes.push((mesh, "is outside the scene's folder"));
     scenes.push((texture, "folder"));
     for (scene, words) in &scenes {
         let (code, stderr) = render_args(scene);

@@ -126,7 +126,10 @@ fn a_scene_placing_the_milk_truck_builds_its_wheel_mesh_once() {
             truck.to_str().unwrap()
         ),
     );
-    let r = ok(run_in(dir.path(), ["check", "s.toml", "--json"]));
+    // The truck is outside the scene's folder: allowed.
+    let assets = truck.parent().unwrap().to_str().unwrap();
+    let args = ["check", "s.toml", "--json", "--allow-path", assets];
+    let r = ok(run_in(dir.path(), args));
     let s: Value = serde_json::from_slice(&r.stdout).unwrap();
     let file = check_json(&truck);
     // The world, not only the file: the wheel mesh is built once and placed by both wheel

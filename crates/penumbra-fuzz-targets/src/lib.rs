@@ -168,6 +168,7 @@ pub fn decode_pack(data: &[u8]) -> ScenePack {
             .lines()
             .map(str::to_owned)
             .collect(),
+        allowed: Vec::new(),
         files,
     }
 }

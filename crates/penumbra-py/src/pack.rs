@@ -14,7 +14,8 @@ use pyo3::types::{PyBytes, PyDict};
 use crate::scene::{build, CoreScene};
 
 /// The pack as a dict: `name`, `text`, `format` ("toml" or "json"), `base_dir`,
-/// `overrides` (list of str) and `files` ({path: bytes}); paths as str (file system encoding).
+/// `overrides` (list of str), `allow_paths` (list of str: the folders its files may read in
+/// besides their own) and `files` ({path: bytes}); paths as str (file system encoding).
 pub(crate) fn to_dict<'py>(py: Python<'py>, pack: &ScenePack) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", pack.name.as_os_str())?;
@@ -28,6 +29,8 @@ pub(crate) fn to_dict<'py>(py: Python<'py>, pack: &ScenePack) -> PyResult<Bound<
     )?;
     d.set_item("base_dir", pack.base_dir.as_os_str())?;
     d.set_item("overrides", &pack.overrides)?;
+    let allowed: Vec<&std::ffi::OsStr> = pack.allowed.iter().map(|p| p.as_os_str()).collect();
+    d.set_item("allow_paths", allowed)?;
     let files = PyDict::new(py);
     for (path, bytes) in &pack.files {
         files.set_item(path.as_os_str(), PyBytes::new(py, bytes))?;
@@ -62,6 +65,11 @@ pub fn load_pack(py: Python<'_>, pack: &Bound<'_, PyDict>, threads: usize) -> Py
         format,
         base_dir: PathBuf::from(item("base_dir")?.extract::<OsString>()?),
         overrides: item("overrides")?.extract()?,
+        // Absent from the packs of versions before it: none allowed.
+        allowed: match pack.get_item("allow_paths")? {
+            Some(paths) => paths.extract::<Vec<PathBuf>>()?,
+            None => Vec::new(),
+        },
         files: files
             .into_iter()
             .map(|(p, b)| (PathBuf::from(p), b.as_bytes().to_vec()))

@@ -65,17 +65,26 @@ pub(crate) fn build(
 }
 
 /// Loads and builds the `.toml` or `.json` scene file at `path`, or the scene of a bare
-/// `.obj` or `.ply` mesh (see `SceneFile::for_model`).
+/// `.obj` or `.ply` mesh (see `SceneFile::for_model`); its files may also read in the
+/// folders `allow_paths` (see `SceneFile::load_allowing`).
 #[pyfunction]
-#[pyo3(signature = (path, threads = 0))]
-pub fn load(py: Python<'_>, path: PathBuf, threads: usize) -> PyResult<CoreScene> {
-    build(py, threads, || SceneFile::load(&path))
+#[pyo3(signature = (path, threads = 0, allow_paths = Vec::new()))]
+pub fn load(
+    py: Python<'_>,
+    path: PathBuf,
+    threads: usize,
+    allow_paths: Vec<PathBuf>,
+) -> PyResult<CoreScene> {
+    build(py, threads, || {
+        SceneFile::load_allowing(&path, &[], allow_paths)
+    })
 }
 
 /// Parses and builds scene text in `format` ("toml" or "json"); `name` names it in messages
-/// and relative paths resolve against `base_dir`.
+/// and relative paths resolve against `base_dir`, the folder its files may read in (and below,
+/// and in `allow_paths`).
 #[pyfunction]
-#[pyo3(signature = (text, format = "toml", base_dir = PathBuf::from("."), name = "<string>".to_owned(), threads = 0))]
+#[pyo3(signature = (text, format = "toml", base_dir = PathBuf::from("."), name = "<string>".to_owned(), threads = 0, allow_paths = Vec::new()))]
 pub fn loads(
     py: Python<'_>,
     text: String,
@@ -83,6 +92,7 @@ pub fn loads(
     base_dir: PathBuf,
     name: String,
     threads: usize,
+    allow_paths: Vec<PathBuf>,
 ) -> PyResult<CoreScene> {
     let format = match format.to_ascii_lowercase().as_str() {
         "toml" => SceneFormat::Toml,
@@ -94,7 +104,8 @@ pub fn loads(
         }
     };
     build(py, threads, move || {
-        SceneFile::from_str(&text, format, name, base_dir)
+        let files = penumbra::Files::disk().allowing(allow_paths);
+        SceneFile::from_str(&text, format, name, base_dir).map(|file| file.with_files(files))
     })
 }
 

@@ -19,6 +19,8 @@ pub struct Files {
     /// When set, a copy of every file read from disk, by the path it was read under: the
     /// bytes a build read, so that a pack of it holds them whatever the files hold later.
     kept: Option<Arc<Mutex<ByPath>>>,
+    /// Folders every file of the scene may read besides its own (see [`crate::reach`]).
+    allowed: Arc<[PathBuf]>,
 }
 
 /// Files' bytes by path.
@@ -35,6 +37,7 @@ impl Files {
         Files {
             packed: Some(Arc::new(files)),
             kept: None,
+            allowed: Arc::new([]),
         }
     }
 
@@ -48,8 +51,24 @@ impl Files {
             None => Files {
                 packed: None,
                 kept: Some(Arc::default()),
+                allowed: self.allowed,
             },
         }
+    }
+
+    /// The same files, where every file of a scene may read in `folders` (and below) besides
+    /// its own folder: `--allow-path DIR`. A file names another only within these (see the
+    /// module `reach`); in a pack, the folders are compared by name with the pack's paths.
+    pub fn allowing(self, folders: Vec<PathBuf>) -> Files {
+        Files {
+            allowed: folders.into(),
+            ..self
+        }
+    }
+
+    /// The folders allowed besides each file's own (see [`Files::allowing`]).
+    pub fn allowed(&self) -> &[PathBuf] {
+        &self.allowed
     }
 
     /// The bytes `path` had when it was read: from the pack, or the copy kept when it was read

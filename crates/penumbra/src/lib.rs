@@ -67,6 +67,7 @@ mod names;
 mod pool;
 mod pose;
 mod raycast;
+mod reach;
 mod render;
 mod sampling;
 mod scale;
@@ -110,6 +111,7 @@ pub use raycast::{
     create_rays_pinhole, create_rays_pinhole_fov, CastRays, ClosestPoints, Intersections,
     QueryOptions, RaycastError, RaycastingScene, INVALID_ID,
 };
+pub use reach::{Outside, RULE};
 pub use render::{
     render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, Pass, PassSink, PixelBounds,
     RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch,
@@ -118,10 +120,10 @@ pub use render::{
 pub use sampling::{Rng, Sampler};
 pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};
 pub use scene::{
-    desc, inspect_gltf, inspect_gltf_bytes, inspect_mtl, inspect_obj, inspect_obj_bytes,
-    inspect_ply, inspect_ply_bytes, AssetKind, ErrorKind, GltfInfo, Location, ModelFormat, ObjInfo,
-    Override, OverrideError, PackError, Scene, SceneDesc, SceneError, SceneFile, SceneFormat,
-    ScenePack, MAX_SCENE_BYTES,
+    desc, inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, inspect_mtl, inspect_obj,
+    inspect_obj_bytes, inspect_obj_in, inspect_ply, inspect_ply_bytes, AssetKind, ErrorKind,
+    GltfInfo, Location, ModelFormat, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc,
+    SceneError, SceneFile, SceneFormat, ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
 pub use staged::{commit_all, leftovers, staged_for, StagedFile};

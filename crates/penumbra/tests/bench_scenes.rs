@@ -16,8 +16,10 @@ fn every_suite_scene_loads_builds_and_renders() {
         .collect();
     scenes.sort();
     assert!(scenes.len() >= 10, "{scenes:?}");
+    // They read ../../assets: allowed, as `--allow-path assets` allows it.
+    let assets = dir.join("../../assets");
     for path in &scenes {
-        let scene = SceneFile::load(path)
+        let scene = SceneFile::load_allowing(path, &[], vec![assets.clone()])
             .and_then(|f| f.build(2))
             .unwrap_or_else(|e| panic!("{e}"));
         let settings = RenderSettings {

@@ -36,7 +36,9 @@ fn render_scene(name: &str, camera: Option<&str>) -> RgbImage {
 }
 
 fn render_file(path: &Path, camera: Option<&str>) -> RgbImage {
-    let file = SceneFile::load(path).unwrap_or_else(|e| panic!("{e}"));
+    // The shipped scenes read ../assets: allowed, as `--allow-path assets` allows it.
+    let assets = vec![repo_root().join("assets")];
+    let file = SceneFile::load_allowing(path, &[], assets).unwrap_or_else(|e| panic!("{e}"));
     let scene = file.build(0).unwrap_or_else(|e| panic!("{e}"));
     render_view(&scene, camera)
 }

@@ -373,11 +373,12 @@ fn mtllib_in_a_subfolder_resolves_map_kd_against_the_mtl_folder() {
         "sub/x.mtl",
         "newmtl a\nmap_Kd tex.png\nnewmtl b\nmap_Kd -s 2 2 1 -clamp on -mm 0 1 maps/with space.png\n",
     );
+    // (In the OBJ's folder or below: a model reads nothing outside it, see tests/reach.rs.)
     dir.write(
-        "models/m.obj",
-        "mtllib ../sub/x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n",
+        "m.obj",
+        "mtllib sub/x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n",
     );
-    let scene = mesh(dir.path(), "models/m.obj");
+    let scene = mesh(dir.path(), "m.obj");
     let size = |i: usize| {
         let m = &scene.world.materials()[scene.world.geometry().triangles[i].material as usize];
         match &scene.world.textures()[m.texture.unwrap() as usize].kind {
@@ -699,10 +700,12 @@ fn spot_with_an_mtl_gets_its_texture() {
     let mut obj = b"mtllib spot.mtl\nusemtl spot\n".to_vec();
     obj.extend_from_slice(&original);
     dir.write("spot.obj", obj);
-    let texture = assets().join("textures/spot_texture.png");
+    // A copy of the texture too: a model reads only in its own folder (see tests/reach.rs).
+    let texture = std::fs::read(assets().join("textures/spot_texture.png")).unwrap();
+    dir.write("spot_texture.png", texture);
     dir.write(
         "spot.mtl",
-        format!("newmtl spot\nKd 1 1 1\nmap_Kd {}\n", texture.display()),
+        "newmtl spot\nKd 1 1 1\nmap_Kd spot_texture.png\n",
     );
     let scene = mesh(dir.path(), "spot.obj");
     assert_eq!(scene.world.stats().triangles, 5_856);

@@ -3,7 +3,7 @@
 
 mod support;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use penumbra::{render, Film, RenderOptions, SceneFile, ScenePack};
 use support::{with_mesh, with_texture, TempDir};
@@ -29,6 +29,12 @@ fn write_scene(dir: &TempDir) -> PathBuf {
     dir.write("scenes/room.toml", text)
 }
 
+/// The scene at `path`, whose files may read anywhere in `dir` (it reads `../meshes`), with
+/// the overrides `set`.
+fn load(dir: &TempDir, path: &Path, set: &[penumbra::Override]) -> SceneFile {
+    SceneFile::load_allowing(path, set, vec![dir.path().to_owned()]).unwrap()
+}
+
 fn small(file: &SceneFile) -> Film {
     let scene = file.build(1).unwrap();
     let mut settings = scene.settings.clone();
@@ -43,7 +49,7 @@ fn small(file: &SceneFile) -> Film {
 fn a_pack_builds_the_same_scene_without_the_files_on_disk() {
     let dir = TempDir::new("pack");
     let path = write_scene(&dir);
-    let file = SceneFile::load(&path).unwrap();
+    let file = load(&dir, &path, &[]);
     let scene = file.build(0).unwrap();
     let scenes = dir.join("scenes");
     let expected: Vec<PathBuf> = [
@@ -63,6 +69,11 @@ fn a_pack_builds_the_same_scene_without_the_files_on_disk() {
 
     let pack = file.pack(&scene.files).unwrap();
     assert_eq!(pack.files.len(), 4);
+    assert_eq!(
+        pack.allowed,
+        [dir.path()],
+        "the folders allowed travel with the pack"
+    );
     assert_eq!(
         pack.file_bytes() as u64,
         want.iter()
@@ -90,7 +101,7 @@ fn a_pack_builds_the_same_scene_without_the_files_on_disk() {
 fn a_pack_missing_a_file_fails_as_a_missing_file_does() {
     let dir = TempDir::new("pack-missing");
     let path = write_scene(&dir);
-    let file = SceneFile::load(&path).unwrap();
+    let file = load(&dir, &path, &[]);
     let scene = file.build(1).unwrap();
     let mut pack: ScenePack = file.pack(&scene.files).unwrap();
     let obj = dir.join("scenes/../meshes/tri.obj");
@@ -107,7 +118,7 @@ fn overrides_travel_with_the_pack() {
     let dir = TempDir::new("pack-overrides");
     let path = write_scene(&dir);
     let set = [penumbra::Override::parse("film.width=7").unwrap()];
-    let file = SceneFile::load_with(&path, &set).unwrap();
+    let file = load(&dir, &path, &set);
     let scene = file.build(1).unwrap();
     let pack = file.pack(&scene.files).unwrap();
     assert_eq!(pack.overrides, ["film.width=7"]);
@@ -118,7 +129,7 @@ fn overrides_travel_with_the_pack() {
 fn a_scene_keeping_its_files_packs_the_bytes_its_build_read() {
     let dir = TempDir::new("pack-snapshot");
     let path = write_scene(&dir);
-    let file = SceneFile::load(&path).unwrap().keeping_files();
+    let file = load(&dir, &path, &[]).keeping_files();
     let scene = file.build(1).unwrap();
     let original = small(&file);
     let obj = dir.join("scenes/../meshes/tri.obj");
@@ -142,7 +153,7 @@ fn a_scene_keeping_its_files_packs_the_bytes_its_build_read() {
         "the pack renders the scene as loaded"
     );
     // A file read without keeping is read again: the edited mesh.
-    let plain = SceneFile::load(&path).unwrap();
+    let plain = load(&dir, &path, &[]);
     let now = plain.pack(&scene.files).unwrap();
     assert_ne!(now.files[&obj], read);
 }
@@ -151,7 +162,7 @@ fn a_scene_keeping_its_files_packs_the_bytes_its_build_read() {
 fn a_pack_with_a_bad_override_is_a_scene_error_naming_it() {
     let dir = TempDir::new("pack-bad-override");
     let path = write_scene(&dir);
-    let file = SceneFile::load(&path).unwrap();
+    let file = load(&dir, &path, &[]);
     let scene = file.build(1).unwrap();
     for (bad, why) in [
         ("film.width", "no `=`"),
@@ -170,4 +181,19 @@ fn a_pack_with_a_bad_override_is_a_scene_error_naming_it() {
             "{bad}: {message}"
         );
     }
+}
+
+#[test]
+fn a_pack_keeps_the_rule_on_the_paths_it_names() {
+    let dir = TempDir::new("pack-rule");
+    let path = write_scene(&dir);
+    let file = load(&dir, &path, &[]);
+    let scene = file.build(1).unwrap();
+    let mut pack = file.pack(&scene.files).unwrap();
+    pack.allowed.clear();
+    let e = pack.load().unwrap().build(1).unwrap_err().to_string();
+    assert!(
+        e.contains("\"../textures/wood.png\" is outside the scene's folder"),
+        "{e}"
+    );
 }

@@ -22,14 +22,15 @@ use std::time::Duration;
 
 use crate::camera_path::CameraPath;
 use crate::files::{read_bounded, Files};
+use crate::reach::Reach;
 use crate::render::RenderSettings;
 use crate::world::World;
 
 pub use desc::SceneDesc;
 pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
-pub use gltf::{inspect_gltf, inspect_gltf_bytes, GltfInfo};
+pub use gltf::{inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, GltfInfo};
 pub use model::ModelFormat;
-pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
+pub use obj::{inspect_mtl, inspect_obj, inspect_obj_bytes, inspect_obj_in, ObjInfo};
 pub use overrides::{Override, OverrideError};
 pub use pack::{PackError, ScenePack};
 use parse::Source;
@@ -126,9 +127,22 @@ impl SceneFile {
         path: impl AsRef<Path>,
         overrides: &[Override],
     ) -> Result<SceneFile, SceneError> {
+        SceneFile::load_allowing(path, overrides, Vec::new())
+    }
+
+    /// [`SceneFile::load_with`] where every file of the scene may read in the folders
+    /// `allowed` (and below) besides its own folder (`--allow-path DIR`; see
+    /// [`Files::allowing`]). Without them, a scene file reads only files in its folder and
+    /// below, and a model only files in its own folder and below.
+    pub fn load_allowing(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+        allowed: Vec<PathBuf>,
+    ) -> Result<SceneFile, SceneError> {
         let path = path.as_ref();
+        let files = Files::disk().allowing(allowed);
         if ModelFormat::from_path(path).is_some() {
-            return SceneFile::for_model_with(path, overrides);
+            return SceneFile::for_model_in(path, overrides, files);
         }
         let format = SceneFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
             path: path.to_owned(),
@@ -141,7 +155,7 @@ impl SceneFile {
         let text =
             String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()))?;
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
-        SceneFile::from_str_with(&text, format, path, base_dir, overrides)
+        Ok(SceneFile::from_str_with(&text, format, path, base_dir, overrides)?.with_files(files))
     }
 
     /// Parses scene text. `name` is used in messages; relative paths in the file are resolved
@@ -258,9 +272,15 @@ impl SceneFile {
         self.source.sampler_set_alone()
     }
 
-    /// Resolves a path written in the scene file against its folder.
+    /// Resolves a path written in the scene file against its folder (whether the scene may
+    /// read it or not: building it checks that).
     pub fn resolve(&self, path: &str) -> PathBuf {
         self.base_dir.join(path)
+    }
+
+    /// What the file may read: its folder and below, and the folders its files allow.
+    pub(crate) fn reach(&self) -> Reach<'_> {
+        Reach::new(&self.files, self.name(), &self.base_dir, "scene")
     }
 }
 

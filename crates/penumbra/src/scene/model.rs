@@ -38,8 +38,9 @@ use super::error::{AssetKind, ErrorKind, Location};
 use super::obj::obj_bounds;
 use super::parse::Source;
 use super::ply::ply_bounds;
-use super::{inspect_gltf, Override, SceneError, SceneFile, SceneFormat};
+use super::{inspect_gltf_in, Override, SceneError, SceneFile, SceneFormat};
 use crate::camera::{framing_view, FRAMING_FOV_DEG};
+use crate::files::Files;
 use crate::math::Aabb;
 
 /// Direction from the bounds' centre to the default area light (normalized before use).
@@ -84,7 +85,15 @@ impl SceneFile {
         path: impl AsRef<Path>,
         overrides: &[Override],
     ) -> Result<SceneFile, SceneError> {
-        let path = path.as_ref();
+        SceneFile::for_model_in(path.as_ref(), overrides, Files::disk())
+    }
+
+    /// [`SceneFile::for_model_with`] reading the model's files through `files`.
+    pub(super) fn for_model_in(
+        path: &Path,
+        overrides: &[Override],
+        files: Files,
+    ) -> Result<SceneFile, SceneError> {
         let format = ModelFormat::from_path(path).ok_or_else(|| SceneError::UnknownFormat {
             path: path.to_owned(),
         })?;
@@ -93,9 +102,9 @@ impl SceneFile {
             source,
         })?;
         let (bounds, imports) = match format {
-            ModelFormat::Obj => (obj_bounds(path), Imports::default()),
+            ModelFormat::Obj => (obj_bounds(&files, path), Imports::default()),
             ModelFormat::Ply => (ply_bounds(path), Imports::default()),
-            ModelFormat::Gltf => match inspect_gltf(path) {
+            ModelFormat::Gltf => match inspect_gltf_in(&files, path) {
                 Ok(i) => {
                     let imports = Imports {
                         cameras: !i.cameras.is_empty(),
@@ -114,7 +123,7 @@ impl SceneFile {
         let text = model_scene_text(name, bounds, imports);
         let base_dir = path.parent().map(Path::to_owned).unwrap_or_default();
         let source = Source::new(path.to_owned(), text, SceneFormat::Toml).generated();
-        SceneFile::from_source(source, base_dir, overrides)
+        Ok(SceneFile::from_source(source, base_dir, overrides)?.with_files(files))
     }
 }
 

@@ -26,6 +26,9 @@ pub struct ScenePack {
     pub base_dir: PathBuf,
     /// The `KEY.PATH=VALUE` overrides applied to it, in order.
     pub overrides: Vec<String>,
+    /// The folders its files may read in besides their own (see
+    /// [`Files::allowing`]), as given: compared by name with the packed files' paths.
+    pub allowed: Vec<PathBuf>,
     /// The files, by resolved path.
     pub files: BTreeMap<PathBuf, Vec<u8>>,
 }
@@ -76,6 +79,7 @@ impl SceneFile {
             format: self.format(),
             base_dir: self.base_dir.clone(),
             overrides: self.source.overrides().map(str::to_owned).collect(),
+            allowed: self.files.allowed().to_vec(),
             files,
         })
     }
@@ -116,6 +120,6 @@ impl ScenePack {
             self.base_dir,
             &overrides,
         )?;
-        Ok(file.with_files(Files::packed(self.files)))
+        Ok(file.with_files(Files::packed(self.files).allowing(self.allowed)))
     }
 }

@@ -89,7 +89,7 @@ pub(crate) fn cutout_of(alpha: AlphaMode) -> Option<f32> {
 impl Builder<'_> {
     /// The glTF file `file` named at `path`, read once per scene.
     fn gltf(&mut self, path: &KeyPath, file: &str) -> Result<Rc<GltfModel>> {
-        let resolved = self.file.resolve(file);
+        let resolved = self.reference(path, file, ErrorKind::Asset(AssetKind::Mesh))?;
         let key = self.file.files().identity(&resolved);
         if let Some(loaded) = self.gltfs.get(&key) {
             return Ok(loaded.model.clone());

@@ -79,8 +79,9 @@ impl Builder<'_> {
         let kind = match &t.kind {
             TextureKindDesc::Image(i) => {
                 let srgb = i.colorspace.unwrap_or(ColorSpace::Srgb) == ColorSpace::Srgb;
-                let file = self.file.resolve(&i.file);
-                let image = self.image(&path.key("file"), file, srgb, "texture")?;
+                let at = path.key("file");
+                let file = self.reference(&at, &i.file, ErrorKind::Asset(AssetKind::Image))?;
+                let image = self.image(&at, file, srgb, "texture")?;
                 TextureKind::Image(ImageTexture {
                     image,
                     filter: i.filter.unwrap_or(Filter::Bilinear),
@@ -278,9 +279,10 @@ impl Builder<'_> {
                 EnvironmentMap::uniform(c)
             }
             (Some(file), None) => {
-                let resolved = self.file.resolve(file);
+                let at = path.key("file");
+                let resolved = self.reference(&at, file, ErrorKind::Asset(AssetKind::Image))?;
                 // The content picks the curve, not the extension: see `load_texture_image`.
-                let image = self.image(&path.key("file"), resolved, true, "environment map")?;
+                let image = self.image(&at, resolved, true, "environment map")?;
                 EnvironmentMap::new(image.width, image.height, image.texels.clone())
             }
         };

@@ -205,6 +205,15 @@ impl Builder<'_> {
     fn bad(&self, path: &KeyPath, message: impl Into<String>) -> SceneError {
         self.err(ErrorKind::BadValue, path, message)
     }
+
+    /// The file that `text`, the value at `path`, names: resolved against the scene's folder,
+    /// when the scene may read it (see the module `reach`); else an error of `kind`.
+    fn reference(&self, path: &KeyPath, text: &str, kind: ErrorKind) -> Result<PathBuf> {
+        self.file
+            .reach()
+            .resolve(&self.file.base_dir, text)
+            .map_err(|e| self.err(kind, path, e.to_string()))
+    }
 }
 
 /// " (known: a, b)" or " (none are defined)", to end an unknown-name message.

@@ -223,7 +223,7 @@ impl Builder<'_> {
         file: &str,
         with_mtl: bool,
     ) -> Result<(Rc<Mesh>, Option<Vec<u32>>)> {
-        let obj_path = self.file.resolve(file);
+        let obj_path = self.reference(path, file, ErrorKind::Asset(AssetKind::Mesh))?;
         let key = self.file.files().identity(&obj_path);
         let loaded = match self.meshes.get(&key) {
             Some(loaded) => loaded,

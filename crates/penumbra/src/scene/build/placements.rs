@@ -111,7 +111,7 @@ impl Builder<'_> {
 
     /// The matrices of the `.npy` file `file` (named at `path`), read once per scene.
     fn npy(&mut self, path: &KeyPath, file: &str) -> Result<Rc<[Mat4]>> {
-        let resolved = self.file.resolve(file);
+        let resolved = self.reference(path, file, ErrorKind::Asset(AssetKind::Transforms))?;
         let key = self.file.files().identity(&resolved);
         if let Some(m) = self.transforms.get(&key) {
             return Ok(m.clone());

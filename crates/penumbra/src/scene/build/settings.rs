@@ -64,7 +64,7 @@ impl Builder<'_> {
                     format!("unknown image format \"{o}\" (use .png, .jpg, .exr or .pfm)"),
                 ))
             }
-            Some(o) => Some(self.file.resolve(o)),
+            Some(o) => Some(self.reference(&path.key("output"), o, ErrorKind::BadValue)?),
         };
         Ok(Film {
             width,

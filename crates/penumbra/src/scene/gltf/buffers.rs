@@ -9,10 +9,13 @@ use gltf::buffer::Source;
 
 use super::{GltfError, ImageSource, Result, MAX_FILE_BYTES};
 use crate::files::Files;
+use crate::reach::Reach;
 
 /// The buffers of a document, read on first use.
 pub(super) struct Buffers<'a> {
     blob: Option<Arc<[u8]>>,
+    /// The glTF file's folder: where the files its URIs name may be (see the module
+    /// `reach`).
     dir: PathBuf,
     files: &'a Files,
     read: Vec<Option<Arc<[u8]>>>,
@@ -101,15 +104,20 @@ impl<'a> Buffers<'a> {
         })
     }
 
-    /// The file a relative `uri` (at `at`) names.
+    /// The file a relative `uri` (at `at`) names, percent-decoded, when the model may read it.
     fn path(&self, uri: &str, at: &str) -> Result<PathBuf> {
         if uri.contains("://") {
             return Err(GltfError::new(
                 at,
-                format!("\"{uri}\" is a remote address: only files beside the glTF file are read"),
+                format!(
+                    "\"{uri}\" is a remote address: only files in the glTF file's folder and \
+                     below are read"
+                ),
             ));
         }
-        Ok(self.dir.join(percent_decode(uri)))
+        Reach::new(self.files, &self.dir, &self.dir, "model")
+            .resolve(&self.dir, &percent_decode(uri))
+            .map_err(|e| GltfError::new(at, e.to_string()))
     }
 
     /// Where the bytes of image `image` are; a file is checked to exist, not read. Read from

@@ -42,8 +42,12 @@ pub struct GltfInfo {
 
 /// Reads the glTF or GLB file at `path` and summarizes it. The error names the JSON path.
 pub fn inspect_gltf(path: &Path) -> Result<GltfInfo, String> {
-    let model =
-        load_gltf(&Files::disk(), path, crate::memory::available()).map_err(|e| e.to_string())?;
+    inspect_gltf_in(&Files::disk(), path)
+}
+
+/// [`inspect_gltf`] reading through `files` (with the folders it allows besides the file's).
+pub fn inspect_gltf_in(files: &Files, path: &Path) -> Result<GltfInfo, String> {
+    let model = load_gltf(files, path, crate::memory::available()).map_err(|e| e.to_string())?;
     Ok(summarize(&model))
 }
 

@@ -35,7 +35,7 @@ mod materials;
 mod meshes;
 mod nodes;
 
-pub use info::{inspect_gltf, inspect_gltf_bytes, GltfInfo};
+pub use info::{inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, GltfInfo};
 pub(crate) use nodes::unique;
 #[cfg(test)]
 mod tests;

@@ -37,12 +37,18 @@ pub struct ObjInfo {
 /// Reads the OBJ file at `path` (and its MTL libraries, not its textures) and summarizes it.
 /// The error says what is wrong, with the line.
 pub fn inspect_obj(path: &Path) -> Result<ObjInfo, String> {
-    Ok(summarize(&load_obj(&Files::disk(), path, None)?))
+    inspect_obj_in(&Files::disk(), path)
+}
+
+/// [`inspect_obj`] reading through `files` (with the folders it allows besides the file's).
+pub fn inspect_obj_in(files: &Files, path: &Path) -> Result<ObjInfo, String> {
+    Ok(summarize(&load_obj(files, path, None)?))
 }
 
 /// [`inspect_obj`] for the bytes of an OBJ file, whose `mtllib` names are relative to `dir`.
 pub fn inspect_obj_bytes(bytes: &[u8], dir: &Path) -> Result<ObjInfo, String> {
-    Ok(summarize(&parse_obj(bytes, dir, Library::default(), None)?))
+    let library = Library::new(Files::disk(), dir, dir);
+    Ok(summarize(&parse_obj(bytes, dir, library, None)?))
 }
 
 /// The materials the bytes of an MTL file define, in order, each with its `map_Kd` texture
@@ -58,8 +64,8 @@ pub fn inspect_mtl(bytes: &[u8], path: &Path) -> Result<Vec<(String, Option<Path
 
 /// The bounds of the OBJ file at `path` (read as [`inspect_obj`] reads it): all a model's
 /// scene needs, without the rest of the summary (closedness costs a sort of every edge).
-pub(in crate::scene) fn obj_bounds(path: &Path) -> Result<Aabb, String> {
-    Ok(mesh_bounds(&load_obj(&Files::disk(), path, None)?.mesh))
+pub(in crate::scene) fn obj_bounds(files: &Files, path: &Path) -> Result<Aabb, String> {
+    Ok(mesh_bounds(&load_obj(files, path, None)?.mesh))
 }
 
 /// Bounds of every vertex a triangle of `mesh` uses.

@@ -44,7 +44,7 @@ use crate::files::Files;
 use crate::geometry::Mesh;
 
 use chunk::{Chunk, Deferred, Face, INHERITED};
-pub use info::{inspect_mtl, inspect_obj, inspect_obj_bytes, ObjInfo};
+pub use info::{inspect_mtl, inspect_obj, inspect_obj_bytes, inspect_obj_in, ObjInfo};
 pub(super) use info::{mesh_bounds, obj_bounds, summarize};
 use lines::decode;
 use mtl::Library;
@@ -149,7 +149,7 @@ pub(crate) fn load_obj(
         .read(path, MAX_FILE_BYTES)
         .map_err(|e| e.to_string())?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    parse_obj(&bytes, dir, Library::new(files.clone()), pool)
+    parse_obj(&bytes, dir, Library::new(files.clone(), path, dir), pool)
 }
 
 /// [`load_obj`] for the bytes of an OBJ file whose `mtllib` names are relative to `dir` and
@@ -237,7 +237,11 @@ fn merge(chunks: Vec<Chunk>, dir: &Path, library: Library) -> Result<ObjData, St
                         rest.split_ascii_whitespace().collect()
                     };
                     for f in files {
-                        data.library.load(data.library.resolve(dir, f))?;
+                        let path = data
+                            .library
+                            .resolve(dir, f)
+                            .map_err(|e| format!("`mtllib` {e}"))?;
+                        data.library.load(path)?;
                     }
                 }
                 Deferred::Relative {

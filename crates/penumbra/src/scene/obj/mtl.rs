@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use super::lines::{check_text, decode, for_each_line, numbers, rest_of_line};
 use super::{ObjMaterial, MAX_FILE_BYTES};
 use crate::files::Files;
+use crate::reach::{Outside, Reach};
 
 /// The materials of every `mtllib`, later definitions of a name replacing earlier ones.
 #[derive(Default)]
@@ -23,13 +24,20 @@ pub(super) struct Library {
     loaded: HashSet<PathBuf>,
     /// Where the MTL files (and the textures they name) are read from.
     files: Files,
+    /// The model whose libraries these are, and its folder: where its MTL files and their
+    /// textures may be (see the module `reach`).
+    model: PathBuf,
+    root: PathBuf,
 }
 
 impl Library {
-    /// An empty library whose MTL files are read from `files`.
-    pub(super) fn new(files: Files) -> Library {
+    /// An empty library of the model `model`, whose MTL files are read from `files` within the
+    /// model's folder `root` (and the folders `files` allows).
+    pub(super) fn new(files: Files, model: &Path, root: &Path) -> Library {
         Library {
             files,
+            model: model.to_owned(),
+            root: root.to_owned(),
             ..Library::default()
         }
     }
@@ -52,9 +60,10 @@ impl Library {
         self.files.is_file(path)
     }
 
-    /// `name` relative to `dir`, as [`resolve`] finds it in the library's files.
-    pub(super) fn resolve(&self, dir: &Path, name: &str) -> PathBuf {
-        resolve(&self.files, dir, name)
+    /// `name` relative to `dir`, as [`resolve`] finds it in the library's files, when the
+    /// model may read it.
+    pub(super) fn resolve(&self, dir: &Path, name: &str) -> Result<PathBuf, Outside> {
+        checked(&self.files, &self.model, &self.root, dir, name)
     }
 
     /// How many materials have been defined; [`Library::find`] gives indices below this.
@@ -83,9 +92,11 @@ fn load_mtl(path: &Path, library: &mut Library) -> Result<(), String> {
     read_mtl(&bytes, path, library)
 }
 
-/// The library of the one MTL file whose bytes are `bytes`; `path` names it in messages.
+/// The library of the one MTL file whose bytes are `bytes`; `path` names it in messages, and
+/// its folder is where its textures may be.
 pub(super) fn parse_bytes(bytes: &[u8], path: &Path) -> Result<Library, String> {
-    let mut library = Library::default();
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut library = Library::new(Files::disk(), path, dir);
     read_mtl(bytes, path, &mut library)?;
     Ok(library)
 }
@@ -157,8 +168,10 @@ fn parse_mtl(text: &str, path: &Path, library: &mut Library) -> Result<(), Strin
                 m.shininess = Some(p);
             }
             "map_Kd" | "map_d" => {
-                if let Some(file) = texture_file_name(line, words) {
-                    let file = Some(resolve(&library.files, dir, file));
+                if let Some(name) = texture_file_name(line, words) {
+                    let file = checked(&library.files, &library.model, &library.root, dir, name)
+                        .map_err(|e| at(&format!("`{keyword}` {e}")))?;
+                    let file = Some(file);
                     match keyword {
                         "map_Kd" => m.diffuse_texture = file,
                         _ => m.dissolve_texture = file,
@@ -205,6 +218,21 @@ fn texture_file_name<'a>(
         }
     }
     None
+}
+
+/// [`resolve`], when the model `model` with the folder `root` may read the file (see the
+/// module `reach`).
+fn checked(
+    files: &Files,
+    model: &Path,
+    root: &Path,
+    dir: &Path,
+    name: &str,
+) -> Result<PathBuf, Outside> {
+    let path = resolve(files, dir, name);
+    Reach::new(files, model, root, "model")
+        .check(name, &path)
+        .map(|()| path)
 }
 
 /// `name` relative to `dir`. Names written with Windows separators are tried with `/` when

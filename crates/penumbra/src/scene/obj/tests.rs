@@ -30,7 +30,7 @@ fn read_with(bytes: &[u8], chunk_bytes: usize, on_pool: bool) -> Result<ObjModel
     build_mesh(read(
         bytes,
         mtl_dir(),
-        Library::default(),
+        Library::new(Files::disk(), mtl_dir(), mtl_dir()),
         pool,
         chunk_bytes,
     )?)

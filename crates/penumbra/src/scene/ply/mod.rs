@@ -50,6 +50,7 @@ use super::obj::{mesh_bounds, summarize, ObjInfo, ObjMaterial, ObjModel, MAX_FIL
 use crate::files::Files;
 use crate::geometry::Mesh;
 use crate::math::Aabb;
+use crate::reach::Reach;
 use body::Body;
 use header::{Element, Format, Kind, Property};
 use roles::{face_roles, ignored, vertex_roles, Role};
@@ -131,10 +132,19 @@ pub(crate) fn load_ply(files: &Files, path: &Path) -> Result<PlyModel, PlyError>
 
 /// [`load_ply`] as the model an OBJ file gives, for the scene's mesh objects: a texture file
 /// becomes one material with it as `map_Kd` (resolved against the PLY file's folder), which
-/// every triangle uses; a texture file that is not there is dropped with a warning (see
-/// [`drop_missing_textures`]). The error is its message; the warnings come beside the model.
+/// every triangle uses; it must be in the PLY file's folder or below, or in a folder `files`
+/// allows (see the module `reach`); a texture file that is not there is dropped with a warning
+/// (see [`drop_missing_textures`]). The error is its message; the warnings come beside the
+/// model.
 pub(crate) fn load_model(files: &Files, path: &Path) -> Result<(ObjModel, Vec<String>), String> {
-    let (mut model, mut warnings) = model(load_ply(files, path).map_err(|e| e.to_string())?, path);
+    let ply = load_ply(files, path).map_err(|e| e.to_string())?;
+    if let Some(name) = &ply.texture_file {
+        let dir = path.parent().unwrap_or(Path::new(""));
+        Reach::new(files, path, dir, "model")
+            .resolve(dir, name)
+            .map_err(|e| format!("`comment TextureFile` {e}"))?;
+    }
+    let (mut model, mut warnings) = model(ply, path);
     drop_missing_textures(files, &mut model, &mut warnings);
     Ok((model, warnings))
 }
