@@ -124,11 +124,22 @@ fn set_sampler_center_means_one_sample_on_every_shipped_scene() {
     let dir = TempDir::new("set-center");
     let scenes = shipped_scenes();
     assert!(scenes.len() >= 5, "{scenes:?}");
+    // Some shipped scenes read the repository's assets/, beside scenes/.
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let assets = assets.to_str().unwrap();
     for scene in &scenes {
         let scene = scene.to_str().unwrap();
         let r = ok(run_in(
             dir.path(),
-            ["check", scene, "-D", "render.sampler=center", "--json"],
+            [
+                "check",
+                scene,
+                "-D",
+                "render.sampler=center",
+                "--json",
+                "--allow-path",
+                assets,
+            ],
         ));
         let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
         assert_eq!(summary["sampler"], "center", "{scene}");
