@@ -3,7 +3,8 @@
 //! origins and the range of `1/direction` per axis (interval arithmetic, Boulos et al. 2006);
 //! and whether a packet misses the whole tree, tested on the rays before they are prepared.
 
-use super::tree::{tie_bound, WideBvh, EXIT_SCALE};
+use super::margins::{tie_bound, EXIT_SCALE};
+use super::tree::WideBvh;
 use crate::simd::{max, min, Isa};
 
 /// The smallest and largest origin coordinates, and the smallest and largest `1/direction`,
@@ -132,8 +133,8 @@ mod tests {
 
     use super::*;
     use crate::accel::lanes::slab;
+    use crate::accel::wide::margins::EXIT_SCALE;
     use crate::accel::wide::node::{collapse, WideNode, WIDTH};
-    use crate::accel::wide::tree::EXIT_SCALE;
     use crate::accel::Bvh;
     use crate::geometry::{Geometry, Triangle};
     use crate::simd::{dispatch, supported_paths, Isa, Kernel};

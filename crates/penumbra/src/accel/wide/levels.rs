@@ -24,8 +24,9 @@ use std::sync::Arc;
 
 use glam::{Affine3A, DAffine3, Vec3, Vec3A};
 
+use super::margins::EXIT_SCALE;
 use super::nearest::{Frame, Nearest};
-use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
+use super::tree::{SlotHit, Stack, WideBvh};
 use crate::accel::instances::{inverse, inverse_f64, world_box};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{unit_normal, PreparedRay};

@@ -20,6 +20,7 @@ mod cull;
 mod group;
 pub(crate) mod kernels;
 pub(crate) mod levels;
+mod margins;
 pub(crate) mod nearest;
 pub(crate) mod node;
 pub(crate) mod packets;
@@ -30,4 +31,5 @@ pub(crate) mod turns;
 #[cfg(test)]
 mod turns_tests;
 
-pub(crate) use tree::{raised, tie_bound, WideBvh};
+pub(crate) use margins::{raised, tie_bound};
+pub(crate) use tree::WideBvh;

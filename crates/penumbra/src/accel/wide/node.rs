@@ -16,7 +16,7 @@
 //! the binary one (see `tree`) and every query visits a superset of the triangles it must
 //! see.
 
-use super::tree::raised;
+use super::margins::raised;
 use crate::accel::BvhNode;
 use crate::simd::{max, min, Isa};
 

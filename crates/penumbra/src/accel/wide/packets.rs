@@ -30,9 +30,10 @@
 use super::cull::{bounds, furthest, misses, Bounds};
 use super::kernels::Control;
 use super::levels::WideLevels;
+use super::margins::EXIT_SCALE;
 use super::node::WIDTH;
 use super::rays::{lanes, Lanes};
-use super::tree::{SlotHit, Stack, WideBvh, EXIT_SCALE};
+use super::tree::{SlotHit, Stack, WideBvh};
 use super::turns::{prepare, stream, Turns, INTERLEAVED};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;

@@ -13,7 +13,8 @@
 use glam::Vec3;
 
 use super::group::TriangleGroup;
-use super::tree::{found_hit, tie_bound, Found, Order, SlotHit, Stack, WideBvh};
+use super::margins::tie_bound;
+use super::tree::{found_hit, Found, Order, SlotHit, Stack, WideBvh};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{Crossing, EdgeRule, PreparedRay};
 use crate::accel::AlphaTests;
