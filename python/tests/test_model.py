@@ -74,6 +74,7 @@ def test_camera_auto_frames_any_scene_as_a_model_is_framed(models):
     assert model.camera("auto") == model.camera()
     # A scene whose own camera looks away from the cube: auto frames it all the same.
     away = penumbra.load_dict({
+        "film": {"width": 40, "height": 30},
         "camera": {"position": [0, 0, 0], "look_at": [-1, 0, 0], "fov": 40},
         "lights": [{"type": "point", "position": [5, 9, 5]}],
         "objects": [{"type": "cube", "center": [5, 5, 5], "size": 1}],
