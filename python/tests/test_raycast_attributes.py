@@ -51,10 +51,8 @@ def test_attributes_are_what_the_renderer_sees_through_each_pixel_centre(name):
     assert len(np.unique(albedo[hit].round(4), axis=0)) > 5
 
 
-def test_uv_is_the_texture_coordinate_the_texture_is_read_at():
-    # A quad mapped (0, 0) to (1, 1) corner to corner: uv is the hit's place on it.
-    scene = penumbra.loads(
-        """
+# A unit quad in z = 0 mapped (0, 0) to (1, 1) corner to corner, as object 0.
+UNIT_QUAD = """
 [film]
 width = 8
 height = 8
@@ -71,7 +69,11 @@ corner = [0, 0, 0]
 u = [1, 0, 0]
 v = [0, 1, 0]
 """
-    )
+
+
+def test_uv_is_the_texture_coordinate_the_texture_is_read_at():
+    # A quad mapped (0, 0) to (1, 1) corner to corner: uv is the hit's place on it.
+    scene = penumbra.loads(UNIT_QUAD)
     rays = np.array([[0.25, 0.75, 1, 0, 0, -1], [0.6, 0.1, 1, 0, 0, -1], [5, 5, 1, 0, 0, -1]],
                     np.float32)
     hits = scene.raycasting_scene().cast_rays(rays, attributes=["uv", "shading_normal"])
@@ -100,25 +102,7 @@ def test_geometry_added_later_has_no_object_id_nor_surface():
     # A quad as object 0; then a triangle and a placed copy of the quad added to the
     # ray-casting scene: their geometry ids are no object's, so object_id is INVALID_ID and
     # the surface's attributes are zero, as on a miss.
-    scene = penumbra.loads(
-        """
-[film]
-width = 8
-height = 8
-[camera]
-position = [0.5, 0.5, 3]
-look_at = [0.5, 0.5, 0]
-fov = 30
-[[lights]]
-type = "point"
-position = [0, 0, 3]
-[[objects]]
-type = "quad"
-corner = [0, 0, 0]
-u = [1, 0, 0]
-v = [0, 1, 0]
-"""
-    )
+    scene = penumbra.loads(UNIT_QUAD)
     rc = scene.raycasting_scene()
     assert rc.add_triangles(np.array([[2, 0, 0], [3, 0, 0], [2, 1, 0]], np.float32),
                             np.array([[0, 1, 2]], np.uint32)) == 1
