@@ -15,9 +15,8 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::{
-    supported_paths, Light, Pairs, PinholeCamera, Ray, Rng, SceneFile, Segments, World,
-};
+use penumbra::bench::{Pairs, Segments};
+use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, World};
 
 /// The seed's room, built once.
 fn world() -> std::sync::Arc<World> {

@@ -10,8 +10,9 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use penumbra::{intersect_brute_force, shapes, Bvh, Geometry, Ray, Transform};
+use penumbra::bench::intersect_brute_force;
 use penumbra::{render, RenderOptions, SceneFile};
+use penumbra::{shapes, Bvh, Geometry, Ray, Transform};
 
 /// Two tessellated spheres and a floor: 18,050 triangles.
 fn spheres() -> Geometry {

@@ -83,10 +83,18 @@ pub mod shapes {
     pub use crate::geometry::{cube, quad, sphere, triangle, SPHERE_RINGS, SPHERE_SEGMENTS};
 }
 
+/// Hooks for the benchmarks and the integration tests: the two-level structure a [`World`]
+/// traverses ([`World::accel`]), the shadow queries it answers on a forced SIMD path (the `_on`
+/// methods), and the brute-force references. Not a stable API: it follows the engine's shape.
+#[doc(hidden)]
+pub mod bench {
+    pub use crate::accel::{
+        intersect_brute_force, occluded_brute_force, Instances, Levels, Pairs, Segments,
+    };
+}
+
 pub use accel::prim::moller_trumbore::intersect_triangle;
-pub use accel::{
-    intersect_brute_force, occluded_brute_force, Bvh, Instances, Levels, Pairs, Segments,
-};
+pub use accel::Bvh;
 pub use camera::{Camera, CameraError, PinholeCamera, FRAMING_CAMERA, FRAMING_FOV_DEG};
 pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::encode_8bit;

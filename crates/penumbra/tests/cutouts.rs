@@ -9,9 +9,10 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use penumbra::bench::{Pairs, Segments};
 use penumbra::{
     intersect_triangle, supported_paths, Cutout, Filter, Hit, Image, ImageTexture, Material, Mesh,
-    Pairs, Ray, Segments, Texture, TextureKind, Transform, World, WorldBuilder, Wrap,
+    Ray, Texture, TextureKind, Transform, World, WorldBuilder, Wrap,
 };
 use proptest::prelude::*;
 

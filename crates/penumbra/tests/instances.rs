@@ -5,9 +5,8 @@
 //! rays, shared-origin packets, bundles of segments and shafts, on every SIMD path.
 
 use glam::{Vec2, Vec3};
-use penumbra::{
-    supported_paths, Hit, Material, Mesh, Pairs, Ray, Segments, Transform, World, WorldBuilder,
-};
+use penumbra::bench::{Pairs, Segments};
+use penumbra::{supported_paths, Hit, Material, Mesh, Ray, Transform, World, WorldBuilder};
 use proptest::prelude::*;
 
 /// A small random mesh near the origin, with uvs and (sometimes) vertex normals and colours.

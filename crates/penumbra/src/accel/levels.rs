@@ -102,6 +102,7 @@ impl Levels {
     }
 
     /// [`Bvh::intersect_from_on`] over both levels.
+    #[doc(hidden)]
     pub fn intersect_from_on(
         &self,
         path: SimdPath,
@@ -139,6 +140,7 @@ impl Levels {
     }
 
     /// [`Bvh::occlude_from_on`] over both levels.
+    #[doc(hidden)]
     pub fn occlude_from_on(
         &self,
         path: SimdPath,
@@ -171,6 +173,7 @@ impl Levels {
     }
 
     /// [`Bvh::occlude_segments_on`] over both levels.
+    #[doc(hidden)]
     pub fn occlude_segments_on(
         &self,
         path: SimdPath,
@@ -192,6 +195,7 @@ impl Levels {
     }
 
     /// [`Bvh::occlude_pairs_on`] over both levels.
+    #[doc(hidden)]
     pub fn occlude_pairs_on(&self, path: SimdPath, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
         self.flat.occlude_pairs_on(path, pairs, t_max, blocked);
         if !self.instances.is_empty() {

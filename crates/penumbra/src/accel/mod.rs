@@ -285,6 +285,7 @@ impl Bvh {
 
     /// [`Bvh::intersect_from`] on a given SIMD path (the portable one when `path` is not
     /// supported), so that tests can run every path the machine has.
+    #[doc(hidden)]
     pub fn intersect_from_on(
         &self,
         path: SimdPath,
@@ -328,6 +329,7 @@ impl Bvh {
 
     /// [`Bvh::occlude_from`] on a given SIMD path (the portable one when `path` is not
     /// supported), so that tests can run every path the machine has.
+    #[doc(hidden)]
     pub fn occlude_from_on(
         &self,
         path: SimdPath,
@@ -358,6 +360,7 @@ impl Bvh {
 
     /// [`Bvh::occlude_segments`] on a given SIMD path (the portable one when `path` is not
     /// supported), so that tests can run every path the machine has.
+    #[doc(hidden)]
     pub fn occlude_segments_on(
         &self,
         path: SimdPath,
@@ -390,6 +393,7 @@ impl Bvh {
 
     /// [`Bvh::occlude_pairs`] on a given SIMD path (the portable one when `path` is not
     /// supported), so that tests can run every path the machine has.
+    #[doc(hidden)]
     pub fn occlude_pairs_on(&self, path: SimdPath, pairs: Pairs, t_max: f32, blocked: &mut [bool]) {
         let kernel = segments::OccludePairs {
             bvh: self,

@@ -158,7 +158,9 @@ impl World {
         &self.geometry
     }
 
-    /// The acceleration structure: the tree over [`World::geometry`] and the instances.
+    /// The acceleration structure: the tree over [`World::geometry`] and the instances (a
+    /// benchmark hook, see [`crate::bench`]).
+    #[doc(hidden)]
     pub fn accel(&self) -> &Levels {
         &self.accel
     }
