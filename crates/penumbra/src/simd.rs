@@ -145,8 +145,8 @@ fn mask_by_lane<const N: usize>(lanes: &[i32; N]) -> u32 {
 struct Avx512;
 /// AVX2.
 struct Avx2;
-/// The target's baseline (SSE2 on x86-64).
-struct Baseline;
+/// The target's baseline (SSE2 on x86-64); what a query that uses no SIMD names as its `Isa`.
+pub(crate) struct Baseline;
 
 impl Isa for Avx512 {
     #[inline(always)]

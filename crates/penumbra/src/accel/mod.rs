@@ -91,15 +91,19 @@ mod instance_batches;
 mod instances;
 mod lanes;
 mod levels;
+pub(crate) mod placed;
 pub(crate) mod prim;
 mod segments;
 mod shadow_fans;
 mod shaft;
 mod split;
 mod traverse;
+mod tree;
 mod validate;
 pub(crate) mod wide;
 
+#[cfg(test)]
+mod placed_tests;
 #[cfg(test)]
 pub(crate) mod test_meshes;
 #[cfg(test)]
@@ -110,6 +114,7 @@ pub use instances::Instances;
 pub use levels::Levels;
 pub use segments::{Pairs, Segments};
 pub use shaft::MIN_ENDS as SHAFT_MIN_ENDS;
+pub(crate) use tree::Tree;
 pub use validate::{intersect_brute_force, occluded_brute_force};
 
 /// A node of the flat BVH. Interior nodes have `count == 0` and their two children at

@@ -212,6 +212,39 @@ pub(super) fn occluded_kept(
     })
 }
 
+/// Calls `f` with every hit with `t` in `(t_min, t_max)` that `keep(prim_id, b1, b2)` keeps,
+/// in the walk's order: the any-hit walk that never stops.
+pub(super) fn each_kept(
+    bvh: &Bvh,
+    ray: &Ray,
+    (t_min, t_max): (f32, f32),
+    keep: impl Fn(u32, f32, f32) -> bool,
+    f: &mut impl FnMut(Hit),
+) {
+    if bvh.nodes.is_empty() {
+        return;
+    }
+    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
+    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
+        for i in slots {
+            let id = bvh.prim_ids[i];
+            if let Some(h) = bvh.tris[i]
+                .hit(ray, t_min, t_max)
+                .filter(|h| keep(id, h.b1, h.b2))
+            {
+                f(Hit {
+                    t: h.t,
+                    b1: h.b1,
+                    b2: h.b2,
+                    triangle: id,
+                    instance: None,
+                });
+            }
+        }
+        false
+    });
+}
+
 /// The closest hit of every ray of `rays`, written to `hits`; see [`Bvh::intersect_batch`].
 pub(super) fn intersect_batch(
     bvh: &Bvh,

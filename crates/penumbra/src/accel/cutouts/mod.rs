@@ -23,10 +23,11 @@ mod alpha;
 use glam::Vec3;
 
 use super::instances::{build_meshes, closer, Instances};
-use super::{build, traverse, Bvh};
+use super::{build, Bvh, Tree};
 use crate::geometry::{Geometry, Hit, Mesh};
 use crate::material::Material;
 use crate::math::{Ray, Transform};
+use crate::simd::Baseline;
 use crate::texture::Texture;
 pub(crate) use alpha::AlphaTests;
 
@@ -151,8 +152,10 @@ impl Cutouts {
     ) -> Option<Hit> {
         // Ties with `best` are looked for too: a smaller key may take them.
         let limit = best.map_or(t_max, |b| b.t.next_up());
-        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
-        let own = traverse::intersect_kept(&self.flat, ray, t_min, limit, keep).map(|h| Hit {
+        let own = self
+            .flat
+            .closest::<Baseline>(ray, (t_min, limit), Some(&self.alpha), &mut ());
+        let own = own.map(|h| Hit {
             triangle: self.flat_ids[h.triangle as usize],
             ..h
         });
@@ -166,8 +169,8 @@ impl Cutouts {
 
     /// True when a kept hit of a cut-out triangle meets the ray with `t` in `(t_min, t_max)`.
     pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
-        traverse::occluded_kept(&self.flat, ray, t_min, t_max, keep)
+        self.flat
+            .any::<Baseline>(ray, (t_min, t_max), Some(&self.alpha), &mut ())
             || self
                 .instances
                 .occluded_kept(ray, t_min, t_max, |p, tri, b1, b2| {
@@ -179,9 +182,9 @@ impl Cutouts {
     /// for some `t` in `(0, t_max)`, as the renderer's shadow queries define it (an
     /// instance traces the segment between the mapped end points).
     pub(crate) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
-        let keep = |local, b1, b2| self.alpha.keeps_flat(local, b1, b2);
         let ray = Ray::new(origin, end - origin);
-        traverse::occluded_kept(&self.flat, &ray, 0.0, t_max, keep)
+        self.flat
+            .any::<Baseline>(&ray, (0.0, t_max), Some(&self.alpha), &mut ())
             || self
                 .instances
                 .occludes_segment_kept(origin, end, t_max, |p, tri, b1, b2| {

@@ -24,13 +24,13 @@ use std::sync::Arc;
 
 use glam::{Affine3A, DAffine3, Vec3, Vec3A};
 
-use super::margins::EXIT_SCALE;
 use super::nearest::{Frame, Nearest};
 use super::tree::{SlotHit, Stack, WideBvh};
 use crate::accel::instances::{inverse, inverse_f64, world_box};
+use crate::accel::placed::{self, Entry, Placements};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{unit_normal, PreparedRay};
-use crate::accel::traverse::{slab_scaled, walk_nearest};
+use crate::accel::traverse::walk_nearest;
 use crate::accel::{build, AlphaTests, BvhNode};
 use crate::math::Transform;
 use crate::simd::Isa;
@@ -198,27 +198,11 @@ impl WideLevels {
     pub fn closest_placed<I: Isa>(
         &self,
         ray: &[f32; 6],
-        (t_min, t_max): (f32, f32),
-        mut best: Option<SlotHit>,
+        range: (f32, f32),
+        best: Option<SlotHit>,
         stack: &mut Stack,
     ) -> Option<SlotHit> {
-        let mut t = best.map_or(t_max, |h| h.crossing.t);
-        self.walk_top(ray, t_min, &mut t, |index, p, mesh, r, t| {
-            let alpha = p.alpha.as_deref();
-            let Some(mut h) = mesh.closest::<I>(r, (t_min, *t), alpha, stack) else {
-                return;
-            };
-            (h.geometry, h.level) = (p.geometry, index);
-            let closer = best.is_none_or(|b| {
-                let c = (h.crossing.t, h.geometry, h.primitive);
-                c < (b.crossing.t, b.geometry, b.primitive)
-            });
-            if closer {
-                *t = h.crossing.t;
-                best = Some(h);
-            }
-        });
-        best
+        placed::closest::<_, I>(self, world_ray(ray), range, best, stack)
     }
 
     /// True when a triangle of the own tree meets `prepared` with `t` in `range`.
@@ -256,16 +240,7 @@ impl WideLevels {
         range: (f32, f32),
         stack: &mut Stack,
     ) -> bool {
-        let mut hit = false;
-        let mut bound = range.1;
-        self.walk_top(ray, range.0, &mut bound, |_, p, mesh, r, bound| {
-            if !hit && mesh.occluded::<I>(r, range, p.alpha.as_deref(), stack) {
-                hit = true;
-                // No box is entered before −∞: the walk ends.
-                *bound = f32::NEG_INFINITY;
-            }
-        });
-        hit
+        placed::any::<_, I>(self, world_ray(ray), range, stack)
     }
 
     /// Calls `f` with every crossing of `prepared` with `t` in `range` in the own tree, one per
@@ -307,7 +282,7 @@ impl WideLevels {
     }
 
     /// [`WideLevels::each_hit_own`] of the placements: every crossing of `ray` with each placed
-    /// mesh's surface.
+    /// mesh's surface (`borders` are every tree's, made).
     #[inline(always)]
     pub fn each_hit_placed<I: Isa>(
         &self,
@@ -317,48 +292,8 @@ impl WideLevels {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        let mut bound = range.1;
-        self.walk_top(ray, range.0, &mut bound, |index, p, mesh, r, _| {
-            let rule = (borders.meshes[p.mesh as usize], p.alpha.as_deref());
-            mesh.each_hit::<I>(r, range, rule, stack, &mut |mut h| {
-                (h.geometry, h.level) = (p.geometry, index);
-                f(h)
-            });
-        });
-    }
-
-    /// Visits the placements whose boxes `ray` enters with `t` in `[t_min, bound]`, nearest
-    /// first: `visit(index, placement, mesh, object-space ray, bound)`, which may lower the
-    /// bound.
-    #[inline(always)]
-    fn walk_top(
-        &self,
-        ray: &[f32; 6],
-        t_min: f32,
-        bound: &mut f32,
-        mut visit: impl FnMut(u32, &Placement, &WideBvh, &PreparedRay, &mut f32),
-    ) {
-        if self.top.is_empty() {
-            return;
-        }
-        let (o, d) = (
-            Vec3::new(ray[0], ray[1], ray[2]),
-            Vec3::new(ray[3], ray[4], ray[5]),
-        );
-        let (origin, inv_dir) = (Vec3A::from(o), Vec3A::from(d).recip());
-        let enter =
-            |node: &BvhNode, t: f32| slab_scaled(node, origin, inv_dir, (t_min, t), EXIT_SCALE);
-        walk_nearest(&self.top, bound, enter, |slots, bound| {
-            for &index in &self.top_ids[slots] {
-                let p = &self.placed[index as usize];
-                let map = &p.object_from_world;
-                let object = PreparedRay::new(map.transform_point3(o), map.transform_vector3(d));
-                if let Some(r) = object {
-                    let mesh = &self.meshes[p.placement.mesh as usize];
-                    visit(index, &p.placement, mesh, &r, bound);
-                }
-            }
-        });
+        debug_assert_eq!(borders.meshes.len(), self.meshes.len());
+        placed::each::<_, I>(self, world_ray(ray), range, stack, f);
     }
 
     /// The unit normal of the triangle of a hit or closest point: leaf slot `slot` of the own
@@ -407,5 +342,37 @@ impl WideLevels {
             }
         });
         best
+    }
+}
+
+/// A ray's origin and direction from its six coordinates.
+#[inline(always)]
+fn world_ray(ray: &[f32; 6]) -> (Vec3, Vec3) {
+    (
+        Vec3::new(ray[0], ray[1], ray[2]),
+        Vec3::new(ray[3], ray[4], ray[5]),
+    )
+}
+
+impl Placements for WideLevels {
+    type Tree = WideBvh;
+
+    #[inline(always)]
+    fn top(&self) -> (&[BvhNode], &[u32]) {
+        (&self.top, &self.top_ids)
+    }
+
+    #[inline(always)]
+    fn entry(&self, index: u32) -> Entry<'_, WideBvh> {
+        let p = &self.placed[index as usize];
+        let mesh = &self.meshes[p.placement.mesh as usize];
+        Entry {
+            object_from_world: &p.object_from_world,
+            mesh,
+            id: p.placement.geometry,
+            filter: p.placement.alpha.as_deref(),
+            // Made by `borders` before any query that counts.
+            border: mesh.made_border(),
+        }
     }
 }

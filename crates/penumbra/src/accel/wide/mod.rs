@@ -31,5 +31,5 @@ pub(crate) mod turns;
 #[cfg(test)]
 mod turns_tests;
 
-pub(crate) use margins::{raised, tie_bound};
-pub(crate) use tree::WideBvh;
+pub(crate) use margins::{raised, tie_bound, EXIT_SCALE};
+pub(crate) use tree::{SlotHit, Stack, WideBvh};

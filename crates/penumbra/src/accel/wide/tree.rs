@@ -456,6 +456,24 @@ impl WideBvh {
         });
     }
 
+    /// Calls `f` with every hit with `t` in `[t_min, t_max]` under the
+    /// [`EdgeRule::Inclusive`] rule (each triangle the ray meets, edges and vertices
+    /// inclusive), in traversal order.
+    pub fn each_met<I: Isa>(
+        &self,
+        ray: &PreparedRay,
+        (t_min, t_max): (f32, f32),
+        alpha: Option<&AlphaTests>,
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        let tests = (t_min, &|t| t, Order::Free, (EdgeRule::Inclusive, &[][..]));
+        self.walk::<I>(ray, &mut t_max.clone(), tests, stack, |g, lane, c, _| {
+            self.each(alpha, (g, lane, c), f);
+            true
+        });
+    }
+
     /// Calls `f` with the hit record of `found` unless `alpha` cuts it out.
     #[inline(always)]
     pub(super) fn each(

@@ -1,0 +1,244 @@
+//! One interface over both of the engine's trees: [`Tree`], the closest, any and every hit of
+//! one ray, each with a hit [`Filter`] asked after the primitive test (none, or the cut-outs'
+//! alpha test), as Embree's intersection filter and pbrt-v4's `GeometricPrimitive` ask theirs,
+//! and under the tree's [`Rule`]: the interval a hit's `t` may take and the order that breaks
+//! ties.
+//!
+//! Two trees implement it, each with its one primitive test:
+//! - the binary [`Bvh`] (Möller–Trumbore, the renderer's): `t` in the open interval
+//!   `(t_min, t_max)`, ties to the smaller triangle index, so that the renderer's images stay
+//!   what they are bit for bit;
+//! - the [`WideBvh`] (the watertight test, ray casting's): `t` in the closed interval
+//!   `[t_min, t_max]`, edges and vertices inclusive, ties to the smaller (geometry, primitive)
+//!   id, as Open3D answers.
+//!
+//! A filter is asked only about a hit that would count: one that would become the closest so
+//! far, end an any-hit walk, or be reported. A hit it refuses does not shorten a closest-hit
+//! ray, and an any-hit walk looks on past it. The filter names a triangle by the tree's own
+//! triangle index (its `prim_ids`), which is how [`AlphaTests::keeps_flat`] numbers them.
+
+use glam::Vec3;
+
+use super::prim::boundary::Boundary;
+use super::prim::watertight::PreparedRay;
+use super::wide::{SlotHit, Stack, WideBvh, EXIT_SCALE};
+use super::{traverse, AlphaTests, Bvh};
+use crate::geometry::Hit;
+use crate::math::Ray;
+use crate::simd::Isa;
+
+/// What a hit must pass after the primitive test: `None` keeps every hit; the alpha tests
+/// keep a hit unless its triangle's material cuts it out where the ray meets it.
+pub(crate) type Filter<'a> = Option<&'a AlphaTests>;
+
+/// The interval of `t` a tree's hits may take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Rule {
+    /// `(t_min, t_max)`, ties to the smaller triangle index: the renderer's.
+    Open,
+    /// `[t_min, t_max]`, edges and vertices inclusive, ties to the smaller (geometry,
+    /// primitive) id: ray casting's.
+    Closed,
+}
+
+/// A tree of triangles and its single-ray queries (see the module's docs).
+pub(crate) trait Tree {
+    /// A ray as the tree's primitive test takes it.
+    type Ray;
+    /// A hit as the tree reports it.
+    type Hit: Copy;
+    /// The scratch a walk needs (a stack), made once per thread and reused.
+    type Stack: Default;
+    /// The interval of `t` and the order of ties.
+    const RULE: Rule;
+    /// The margin a top-level box's exit distance is raised by ([`raised`]): 1 for the
+    /// binary tree, Ize's conservative scale for the watertight one, as its own nodes use.
+    const EXIT_SCALE: f32;
+
+    /// `origin + t·direction` prepared for [`Tree::closest`] and the others; `None` for a ray
+    /// that can hit nothing (a component not finite, a zero direction).
+    fn prepare(origin: Vec3, direction: Vec3) -> Option<Self::Ray>;
+
+    /// The closest hit with `t` in `range` under [`Tree::RULE`] that `filter` keeps, if any.
+    fn closest<I: Isa>(
+        &self,
+        ray: &Self::Ray,
+        range: (f32, f32),
+        filter: Filter,
+        stack: &mut Self::Stack,
+    ) -> Option<Self::Hit>;
+
+    /// True when some hit with `t` in `range` passes `filter`; stops at the first.
+    fn any<I: Isa>(
+        &self,
+        ray: &Self::Ray,
+        range: (f32, f32),
+        filter: Filter,
+        stack: &mut Self::Stack,
+    ) -> bool;
+
+    /// Calls `f` with every hit with `t` in `range` that `filter` keeps, in the walk's order.
+    /// `border` (the wide tree's [`WideBvh::border`]) counts each crossing of the surface
+    /// once: a ray through an edge or vertex is reported by the one triangle that owns it;
+    /// without it, every triangle the ray meets is reported. The binary tree takes no border.
+    fn each<I: Isa>(
+        &self,
+        ray: &Self::Ray,
+        range: (f32, f32),
+        filters: (Filter, Option<&[Boundary]>),
+        stack: &mut Self::Stack,
+        f: &mut impl FnMut(Self::Hit),
+    );
+
+    /// The `t` of `hit`.
+    fn t(hit: &Self::Hit) -> f32;
+
+    /// The key that breaks a tie of `hit` with another at the same `t`: the smaller wins.
+    fn tie_key(hit: &Self::Hit) -> u64;
+
+    /// `hit`, found in placement `index` (whose hits report `id`), as the placement's.
+    fn placed(hit: Self::Hit, id: u32, index: u32) -> Self::Hit;
+}
+
+impl Tree for Bvh {
+    type Ray = Ray;
+    type Hit = Hit;
+    type Stack = ();
+    const RULE: Rule = Rule::Open;
+    const EXIT_SCALE: f32 = 1.0;
+
+    fn prepare(origin: Vec3, direction: Vec3) -> Option<Ray> {
+        Some(Ray::new(origin, direction))
+    }
+
+    #[inline(always)]
+    fn closest<I: Isa>(
+        &self,
+        ray: &Ray,
+        range: (f32, f32),
+        filter: Filter,
+        _: &mut (),
+    ) -> Option<Hit> {
+        match filter {
+            None => traverse::intersect(self, ray, range.0, range.1),
+            Some(alpha) => traverse::intersect_kept(self, ray, range.0, range.1, |id, b1, b2| {
+                alpha.keeps_flat(id, b1, b2)
+            }),
+        }
+    }
+
+    #[inline(always)]
+    fn any<I: Isa>(&self, ray: &Ray, range: (f32, f32), filter: Filter, _: &mut ()) -> bool {
+        match filter {
+            None => traverse::occluded(self, ray, range.0, range.1),
+            Some(alpha) => traverse::occluded_kept(self, ray, range.0, range.1, |id, b1, b2| {
+                alpha.keeps_flat(id, b1, b2)
+            }),
+        }
+    }
+
+    fn each<I: Isa>(
+        &self,
+        ray: &Ray,
+        range: (f32, f32),
+        (filter, border): (Filter, Option<&[Boundary]>),
+        _: &mut (),
+        f: &mut impl FnMut(Hit),
+    ) {
+        debug_assert!(border.is_none(), "Möller–Trumbore owns no border");
+        traverse::each_kept(
+            self,
+            ray,
+            range,
+            |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2)),
+            f,
+        );
+    }
+
+    #[inline(always)]
+    fn t(hit: &Hit) -> f32 {
+        hit.t
+    }
+
+    /// The world's own triangles first, then by instance, then by triangle.
+    #[inline(always)]
+    fn tie_key(hit: &Hit) -> u64 {
+        (hit.instance.map_or(0, |i| u64::from(i) + 1) << 32) | u64::from(hit.triangle)
+    }
+
+    #[inline(always)]
+    fn placed(hit: Hit, id: u32, _: u32) -> Hit {
+        Hit {
+            instance: Some(id),
+            ..hit
+        }
+    }
+}
+
+impl Tree for WideBvh {
+    type Ray = PreparedRay;
+    type Hit = SlotHit;
+    type Stack = Stack;
+    const RULE: Rule = Rule::Closed;
+    const EXIT_SCALE: f32 = EXIT_SCALE;
+
+    fn prepare(origin: Vec3, direction: Vec3) -> Option<PreparedRay> {
+        PreparedRay::new(origin, direction)
+    }
+
+    #[inline(always)]
+    fn closest<I: Isa>(
+        &self,
+        ray: &PreparedRay,
+        range: (f32, f32),
+        filter: Filter,
+        stack: &mut Stack,
+    ) -> Option<SlotHit> {
+        WideBvh::closest::<I>(self, ray, range, filter, stack)
+    }
+
+    #[inline(always)]
+    fn any<I: Isa>(
+        &self,
+        ray: &PreparedRay,
+        range: (f32, f32),
+        filter: Filter,
+        stack: &mut Stack,
+    ) -> bool {
+        WideBvh::occluded::<I>(self, ray, range, filter, stack)
+    }
+
+    fn each<I: Isa>(
+        &self,
+        ray: &PreparedRay,
+        range: (f32, f32),
+        (filter, border): (Filter, Option<&[Boundary]>),
+        stack: &mut Stack,
+        f: &mut impl FnMut(SlotHit),
+    ) {
+        match border {
+            Some(border) => self.each_hit::<I>(ray, range, (border, filter), stack, f),
+            None => self.each_met::<I>(ray, range, filter, stack, f),
+        }
+    }
+
+    #[inline(always)]
+    fn t(hit: &SlotHit) -> f32 {
+        hit.crossing.t
+    }
+
+    /// By geometry id, then primitive id.
+    #[inline(always)]
+    fn tie_key(hit: &SlotHit) -> u64 {
+        (u64::from(hit.geometry) << 32) | u64::from(hit.primitive)
+    }
+
+    #[inline(always)]
+    fn placed(hit: SlotHit, id: u32, index: u32) -> SlotHit {
+        SlotHit {
+            geometry: id,
+            level: index,
+            ..hit
+        }
+    }
+}
