@@ -45,8 +45,9 @@ pub fn check_finite(film: &Film, path: &Path, format: OutputFormat) -> Result<()
     if !matches!(format, OutputFormat::Exr | OutputFormat::Pfm) {
         return Ok(());
     }
-    // A branch-free pass first (vectorized; a search that stops at the first bad value ran
-    // one value at a time, 2 ms at 1024²), then the search only when something is bad.
+    // A branch-free pass first (vectorized, where a search that stops at the first bad value
+    // runs one value at a time), then the search only when something is bad (measured:
+    // docs/benchmarks.md, «Design measurements», `check_finite`).
     let finite = |p: &Rgb| p.x.is_finite() & p.y.is_finite() & p.z.is_finite();
     if film.pixels.iter().fold(true, |all, p| all & finite(p)) {
         return Ok(());
@@ -266,7 +267,8 @@ fn encode<W: Write + Seek>(
             // Whole rows at a time, at least the writer's buffer so that they go straight to
             // the file (four bytes a call cost 3 million calls at 1024², and rows copied
             // through the buffer a second pass over 12 MB). Each pixel's twelve bytes go to
-            // their place (appended four at a time, they took 5 ms at 1024²).
+            // their place rather than being appended four at a time (measured:
+            // docs/benchmarks.md, «Design measurements», PFM rows).
             let row_bytes = width as usize * 12;
             let rows = WRITE_BUFFER.div_ceil(row_bytes.max(1));
             let mut chunk = Vec::with_capacity(rows * row_bytes);

@@ -10,7 +10,8 @@ pub const MAX_THREADS: usize = 1024;
 /// [`MAX_THREADS`] is refused; more than the cores this process may use (its CPU affinity and
 /// quota, as `std::thread::available_parallelism` reads them) get one worker per core: the
 /// work is CPU-bound, so extra workers only compete for the cores, and idle rayon workers spin
-/// before they sleep (1,024 workers on 2 cores made a BVH build 50x and a render 10x slower).
+/// before they sleep (1,024 workers on 2 cores made a BVH build and a render many times
+/// slower; measured: docs/benchmarks.md, «Design measurements», `thread_pool`).
 pub(crate) fn thread_pool(threads: usize) -> Result<(rayon::ThreadPool, usize), String> {
     if threads > MAX_THREADS {
         return Err(format!(

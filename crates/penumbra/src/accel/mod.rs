@@ -210,9 +210,9 @@ const BINS: usize = 16;
 /// Largest leaf the SAH may keep when a split would be cheaper.
 const MAX_LEAF: usize = 8;
 /// Subtrees with at least this many triangles are built on separate threads. At 32k, the
-/// suite's 17,590-triangle scenes were built on one thread while the other waited (5–6 ms of
-/// a 0.3 s process); a `rayon::join` costs microseconds, a 4k-triangle subtree about a
-/// millisecond.
+/// suite's 17,590-triangle scenes were built on one thread while the other waited (measured:
+/// docs/benchmarks.md, «Design measurements», `PARALLEL_MIN`); a `rayon::join` costs
+/// microseconds, a 4k-triangle subtree about a millisecond.
 const PARALLEL_MIN: usize = 4 * 1024;
 /// Entries of the fixed stacks of every walk of the binary tree (single rays, packets, closest
 /// points), and the depth from which the wide walks' stack is sized: the one bound of both

@@ -196,7 +196,8 @@ impl Kernel for OccludePairs<'_> {
 
 /// Traces the segments of one packet (at most `N`, `blocked` one slot each) whose origin and
 /// end `segment(i)` gives, and whose lanes `fill` writes into `bundle`'s (in place: a packet's
-/// lanes are a few hundred bytes, and copies of them cost 10 % of the seed room's shadow rays).
+/// lanes are a few hundred bytes, and copies of them were a visible share of the seed room's
+/// shadow rays; measured: docs/benchmarks.md, «Design measurements», `occlude_lanes`).
 /// A packet with a quarter of its lanes or fewer to trace goes one ray at a time.
 #[inline(always)]
 fn occlude_lanes<const N: usize, I: Isa>(
@@ -254,8 +255,8 @@ impl<const N: usize> Lanes<N> {
 
 /// One axis of [`Lanes::set`]: lane `i` starts at `origin(i)` and ends at `end(i)`. The lanes
 /// are computed in registers and stored once, never read back from the stores: reading the
-/// origins back right after copying them in cost the seed room 7 % of its render time at 2
-/// threads.
+/// origins back right after copying them in slowed the seed room's render (measured:
+/// docs/benchmarks.md, «Design measurements», `set_axis`).
 // Lane loops index several arrays by lane; that is what vectorizes.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]

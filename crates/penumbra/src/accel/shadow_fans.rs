@@ -25,8 +25,8 @@ use crate::simd::{Isa, Kernel};
 
 /// Trees of at least this many nodes (2 MiB of them: more than a core's L2 cache) have the
 /// packets prefetch what lies below the children they test. On smaller trees the nodes stay
-/// cached and the prefetches are pure cost (+5 % on the seed's room); on the 1M-triangle room
-/// they save 3 %.
+/// cached and the prefetches are pure cost (the seed's room); on the 1M-triangle room they
+/// save time (measured: docs/benchmarks.md, «Design measurements», `PREFETCH_MIN_NODES`).
 const PREFETCH_MIN_NODES: usize = 64 * 1024;
 
 /// [`Bvh::occlude_from`] as a [`Kernel`]: the segments in packets of `N` lanes.
@@ -285,9 +285,9 @@ pub(super) fn slab<const N: usize, I: Isa>(
 /// `t = t_num · (1 / det)` is positive only where `det` is nonzero and has the sign of
 /// `t_num` (shared by all lanes), so the lanes' `det` alone (a third of the test) rules out a
 /// triangle whose plane lies behind every lane; the rest of the test runs only when some lane
-/// is left. Either way the answer is the full test's. This pays on 16-lane vectors (AVX-512:
-/// 2–3 % less time on the embree-bench rooms) and costs on 8 (AVX2: 4 % more), so only packets
-/// of 16 lanes or more take it.
+/// is left. Either way the answer is the full test's. This pays on 16-lane vectors (AVX-512)
+/// and costs on 8 (AVX2), so only packets of 16 lanes or more take it (measured:
+/// docs/benchmarks.md, «Design measurements», the `det` pretest).
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn triangle<const N: usize, I: Isa>(

@@ -33,10 +33,10 @@ pub(super) const MAX_CANDIDATES: usize = 32;
 /// Fewest ends for which a batch's segments are worth a shaft. One walk of the tree gathers
 /// a shaft's triangles for every segment, where the packets walk it once per end: with few
 /// ends the gathering costs about what it saves, and a shaft too wide to use (over
-/// [`MAX_CANDIDATES`]) is pure cost. Without a shaft, against with one (1024², 2 threads):
-/// 0.75× the time under three point lights (3 ends), 0.92× under one 3×3 light
-/// (scenes/bench/small_light.toml), 0.98× in the seed's room at 2×2 and 1.03× at 3×3; at 5×5
-/// (25 ends) the shaft saves 13 % there.
+/// [`MAX_CANDIDATES`]) is pure cost. Without a shaft, renders took less time under three
+/// point lights (3 ends), under one 3×3 light (scenes/bench/small_light.toml) and in the
+/// seed's room at 2×2, about as long at 3×3; at 5×5 (25 ends) the shaft saves time there
+/// (measured: docs/benchmarks.md, «Design measurements», `MIN_ENDS`).
 pub const MIN_ENDS: usize = 16;
 
 /// Fewest ends for which a batch too small for [`MIN_ENDS`] still finds its [`Roots`]: with
@@ -44,8 +44,9 @@ pub const MIN_ENDS: usize = 16;
 pub(super) const ROOTS_MIN_ENDS: usize = 4;
 
 /// Most subtrees a shaft's descent leaves for the walks to start from. 4 and 8 gave the same
-/// time under a 3×3 light (scenes/bench/small_light.toml: 0.92× the walks from the tree's
-/// root); 16 was slower, 1 and 2 saved little.
+/// time under a 3×3 light (scenes/bench/small_light.toml), less than the walks from the
+/// tree's root; 16 was slower, 1 and 2 saved little (measured: docs/benchmarks.md, «Design
+/// measurements», `MAX_ROOTS`).
 pub(super) const MAX_ROOTS: usize = 4;
 
 /// Axes the shaft is measured along: x, y, z, and three across its direction.
@@ -263,7 +264,8 @@ fn extent(axis: Vec3, (min, max): (Vec3, Vec3)) -> (f32, f32) {
 #[inline(always)]
 fn bounds(points: [&[f32]; 3]) -> (Vec3, Vec3) {
     // Not `points.map(range)`, nor `range` a closure: neither was inlined, and compiled
-    // outside the SIMD kernels these loops took 4 % of the seed room's time.
+    // outside the SIMD kernels these loops took a visible share of the seed room's time
+    // (measured: docs/benchmarks.md, «Design measurements», `shaft::bounds`).
     let [(x0, x1), (y0, y1), (z0, z1)] = [range(points[0]), range(points[1]), range(points[2])];
     (Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
 }

@@ -8,8 +8,8 @@
 //! one a single pass would choose. The partition stays serial and in place: its element order
 //! decides the tree, and Lomuto's partition keeps the left part's order but not the right's,
 //! which a parallel partition could reproduce only with a scratch copy and several more passes
-//! over memory. Measured on the 1M-triangle blob scene (two threads), the serial partitions of
-//! the few nodes above a million triangles take 2–4 ms each, under 3% of the build together.
+//! over memory. The serial partitions of the few nodes above a million triangles are a small
+//! part of the build (measured: docs/benchmarks.md, «Design measurements», `accel::split`).
 
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;

@@ -42,11 +42,11 @@ const BUNDLE_MAX_SAMPLES: u64 = 64;
 /// Points whose lights are all fixed bundle their shadow rays as pairs up to this many light
 /// samples (64×64), whatever the tree: pairs write each sample once per render and each point
 /// once per batch, so a batch holds only its points' shading terms, about 1 MB at this bound.
-/// Against fans (process wall time, 2 threads, 1024²): four lights of 1, 9, 25 and 64 samples
-/// in the seed's room (scenes/bench/four_lights.toml) 0.59×, the seed's room at 16×16 samples
-/// 0.57×, the 1M-triangle room at 16×16 (512²) 0.86×. Beyond the bound (lights of up to
-/// 1024×1024 samples) a batch would hold hundreds of megabytes, and fans trace one point at a
-/// time.
+/// Pairs take less time than fans in the seed's room, under four lights
+/// (scenes/bench/four_lights.toml) or at 16×16 samples, and in the 1M-triangle room (measured:
+/// docs/benchmarks.md, «Design measurements», `BUNDLE_MAX_FIXED`). Beyond the bound (lights
+/// of up to 1024×1024 samples) a batch would hold hundreds of megabytes, and fans trace one
+/// point at a time.
 const BUNDLE_MAX_FIXED: u64 = 4096;
 
 /// Fans of fewer samples than this are poor packets (they go one ray at a time): such points
@@ -56,10 +56,10 @@ const FAN_MIN_SAMPLES: u64 = 8;
 /// Trees with at least this many nodes are deep enough for bundles of segments (jittered
 /// lights: each point has samples of its own) to beat fans. On a room of a few large triangles
 /// a fan's rays stay together anyway, and a fan shares its origin, which saves a third of each
-/// triangle test (1024² renders, 1 thread: bundles of segments took 1.03× the time of fans on
-/// the seed's room, 0.90× on the bunny room and 0.66× on the 1M-triangle room). Fixed samples
-/// bundle as pairs, which write each point and sample once (not once per segment) and beat fans
-/// on every tree: 0.91× on the seed's room.
+/// triangle test; bundles of segments gain the more the deeper the tree (the bunny room, the
+/// 1M-triangle room). Fixed samples bundle as pairs, which write each point and sample once
+/// (not once per segment) and beat fans on every tree, the seed's room too (measured:
+/// docs/benchmarks.md, «Design measurements», `BUNDLE_MIN_NODES`).
 const BUNDLE_MIN_NODES: usize = 4096;
 
 /// Whether points with `samples` light samples bundle their shadow rays in a tree of `nodes`
@@ -316,7 +316,8 @@ impl Integrator<'_> {
     /// points (the samples of a few adjacent pixels) make it faster. Each hit's surface is
     /// found where it is shaded, so that it stays in registers: built into a list first, each
     /// was assembled on the stack and copied, and the copy's wide loads waited on the narrow
-    /// stores of its fields (7 % of the time under three point lights).
+    /// stores of its fields (measured: docs/benchmarks.md, «Design measurements»,
+    /// `shade_batch`).
     pub(crate) fn shade_batch(
         &self,
         directions: &[Vec3],

@@ -81,7 +81,8 @@ pub(super) struct Directions {
 impl Directions {
     /// Every field set to `count` lanes, as slices: `[lx, ly, lz, d2, cos]`. Inlined, and
     /// without an array `map` (whose `try_map` was not): called per point and light, the call
-    /// and the map took 5 % of the seed room's time.
+    /// and the map took a visible share of the seed room's time (measured: docs/benchmarks.md,
+    /// «Design measurements», `Directions::lanes`).
     #[inline(always)]
     pub(super) fn lanes(&mut self, count: usize) -> [&mut [f32]; 5] {
         for v in [

@@ -62,7 +62,8 @@ pub(super) fn across_order(points: &[[f32; 3]], pool: &rayon::ThreadPool) -> Vec
 /// sort on the current pool's threads. The cells' counts are summed over parts of the keys;
 /// then the cells are cut into one run per thread, about as many points each, and each
 /// thread scans every key and places those of its cells, in order, in its own part of the
-/// result (a serial sort was 8 ms of occupancy's 50 ms on the bunny at 2 threads).
+/// result (a serial sort was a large serial part of occupancy at 2 threads; measured:
+/// docs/benchmarks.md, «Design measurements», `counting_sort`).
 fn counting_sort(keys: &[u32], last: usize) -> Vec<usize> {
     let threads = rayon::current_num_threads().max(1);
     let part = keys.len().div_ceil(threads).max(1);

@@ -94,10 +94,9 @@ impl RaycastingScene {
     /// `row_length` rays per row, as [`create_rays_pinhole`](super::create_rays_pinhole)
     /// makes them: the same results, bit for bit, found faster. Neighbouring rays go through
     /// the hierarchy together as packets, and packets of 8 × 4 rays meet fewer boxes and
-    /// triangles than runs of one row (with AVX2 on an AMD EPYC, 1024² images on one thread:
-    /// 1.03–1.07× the rays per second of the same rays as a flat batch on the Stanford bunny,
-    /// 1.22–1.25× on a 1M-triangle blob). A `row_length` of 0, or one longer than 4096, is
-    /// the plain query.
+    /// triangles than runs of one row, the more so on a large mesh (measured:
+    /// docs/benchmarks.md, «Design measurements», `RaycastingScene::cast_rays_rows`). A
+    /// `row_length` of 0, or one longer than 4096, is the plain query.
     pub fn cast_rays_rows(
         &self,
         rays: &[[f32; 6]],

@@ -219,13 +219,13 @@ pub(crate) fn budget(arrays: &[(usize, usize)], what: &'static str) -> Result<()
 
 /// `n` copies of `value`, written by the workers of `pool` (in blocks of [`BLOCK`] values),
 /// so that the pages of a large result are first touched in parallel rather than by the
-/// caller alone, a serial part of a two-thread query on coherent rays (with this, 2048²
-/// coherent `cast_rays` went from 30.5 to 32.5 Mrays/s on two idle cores, one thread staying
-/// at 19.2–19.5). Zero-filled results come here too: `vec![0; n]` is `calloc`, which takes
-/// fresh pages when the allocator maps new memory, but clears memory it reuses with a
-/// `memset` on the calling thread alone. In a loop of calls from Python, which reuses it,
-/// that made 1024² coherent `cast_rays` swing between 26 and 42 Mrays/s on two threads
-/// (bunny); with every result filled here, 31–42, mostly about 40.
+/// caller alone, a serial part of a two-thread query on coherent rays (with this, coherent
+/// `cast_rays` got faster on two threads and stayed the same on one). Zero-filled results come
+/// here too: `vec![0; n]` is `calloc`, which takes fresh pages when the allocator maps new
+/// memory, but clears memory it reuses with a `memset` on the calling thread alone. In a loop
+/// of calls from Python, which reuses it, that made coherent `cast_rays` on two threads swing
+/// widely in speed; with every result filled here, it swings less and mostly runs near the top
+/// of that range (measured: docs/benchmarks.md, «Design measurements», `filled`).
 ///
 /// The values are written [`SEGMENT`] at a time, with `options`' cancel flag checked before
 /// each segment: the five results of 24 million rays are 770 MB, a third of a second or more

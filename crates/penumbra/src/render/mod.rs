@@ -217,7 +217,8 @@ fn check_memory(
 
 /// A buffer of `len` values, or the error that the image does not fit in memory; filled on
 /// `pool`. The first write to each page of a fresh buffer faults it in: a 1024² film is
-/// about 3,000 faults, 4–5 ms on one thread while the others waited.
+/// about 3,000 faults, which one thread took while the others waited (measured:
+/// docs/benchmarks.md, «Design measurements», `render::buffer`).
 fn buffer<T: Copy + Send + Sync>(
     len: usize,
     value: T,

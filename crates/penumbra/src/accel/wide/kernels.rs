@@ -20,8 +20,8 @@ use super::packets::{count_parallel, CastPackets};
 use crate::simd::{dispatch, Isa, Kernel, SimdPath};
 
 /// Rays between two looks at the cancel flag: a ray through a dense region can take
-/// milliseconds, so a chunk of 1024 could take seconds; a look at every ray cost 3 % of the
-/// counting query's speed.
+/// milliseconds, so a chunk of 1024 could take seconds; a look at every ray slowed the
+/// counting query (measured: docs/benchmarks.md, «Design measurements», `CHECK`).
 const CHECK: usize = 8;
 
 /// Lanes of a packet of parallel rays (four vectors with AVX2, two with AVX-512).
@@ -197,8 +197,8 @@ impl<C: Control, const PLACED: bool> Kernel for Counts<'_, C, PLACED> {
         let interleave = accel.own().interleaves();
         let mut packet_stack = Vec::new();
         // Runs of parallel rays go as packets of 32 through the own tree (without cut-outs):
-        // such rays share most of their walk (occupancy on the bunny: 1.15x the points per
-        // second of 16 lanes with AVX2, and of 16 with AVX-512 before that).
+        // such rays share most of their walk, and occupancy took less time with 32 lanes than
+        // with 16 (measured: docs/benchmarks.md, «Design measurements», parallel-ray packets).
         let packets = !PLACED && accel.own_alpha().is_none();
         // On a tree larger than the caches, the runs left to single rays go after, as one
         // stream of walks in turn.

@@ -4,13 +4,16 @@
 //! `kernels`) replaces up to three levels of binary nodes. Embree's BVH8 on AVX2 is the model;
 //! against four wide, eight took the bunny's incoherent queries from 2,115 / 3,146 / 1,638
 //! instructions per ray (`cast_rays` / `count_intersections` / `test_occlusions`) to
-//! 1,834 / 2,655 / 1,350, and 17–23 % more rays per second (docs/benchmarks.md).
+//! 1,834 / 2,655 / 1,350, with more rays per second (measured: docs/benchmarks.md, «Design
+//! measurements», `accel::wide::node`, eight wide).
 //!
 //! The wide tree is collapsed from the binary one (an interior child with the largest
 //! surface area is replaced by its two children until there are eight, as in Wald et al.,
 //! "Getting Rid of Packets", 2008), except that children of at most two leaves' worth of
 //! triangles are opened first: left alone, each would become a wide node of two leaves, a
-//! node load for little culling (3 % less time on incoherent rays on the bunny at four wide).
+//! node load for little culling (opening them took less time on incoherent rays on the bunny
+//! at four wide; measured: docs/benchmarks.md, «Design measurements», `accel::wide::node`,
+//! small subtrees opened).
 //! The children's boxes are the binary nodes' padded boxes, bit for bit, and each leaf is the
 //! leaf-slot range of a binary subtree, so the wide box test is exactly as conservative as
 //! the binary one (see `tree`) and every query visits a superset of the triangles it must

@@ -44,9 +44,9 @@ use crate::simd::{Isa, Kernel};
 pub(crate) type ClosestHit = Option<SlotHit>;
 
 /// Rays per packet of closest hits (four vectors of 8 lanes, or two of 16 with AVX-512): 8 × 4
-/// rays of an image in tile order. With the whole packet's culling (`walk`), 4 × 4 tiles went
-/// 1.08–1.14× as fast as 4 × 2 (AVX2, bunny, 1 thread); 8 × 4 then went 1.03–1.05× as fast
-/// as 4 × 4 with AVX2 (AMD EPYC, bunny and a 1M-triangle blob, 1 and 2 threads).
+/// rays of an image in tile order. With the whole packet's culling (`walk`), 4 × 4 tiles beat
+/// 4 × 2, and 8 × 4 then beat 4 × 4 with AVX2 (measured: docs/benchmarks.md, «Design
+/// measurements», `PACKET`).
 const PACKET: usize = 32;
 
 /// The closest hit in the own tree of [`WideLevels`] with `t` in `[0, ∞]` for every ray of
@@ -186,7 +186,8 @@ struct Best<const N: usize> {
 
 /// Every crossing with `t` in `range`, counted by lane, one per crossing of the surface
 /// ([`EdgeRule::Owned`] with the tree's border): `WideBvh::each_hit`'s count. The walk stops
-/// once `options` is cancelled: 32 rays through a dense region can take 100 ms.
+/// once `options` is cancelled: 32 rays through a dense region can take longer than a Ctrl-C
+/// should wait (measured: docs/benchmarks.md, «Design measurements», `Tally`).
 struct Tally<'a, const N: usize, C> {
     t_min: f32,
     t_max: [f32; N],
@@ -293,9 +294,10 @@ fn walk<const N: usize, I: Isa, H: Hits<N>>(
         if hits.stopped() {
             return;
         }
-        // With half the lanes or fewer, lane by lane (in the 1M-triangle blob's image, a
-        // triangle is about one pixel: 1.2x the rays per second, bunny 1.03-1.15x; always
-        // lane by lane lost 6-11 % on the bunny).
+        // With half the lanes or fewer, lane by lane: it pays most where a triangle is about
+        // one pixel (the 1M-triangle blob's image), and on the bunny too, where always lane by
+        // lane was slower (measured: docs/benchmarks.md, «Design measurements», leaves lane
+        // by lane).
         if mask.count_ones() as usize <= N / 2 {
             leaf_by_lane::<N, I>(accel, lanes, (index, count), mask, hits);
             continue;

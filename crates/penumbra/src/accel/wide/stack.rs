@@ -21,14 +21,15 @@ const WIDE_STACK: usize = 2 * DEPTH_FIRST + WIDTH;
 pub(crate) enum Order {
     /// The nearest child first (closest hits, closest points).
     Nearest,
-    /// The last child in lane order first (occlusion: nearest or farthest first were 1.06–
-    /// 1.07× slower).
+    /// The last child in lane order first (occlusion: nearest or farthest first were slower;
+    /// measured: docs/benchmarks.md, «Design measurements», `Order::Lanes`).
     Lanes,
     /// Any order, every child entered is visited (counting and listing every crossing): the
     /// next visit is the entry pushed before the node's children, whose load started a step
-    /// earlier, rather than a child whose load just started. On a 1M-triangle blob (72 MB,
-    /// rays in turns, 2 threads) counting went 1.13× and listing 1.09× as fast, on the bunny
-    /// 1.00–1.01×; occlusion in this order went 0.88× as fast.
+    /// earlier, rather than a child whose load just started. It pays on a tree larger than the
+    /// caches (a 1M-triangle blob, 72 MB), where the loads wait on memory, and is even on the
+    /// bunny; occlusion in this order was slower (measured: docs/benchmarks.md, «Design
+    /// measurements», `Order::Free`).
     Free,
 }
 

@@ -31,8 +31,8 @@ use crate::simd::{prefetch, Isa};
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
 /// With four, half of the bunny's four-wide nodes had only two children, both leaves: a
 /// whole node load for two groups. At eight those subtrees are leaves, and the incoherent
-/// queries took 3–16 % less CPU time, the more the busier the caches (twelve gained nothing
-/// more).
+/// queries took less CPU time, the more the busier the caches (twelve gained nothing more;
+/// measured: docs/benchmarks.md, «Design measurements», `LEAF_MAX`).
 const LEAF_MAX: u32 = GROUP as u32;
 
 /// The BVH over every triangle of a scene with the triangles' exact corners and ids in the
@@ -51,7 +51,8 @@ pub(crate) struct WideBvh {
     ids: Vec<[u32; 2]>,
     /// Unit normal of the triangle in each leaf slot ([`unit_normal`]): made once here, where
     /// `cast_rays` computed one per hit (from the hit's group, a square root and a division
-    /// each: 4 % of coherent rays' time).
+    /// each, a visible share of coherent rays' time; measured: docs/benchmarks.md, «Design
+    /// measurements», `WideBvh::normals`).
     normals: Vec<[f32; 3]>,
     /// Each leaf slot's part of the surface's border, for the counting rule: made by the
     /// first counting query ([`WideBvh::border`]), which the others do not need.

@@ -21,21 +21,19 @@ use crate::accel::AlphaTests;
 use crate::simd::Isa;
 
 /// The size of a tree past which its single-ray walks go [`INTERLEAVED`] rays at a time
-/// ([`super::tree::WideBvh::interleaves`]). Measured on an AMD EPYC with 2 MiB of L2 per core and a 32 MiB
-/// L3, 1 M rays on 2 threads (`examples/raycast_workload`), four rays in turn against one:
-/// the Stanford bunny (4.9 MiB of nodes and triangles) went 0.83–0.86× as fast and a 100k-
-/// triangle skull (7.5 MiB) 0.75–0.88×: the caches serve them, and the turns' bookkeeping
-/// has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even (occlusion
-/// 0.91×, closest hits 1.07×, medians of 5 pairs); blobs of 250k, 450k and 1M triangles
-/// (18, 32 and 72 MiB) went 1.05–1.2×, 1.1–1.4× and 1.24–1.27× as fast.
+/// ([`super::tree::WideBvh::interleaves`]). On an AMD EPYC with 2 MiB of L2 per core and a
+/// 32 MiB L3, four rays in turn lost to one on the Stanford bunny (4.9 MiB of nodes and
+/// triangles) and a 100k-triangle skull (7.5 MiB): the caches serve them, and the turns'
+/// bookkeeping has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even;
+/// blobs of 250k, 450k and 1M triangles (18, 32 and 72 MiB) were faster in turns (measured:
+/// docs/benchmarks.md, «Design measurements», `INTERLEAVE_BYTES`).
 pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
 
 /// Rays whose walks go in turn through a tree larger than [`INTERLEAVE_BYTES`]. Eight
-/// against four, in batches that waited for their longest walk, on an AMD EPYC with AVX-512
-/// (1 MiB of L2 per core), 2 threads, medians of 5 interleaved pairs: the 1M-triangle blob's
-/// occlusion 1.10–1.22×, closest hits 1.09–1.10×, counting 0.98–1.06×. In a stream (a walk
-/// that ends gives its place to the next ray), six, ten, twelve and sixteen were no faster
-/// than eight (4 rounds, within the noise; six was slower).
+/// against four, in batches that waited for their longest walk: faster on the 1M-triangle
+/// blob's occlusion and closest hits, about even on counting. In a stream (a walk that ends
+/// gives its place to the next ray), six, ten, twelve and sixteen gained nothing over eight
+/// (six lost; measured: docs/benchmarks.md, «Design measurements», `INTERLEAVED`).
 pub(crate) const INTERLEAVED: usize = 8;
 
 /// A ray walking in one of a stream's `K` places ([`WideBvh::walk_stream`]): its index in
