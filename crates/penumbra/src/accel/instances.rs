@@ -22,9 +22,11 @@ use std::sync::Arc;
 
 use glam::{Affine3A, DMat4, Vec3, Vec3A};
 
-use super::{build, traverse, Bvh};
+use super::placed::{self, Entry, Placements};
+use super::{build, traverse, AlphaTests, Bvh, BvhNode, Tree};
 use crate::geometry::{Hit, Mesh};
 use crate::math::{Aabb, Ray, Transform};
+use crate::simd::Baseline;
 
 /// Meshes built once, the instances that place them, and the top-level tree over those.
 #[derive(Clone, Debug, Default)]
@@ -37,11 +39,13 @@ pub struct Instances {
     ids: Vec<u32>,
 }
 
-/// Where an instance puts its mesh: the mesh's index and the map from world to object space.
-#[derive(Clone, Copy, Debug)]
+/// Where an instance puts its mesh: the mesh's index, the map from world to object space, and
+/// the alpha tests of its mesh's triangles under its materials when some may cut.
+#[derive(Clone, Debug)]
 struct Placement {
     mesh: u32,
     object_from_world: Affine3A,
+    alpha: Option<Arc<AlphaTests>>,
 }
 
 impl Instances {
@@ -56,16 +60,23 @@ impl Instances {
         if instances.is_empty() {
             return Instances::default();
         }
-        Instances::place(build_meshes(meshes, pool), instances, Vec::new(), pool)
+        let opaque = vec![None; instances.len()];
+        Instances::place(
+            build_meshes(meshes, pool),
+            instances,
+            (Vec::new(), opaque),
+            pool,
+        )
     }
 
     /// The top-level tree over `instances` (mesh index into `meshes` and transform) placing
     /// the mesh trees `meshes` (kept, and counted by [`Instances::node_count`], even without
-    /// instances); `ids` are their world indices (empty: `0, 1, …`).
+    /// instances); `ids` are their world indices (empty: `0, 1, …`), `alphas` their alpha
+    /// tests (one for each instance).
     pub(super) fn place(
         meshes: Arc<Vec<Bvh>>,
         instances: &[(u32, Transform)],
-        ids: Vec<u32>,
+        (ids, alphas): (Vec<u32>, Vec<Option<Arc<AlphaTests>>>),
         pool: Option<&rayon::ThreadPool>,
     ) -> Instances {
         let boxes: Vec<Aabb> = instances
@@ -75,9 +86,11 @@ impl Instances {
         let (nodes, prim_ids) = build::build_tree(boxes.len(), |i| boxes[i], pool);
         let placements = instances
             .iter()
-            .map(|(mesh, transform)| Placement {
+            .zip(alphas)
+            .map(|((mesh, transform), alpha)| Placement {
                 mesh: *mesh,
                 object_from_world: inverse(transform),
+                alpha,
             })
             .collect();
         Instances {
@@ -156,104 +169,40 @@ impl Instances {
         }
     }
 
-    /// The ray in instance `index`'s object space (same `t`), and its mesh's tree.
-    #[inline(always)]
-    fn enter(&self, index: u32, ray: &Ray) -> (Ray, &Bvh) {
-        let p = &self.placements[index as usize];
-        let local = Ray::new(
-            p.object_from_world.transform_point3(ray.origin),
-            p.object_from_world.transform_vector3(ray.direction),
-        );
-        (local, &self.meshes[p.mesh as usize])
-    }
-
     /// The closest of `best` (a hit of the world's own triangles, or `None`) and every
-    /// instance's hits with `t` in `(t_min, t_max)`.
+    /// instance's hits with `t` in `(t_min, t_max)` that its alpha tests keep.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32, best: Option<Hit>) -> Option<Hit> {
-        self.intersect_kept(ray, t_min, t_max, best, |_, _, _, _| true)
+        let world = (ray.origin, ray.direction);
+        placed::closest::<_, Baseline>(self, world, (t_min, t_max), best, &mut ())
     }
 
-    /// [`Instances::intersect`] with only the hits `keep(placement, triangle, b1, b2)` keeps
-    /// (a placement of this set, a triangle of its mesh).
-    #[inline(always)]
-    pub(super) fn intersect_kept(
-        &self,
-        ray: &Ray,
-        t_min: f32,
-        t_max: f32,
-        best: Option<Hit>,
-        keep: impl Fn(u32, u32, f32, f32) -> bool,
-    ) -> Option<Hit> {
-        if self.top.nodes.is_empty() {
-            return best;
-        }
-        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-        let mut best = best;
-        let mut t = best.map_or(t_max, |h| h.t);
-        traverse::walk_closest(
-            &self.top.nodes,
-            origin,
-            inv_dir,
-            t_min,
-            &mut t,
-            |slots, t| {
-                for &index in &self.top.prim_ids[slots] {
-                    let (local, mesh) = self.enter(index, ray);
-                    // Ties at the best `t` so far are looked for too: a smaller key may take them.
-                    let limit = if best.is_some() { t.next_up() } else { t_max };
-                    let kept = |tri, b1, b2| keep(index, tri, b1, b2);
-                    let Some(hit) = traverse::intersect_kept(mesh, &local, t_min, limit, kept)
-                    else {
-                        continue;
-                    };
-                    let hit = Hit {
-                        instance: Some(self.id(index)),
-                        ..hit
-                    };
-                    if best.is_none_or(|b| closer(&hit, &b)) {
-                        *t = hit.t;
-                        best = Some(hit);
-                    }
-                }
-            },
-        );
-        best
-    }
-
-    /// True when an instance meets the ray with `t` in `(t_min, t_max)`; stops at the first.
+    /// True when an instance meets the ray with `t` in `(t_min, t_max)` at a hit its alpha
+    /// tests keep; stops at the first.
+    #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        if self.top.nodes.is_empty() {
-            return false;
-        }
-        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-        traverse::walk_any(&self.top.nodes, origin, inv_dir, t_min, t_max, |slots| {
-            self.top.prim_ids[slots].iter().any(|&index| {
-                let (local, mesh) = self.enter(index, ray);
-                traverse::occluded(mesh, &local, t_min, t_max)
-            })
-        })
+        placed::any::<_, Baseline>(self, (ray.origin, ray.direction), (t_min, t_max), &mut ())
+    }
+}
+
+impl Placements for Instances {
+    type Tree = Bvh;
+
+    #[inline(always)]
+    fn top(&self) -> (&[BvhNode], &[u32]) {
+        (&self.top.nodes, &self.top.prim_ids)
     }
 
-    /// [`Instances::occluded`] counting only the hits `keep(placement, triangle, b1, b2)`
-    /// keeps.
-    pub(super) fn occluded_kept(
-        &self,
-        ray: &Ray,
-        t_min: f32,
-        t_max: f32,
-        keep: impl Fn(u32, u32, f32, f32) -> bool,
-    ) -> bool {
-        if self.top.nodes.is_empty() {
-            return false;
+    #[inline(always)]
+    fn entry(&self, index: u32) -> Entry<'_, Bvh> {
+        let p = &self.placements[index as usize];
+        Entry {
+            object_from_world: &p.object_from_world,
+            mesh: &self.meshes[p.mesh as usize],
+            id: self.id(index),
+            filter: p.alpha.as_deref(),
+            border: None,
         }
-        let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-        traverse::walk_any(&self.top.nodes, origin, inv_dir, t_min, t_max, |slots| {
-            self.top.prim_ids[slots].iter().any(|&index| {
-                let (local, mesh) = self.enter(index, ray);
-                let kept = |tri, b1, b2| keep(index, tri, b1, b2);
-                traverse::occluded_kept(mesh, &local, t_min, t_max, kept)
-            })
-        })
     }
 }
 
@@ -264,18 +213,6 @@ impl Instances {
     /// queries of `instance_batches` do, so a shadow ray gets the same answer whichever way it
     /// was grouped.
     pub(super) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
-        self.occludes_segment_kept(origin, end, t_max, |_, _, _, _| true)
-    }
-
-    /// [`Instances::occludes_segment`] counting only the hits `keep(placement, triangle, b1,
-    /// b2)` keeps.
-    pub(super) fn occludes_segment_kept(
-        &self,
-        origin: Vec3,
-        end: Vec3,
-        t_max: f32,
-        keep: impl Fn(u32, u32, f32, f32) -> bool,
-    ) -> bool {
         if self.top.nodes.is_empty() {
             return false;
         }
@@ -283,10 +220,12 @@ impl Instances {
         let (o, inv_dir) = (Vec3A::from(origin), world.recip());
         traverse::walk_any(&self.top.nodes, o, inv_dir, 0.0, t_max, |slots| {
             self.top.prim_ids[slots].iter().any(|&index| {
-                let (map, mesh) = self.placement(index);
+                let e = self.entry(index);
+                let map = e.object_from_world;
                 let (a, b) = (map.transform_point3(origin), map.transform_point3(end));
-                let kept = |tri, b1, b2| keep(index, tri, b1, b2);
-                traverse::occluded_kept(mesh, &Ray::new(a, b - a), 0.0, t_max, kept)
+                let ray = Ray::new(a, b - a);
+                e.mesh
+                    .any::<Baseline>(&ray, (0.0, t_max), e.filter, &mut ())
             })
         })
     }
@@ -306,10 +245,9 @@ pub(super) fn build_meshes(meshes: &[Mesh], pool: Option<&rayon::ThreadPool>) ->
 }
 
 /// True when `a` is closer than `b`: a smaller `t`, or the same `t` and a smaller key (the
-/// world's own triangles first, then by instance, then by triangle).
+/// world's own triangles first, then by instance, then by triangle: [`Tree::tie_key`]).
 pub(super) fn closer(a: &Hit, b: &Hit) -> bool {
-    let key = |h: &Hit| (h.instance.map_or(0, |i| u64::from(i) + 1), h.triangle);
-    a.t < b.t || (a.t == b.t && key(a) < key(b))
+    (a.t, Bvh::tie_key(a)) < (b.t, Bvh::tie_key(b))
 }
 
 /// The world-space box of `mesh` placed by `transform`: its root box placed, grown by a

@@ -52,6 +52,12 @@
 //! - `traverse`: single rays on the binary tree: the slab test, the nearest-first walk (generic
 //!   over the distance: a ray's closest hit, a point's closest point) and the any-hit walk
 //!   (both generic over what a leaf holds), and the closest-hit, any-hit and batch queries;
+//! - `tree`: [`Tree`], the one interface of both trees (closest, any and every hit of a
+//!   ray, a hit filter after the primitive test, and the rule: interval and tie order),
+//!   implemented by [`Bvh`] and `wide::WideBvh`;
+//! - `placed`: the second level written once over any [`Tree`]: the top-level walk into
+//!   placed meshes and the closest rule across placements (ray casting's placements walk
+//!   through it; the renderer's `instances` are to follow);
 //! - `closest_fans`: closest-hit SIMD packets of rays sharing an origin (camera rays);
 //! - `shadow_fans`: any-hit SIMD packets of segments sharing an origin (a point and its light
 //!   samples), and the any-hit packet walk every packet kind uses;

@@ -25,7 +25,7 @@ use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::accel::wide::levels::{Placement, WideLevels};
 use crate::accel::wide::WideBvh;
 use crate::accel::AlphaTests;
-use crate::geometry::{material_of, Geometry, Mesh, Triangle};
+use crate::geometry::{Geometry, Mesh, Triangle};
 use crate::math::Transform;
 use crate::scale::MAX_COORDINATE;
 use crate::world::World;
@@ -282,18 +282,10 @@ fn own_alpha(world: &World) -> Option<AlphaTests> {
 }
 
 /// The alpha tests of mesh `mesh`'s triangles placed with `materials`, or `None` when none
-/// may be cut out.
+/// may be cut out: the renderer's ([`AlphaTests::of_placement`]).
 fn placed_alpha(world: &World, mesh: u32, materials: &[u32]) -> Option<AlphaTests> {
-    let mut alpha = AlphaTests::of(world.materials(), world.textures())?;
-    let mesh = &world.meshes()[mesh as usize];
-    for (i, t) in mesh.indices.iter().enumerate() {
-        let uv = match mesh.has_uvs() {
-            true => t.map(|v| mesh.uvs[v as usize]),
-            false => Default::default(),
-        };
-        alpha.push_triangle(uv, material_of(mesh.slot(i), materials));
-    }
-    alpha.any_triangle_cuts().then_some(alpha)
+    let alpha = AlphaTests::of(world.materials(), world.textures())?;
+    alpha.of_placement(&world.meshes()[mesh as usize], materials)
 }
 
 /// The trees of `world`'s meshes: the world's own, viewed eight children at a time.

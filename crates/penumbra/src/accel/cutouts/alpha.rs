@@ -1,13 +1,15 @@
 //! The alpha test as the engine asks it: for a hit of a cut-out triangle (one of the world's
-//! own, or one of an instance's mesh), its material's [`Cutout`] at the hit's uv. The engine
-//! keeps copies of what the test reads (the cut-out materials with their textures, the
-//! triangles' corner uvs and material slots), so that it answers without the world. Ray
-//! casting's scene built from a world asks the same tests of its triangles (see
+//! own, or one of an instance's mesh), its material's [`Cutout`] at the hit's uv. A set of
+//! tests belongs to one tree's triangles, in its numbering: the world's own cut-out
+//! triangles, or a mesh's triangles under one placement's materials
+//! ([`AlphaTests::of_placement`]). It keeps copies of what the test reads (the cut-out
+//! materials with their textures, the triangles' corner uvs and tests), so that it answers
+//! without the world. Ray casting's scene built from a world asks the same tests (see
 //! `raycast::instances`).
 
 use glam::Vec2;
 
-use crate::geometry::{Geometry, Mesh};
+use crate::geometry::{material_of, Geometry, Mesh};
 use crate::material::{interpolate_uv, Cutout, Material};
 use crate::texture::Texture;
 
@@ -21,17 +23,10 @@ pub(crate) struct AlphaTests {
     tests: Vec<(Cutout, Option<Texture>)>,
     /// Each material's test, or [`OPAQUE`].
     by_material: Vec<u32>,
-    /// Each of the world's own cut-out triangles (in the cut-out tree's numbering): its
-    /// corners' uvs and its test.
+    /// Each triangle of the tree the tests are for, in its numbering: its corners' uvs and
+    /// its test (the world's own cut-out triangles, or a placed mesh's triangles under one
+    /// placement's materials).
     flat: Vec<([Vec2; 3], u32)>,
-    /// Each mesh's corner uvs by triangle, for the meshes a cut-out instance places (empty
-    /// for the others).
-    mesh_uvs: Vec<Vec<[Vec2; 3]>>,
-    /// Each mesh's material slots (empty: slot 0 for every triangle).
-    mesh_slots: Vec<Vec<u32>>,
-    /// Each cut-out instance (in the cut-out set's numbering): its mesh, and its materials
-    /// by slot as tests (slots past the end take the last; none: the default material).
-    instances: Vec<(u32, Vec<u32>)>,
 }
 
 impl AlphaTests {
@@ -84,7 +79,6 @@ impl AlphaTests {
             tests: self.tests.clone(),
             by_material: self.by_material.clone(),
             flat: triangles.map(|i| self.flat[i]).collect(),
-            ..AlphaTests::default()
         }
     }
 
@@ -93,33 +87,18 @@ impl AlphaTests {
         self.flat.iter().any(|&(_, test)| test != OPAQUE)
     }
 
-    /// Adds an instance of `meshes[mesh]` whose slots map to `materials` as the next cut-out
-    /// instance, copying its mesh's uvs and slots on first use.
-    pub(super) fn push_instance(&mut self, meshes: &[Mesh], mesh: u32, materials: &[u32]) {
-        if self.mesh_uvs.is_empty() {
-            self.mesh_uvs = vec![Vec::new(); meshes.len()];
-            self.mesh_slots = vec![Vec::new(); meshes.len()];
+    /// The tests of `mesh`'s triangles placed with `materials` (an instance's, by slot; see
+    /// `material_of`), numbered as the mesh's: `None` when none may cut.
+    pub(crate) fn of_placement(&self, mesh: &Mesh, materials: &[u32]) -> Option<AlphaTests> {
+        let mut alpha = self.subset(std::iter::empty());
+        for (i, t) in mesh.indices.iter().enumerate() {
+            let uv = match mesh.has_uvs() {
+                true => t.map(|v| mesh.uvs[v as usize]),
+                false => Default::default(),
+            };
+            alpha.push_triangle(uv, material_of(mesh.slot(i), materials));
         }
-        let m = &meshes[mesh as usize];
-        if self.mesh_uvs[mesh as usize].is_empty() {
-            self.mesh_uvs[mesh as usize] = m
-                .indices
-                .iter()
-                .map(|t| match m.has_uvs() {
-                    true => t.map(|v| m.uvs[v as usize]),
-                    false => [Vec2::ZERO; 3],
-                })
-                .collect();
-            self.mesh_slots[mesh as usize] = (0..m.len()).map(|i| m.slot(i)).collect();
-        }
-        let tests = match materials {
-            [] => vec![self.by_material[0]],
-            _ => materials
-                .iter()
-                .map(|&m| self.by_material[m as usize])
-                .collect(),
-        };
-        self.instances.push((mesh, tests));
+        alpha.any_triangle_cuts().then_some(alpha)
     }
 
     /// True when the instance materials `materials` (an instance's, by slot) may cut.
@@ -130,23 +109,11 @@ impl AlphaTests {
         }
     }
 
-    /// Whether the hit at barycentrics `(b1, b2)` of the world's own cut-out triangle `local`
-    /// is kept.
+    /// Whether the hit at barycentrics `(b1, b2)` of triangle `local` (in the tests'
+    /// numbering) is kept.
     #[inline]
     pub(crate) fn keeps_flat(&self, local: u32, b1: f32, b2: f32) -> bool {
         let (uv, test) = self.flat[local as usize];
-        self.keeps(test, uv, b1, b2)
-    }
-
-    /// Whether the hit at barycentrics `(b1, b2)` of triangle `triangle` of cut-out instance
-    /// `placement`'s mesh is kept.
-    #[inline]
-    pub(super) fn keeps_instance(&self, placement: u32, triangle: u32, b1: f32, b2: f32) -> bool {
-        let (mesh, tests) = &self.instances[placement as usize];
-        let slots = &self.mesh_slots[*mesh as usize];
-        let slot = slots.get(triangle as usize).copied().unwrap_or(0) as usize;
-        let test = tests[slot.min(tests.len() - 1)];
-        let uv = self.mesh_uvs[*mesh as usize][triangle as usize];
         self.keeps(test, uv, b1, b2)
     }
 

@@ -5,12 +5,15 @@
 //! ones (the world's own, and the instances whose materials cannot cut) form the levels every
 //! kernel already walks: single rays, fans, bundles, shafts, the batches inside instances.
 //! The cut-out ones form a second pair of levels of the same kind ([`Cutouts`]): a tree over
-//! the world's own cut-out triangles, and the instances whose materials may cut, over the
-//! same mesh trees. Those are walked by the generic single-ray walks of `traverse` with a
-//! filtered primitive test (`intersect_kept`, `occluded_kept`): a hit the alpha test refuses
-//! does not shorten a closest-hit ray, and an any-hit walk looks on past it. The batched
-//! kernels are not changed: after them, each of a batch's rays or segments not yet blocked
-//! (or its closest hit, for a camera fan) asks the cut-out levels on its own.
+//! the world's own cut-out triangles, with their alpha tests, and the instances whose
+//! materials may cut, over the same mesh trees, each with the alpha tests of its mesh under
+//! its materials (one set for each mesh and materials, shared; ray casting makes the same
+//! sets with the same function, [`AlphaTests::of_placement`]). Those are walked by the
+//! single-ray queries of [`Tree`](super::Tree) and [`placed`](super::placed) with the tests
+//! as their hit filter: a hit the alpha test refuses does not shorten a closest-hit ray, and
+//! an any-hit walk looks on past it. The batched kernels are not changed: after them, each of
+//! a batch's rays or segments not yet blocked (or its closest hit, for a camera fan) asks the
+//! cut-out levels on its own.
 //!
 //! So a world without cut-out materials has no cut-out levels, and its queries are exactly
 //! those of before; and each ray gets the same answer whichever way it was grouped, since the
@@ -19,6 +22,9 @@
 //! interpolate, `alpha::AlphaTests::keeps`) on every path.
 
 mod alpha;
+
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use glam::Vec3;
 
@@ -91,22 +97,36 @@ pub(crate) fn split(
     // (the smaller number) agrees with the world's.
     let (mut cut_list, mut opaque_list) = (Vec::new(), Vec::new());
     let (mut cut_ids, mut opaque_ids) = (Vec::new(), Vec::new());
+    // One set of tests for each mesh and materials, shared by the instances that have them.
+    let mut tests = HashMap::new();
+    let mut cut_alphas = Vec::new();
     for (index, inst) in parts.instances.iter().enumerate() {
-        if alpha.instance_cuts(inst.2) {
-            alpha.push_instance(parts.meshes, inst.0, inst.2);
-            cut_list.push(inst);
-            cut_ids.push(index as u32);
-        } else {
-            opaque_list.push(inst);
-            opaque_ids.push(index as u32);
+        let (mesh, _, materials) = *inst;
+        let of = || {
+            alpha
+                .of_placement(&parts.meshes[mesh as usize], materials)
+                .map(Arc::new)
+        };
+        match tests.entry((mesh, materials)).or_insert_with(of).clone() {
+            Some(tests) => {
+                cut_list.push(inst);
+                cut_ids.push(index as u32);
+                cut_alphas.push(Some(tests));
+            }
+            None => {
+                opaque_list.push(inst);
+                opaque_ids.push(index as u32);
+            }
         }
     }
     let meshes = match parts.instances.is_empty() {
         true => Default::default(),
         false => build_meshes(parts.meshes, pool),
     };
-    let instances = Instances::place(meshes.clone(), &placements(&opaque_list), opaque_ids, pool);
-    let cut_instances = Instances::place(meshes, &placements(&cut_list), cut_ids, pool);
+    let opaque = (opaque_ids, vec![None; opaque_list.len()]);
+    let instances = Instances::place(meshes.clone(), &placements(&opaque_list), opaque, pool);
+    let cut_set = (cut_ids, cut_alphas);
+    let cut_instances = Instances::place(meshes, &placements(&cut_list), cut_set, pool);
     let cutouts = Cutouts {
         flat: cut_flat,
         flat_ids: cut,
@@ -163,19 +183,14 @@ impl Cutouts {
             (Some(b), Some(h)) if !closer(&h, &b) => Some(b),
             (b, h) => h.or(b),
         };
-        let keep = |p, tri, b1, b2| self.alpha.keeps_instance(p, tri, b1, b2);
-        self.instances.intersect_kept(ray, t_min, t_max, best, keep)
+        self.instances.intersect(ray, t_min, t_max, best)
     }
 
     /// True when a kept hit of a cut-out triangle meets the ray with `t` in `(t_min, t_max)`.
     pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.flat
             .any::<Baseline>(ray, (t_min, t_max), Some(&self.alpha), &mut ())
-            || self
-                .instances
-                .occluded_kept(ray, t_min, t_max, |p, tri, b1, b2| {
-                    self.alpha.keeps_instance(p, tri, b1, b2)
-                })
+            || self.instances.occluded(ray, t_min, t_max)
     }
 
     /// True when a kept hit of a cut-out triangle meets the segment from `origin` to `end`
@@ -185,10 +200,6 @@ impl Cutouts {
         let ray = Ray::new(origin, end - origin);
         self.flat
             .any::<Baseline>(&ray, (0.0, t_max), Some(&self.alpha), &mut ())
-            || self
-                .instances
-                .occludes_segment_kept(origin, end, t_max, |p, tri, b1, b2| {
-                    self.alpha.keeps_instance(p, tri, b1, b2)
-                })
+            || self.instances.occludes_segment(origin, end, t_max)
     }
 }
