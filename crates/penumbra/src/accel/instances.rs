@@ -212,13 +212,14 @@ impl Instances {
     /// points into its space and traces the segment between them there, exactly as the batched
     /// queries of `instance_batches` do, so a shadow ray gets the same answer whichever way it
     /// was grouped.
+    #[inline]
     pub(super) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
         if self.top.nodes.is_empty() {
             return false;
         }
         let world = Vec3A::from(end - origin);
         let (o, inv_dir) = (Vec3A::from(origin), world.recip());
-        traverse::walk_any(&self.top.nodes, o, inv_dir, 0.0, t_max, |slots| {
+        traverse::walk_any(&self.top.nodes, (o, inv_dir), (0.0, t_max), 1.0, |slots| {
             self.top.prim_ids[slots].iter().any(|&index| {
                 let e = self.entry(index);
                 let map = e.object_from_world;

@@ -14,7 +14,7 @@
 
 use glam::{Affine3A, Vec3, Vec3A};
 
-use super::traverse::{slab_scaled, walk_nearest};
+use super::traverse::{slab_scaled, walk_any, walk_nearest};
 use super::tree::{Filter, Rule, Tree};
 use super::BvhNode;
 use crate::accel::prim::boundary::Boundary;
@@ -101,6 +101,23 @@ pub(crate) fn any<P: Placements, I: Isa>(
     range: (f32, f32),
     stack: &mut StackOf<P>,
 ) -> bool {
+    let (o, d) = ray;
+    if !P::Tree::ANY_NEAREST_FIRST {
+        let (top, ids) = placements.top();
+        if top.is_empty() {
+            return false;
+        }
+        let (origin, inv_dir) = (Vec3A::from(o), Vec3A::from(d).recip());
+        let scale = P::Tree::EXIT_SCALE;
+        return walk_any(top, (origin, inv_dir), range, scale, |slots| {
+            ids[slots].iter().any(|&index| {
+                let entry = placements.entry(index);
+                let map = entry.object_from_world;
+                let ray = P::Tree::prepare(map.transform_point3(o), map.transform_vector3(d));
+                ray.is_some_and(|r| entry.mesh.any::<I>(&r, range, entry.filter, stack))
+            })
+        });
+    }
     let mut hit = false;
     let mut bound = range.1;
     walk(

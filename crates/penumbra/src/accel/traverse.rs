@@ -93,14 +93,14 @@ pub(super) fn walk_nearest<K: Copy + PartialOrd>(
 }
 
 /// The any-hit walk over `nodes` (root at 0, not empty): visits the leaves the ray enters
-/// within `(t_min, t_max)` until `leaf(slots)` says it found a hit; true when one did.
+/// within `(t_min, t_max)` until `leaf(slots)` says it found a hit; true when one did. Each
+/// box's exit distance is raised by `exit_scale` (see [`slab_scaled`]; 1 for the renderer).
 #[inline(always)]
 pub(super) fn walk_any(
     nodes: &[BvhNode],
-    origin: Vec3A,
-    inv_dir: Vec3A,
-    t_min: f32,
-    t_max: f32,
+    (origin, inv_dir): (Vec3A, Vec3A),
+    (t_min, t_max): (f32, f32),
+    exit_scale: f32,
     mut leaf: impl FnMut(Range<usize>) -> bool,
 ) -> bool {
     let mut stack = [0u32; STACK_SIZE];
@@ -109,7 +109,7 @@ pub(super) fn walk_any(
     while sp > 0 {
         sp -= 1;
         let node = &nodes[stack[sp] as usize];
-        if slab(node, origin, inv_dir, t_min, t_max).is_none() {
+        if slab_scaled(node, origin, inv_dir, (t_min, t_max), exit_scale).is_none() {
             continue;
         }
         if node.is_leaf() {
@@ -192,6 +192,7 @@ pub(super) fn occluded(bvh: &Bvh, ray: &Ray, t_min: f32, t_max: f32) -> bool {
 
 /// True when a triangle meets the ray with `t` in `(t_min, t_max)` at a hit that
 /// `keep(prim_id, b1, b2)` keeps; stops at the first.
+#[inline(always)]
 pub(super) fn occluded_kept(
     bvh: &Bvh,
     ray: &Ray,
@@ -203,13 +204,19 @@ pub(super) fn occluded_kept(
         return false;
     }
     let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
-        let (tris, ids) = (&bvh.tris[slots.clone()], &bvh.prim_ids[slots]);
-        tris.iter().zip(ids).any(|(tri, &id)| {
-            tri.hit(ray, t_min, t_max)
-                .is_some_and(|h| keep(id, h.b1, h.b2))
-        })
-    })
+    walk_any(
+        &bvh.nodes,
+        (origin, inv_dir),
+        (t_min, t_max),
+        1.0,
+        |slots| {
+            let (tris, ids) = (&bvh.tris[slots.clone()], &bvh.prim_ids[slots]);
+            tris.iter().zip(ids).any(|(tri, &id)| {
+                tri.hit(ray, t_min, t_max)
+                    .is_some_and(|h| keep(id, h.b1, h.b2))
+            })
+        },
+    )
 }
 
 /// Calls `f` with every hit with `t` in `(t_min, t_max)` that `keep(prim_id, b1, b2)` keeps,
@@ -225,24 +232,30 @@ pub(super) fn each_kept(
         return;
     }
     let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-    walk_any(&bvh.nodes, origin, inv_dir, t_min, t_max, |slots| {
-        for i in slots {
-            let id = bvh.prim_ids[i];
-            if let Some(h) = bvh.tris[i]
-                .hit(ray, t_min, t_max)
-                .filter(|h| keep(id, h.b1, h.b2))
-            {
-                f(Hit {
-                    t: h.t,
-                    b1: h.b1,
-                    b2: h.b2,
-                    triangle: id,
-                    instance: None,
-                });
+    walk_any(
+        &bvh.nodes,
+        (origin, inv_dir),
+        (t_min, t_max),
+        1.0,
+        |slots| {
+            for i in slots {
+                let id = bvh.prim_ids[i];
+                if let Some(h) = bvh.tris[i]
+                    .hit(ray, t_min, t_max)
+                    .filter(|h| keep(id, h.b1, h.b2))
+                {
+                    f(Hit {
+                        t: h.t,
+                        b1: h.b1,
+                        b2: h.b2,
+                        triangle: id,
+                        instance: None,
+                    });
+                }
             }
-        }
-        false
-    });
+            false
+        },
+    );
 }
 
 /// The closest hit of every ray of `rays`, written to `hits`; see [`Bvh::intersect_batch`].

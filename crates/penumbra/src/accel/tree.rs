@@ -54,6 +54,11 @@ pub(crate) trait Tree {
     /// The margin a top-level box's exit distance is raised by ([`raised`]): 1 for the
     /// binary tree, Ize's conservative scale for the watertight one, as its own nodes use.
     const EXIT_SCALE: f32;
+    /// True when an any-hit query walks the top level nearest first (the wide tree: ray
+    /// casting's occlusion walked so before the level was shared); false for tree order,
+    /// depth first (the binary tree: the renderer's single shadow rays walked so). Each tree
+    /// keeps its walk; the other order has not been measured on it.
+    const ANY_NEAREST_FIRST: bool;
 
     /// `origin + t·direction` prepared for [`Tree::closest`] and the others; `None` for a ray
     /// that can hit nothing (a component not finite, a zero direction).
@@ -106,6 +111,7 @@ impl Tree for Bvh {
     type Stack = ();
     const RULE: Rule = Rule::Open;
     const EXIT_SCALE: f32 = 1.0;
+    const ANY_NEAREST_FIRST: bool = false;
 
     fn prepare(origin: Vec3, direction: Vec3) -> Option<Ray> {
         Some(Ray::new(origin, direction))
@@ -119,22 +125,16 @@ impl Tree for Bvh {
         filter: Filter,
         _: &mut (),
     ) -> Option<Hit> {
-        match filter {
-            None => traverse::intersect(self, ray, range.0, range.1),
-            Some(alpha) => traverse::intersect_kept(self, ray, range.0, range.1, |id, b1, b2| {
-                alpha.keeps_flat(id, b1, b2)
-            }),
-        }
+        // One walk for both cases (a `match` made two, and the larger code was no longer
+        // inlined whole): without a filter the test is a branch on a hit, never taken.
+        let keep = |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2));
+        traverse::intersect_kept(self, ray, range.0, range.1, keep)
     }
 
     #[inline(always)]
     fn any<I: Isa>(&self, ray: &Ray, range: (f32, f32), filter: Filter, _: &mut ()) -> bool {
-        match filter {
-            None => traverse::occluded(self, ray, range.0, range.1),
-            Some(alpha) => traverse::occluded_kept(self, ray, range.0, range.1, |id, b1, b2| {
-                alpha.keeps_flat(id, b1, b2)
-            }),
-        }
+        let keep = |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2));
+        traverse::occluded_kept(self, ray, range.0, range.1, keep)
     }
 
     fn each<I: Isa>(
@@ -181,6 +181,7 @@ impl Tree for WideBvh {
     type Stack = Stack;
     const RULE: Rule = Rule::Closed;
     const EXIT_SCALE: f32 = EXIT_SCALE;
+    const ANY_NEAREST_FIRST: bool = true;
 
     fn prepare(origin: Vec3, direction: Vec3) -> Option<PreparedRay> {
         PreparedRay::new(origin, direction)
