@@ -110,8 +110,8 @@ impl AlphaTests {
     }
 
     /// Whether the hit at barycentrics `(b1, b2)` of triangle `local` (in the tests'
-    /// numbering) is kept. Not inlined: asked only of a hit, it keeps the walks' leaf tests
-    /// small enough to be inlined into every walk.
+    /// numbering) is kept. Out of line: it is asked only of a hit, and the walks it is
+    /// passed to stay smaller without it.
     #[inline(never)]
     pub(crate) fn keeps_flat(&self, local: u32, b1: f32, b2: f32) -> bool {
         let (uv, test) = self.flat[local as usize];
