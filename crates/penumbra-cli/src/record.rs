@@ -116,7 +116,7 @@ pub fn stage(
         return Err(runtime("a record needs an image file"));
     };
     let pose = pose_of(job, &scene.world);
-    let objects = record::objects(file, scene);
+    let objects = record::objects(file, &scene.objects);
     let value = Record::new(settings, image, size(job), pose, objects);
     record::stage(value, files).map_err(runtime)
 }

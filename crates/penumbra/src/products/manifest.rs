@@ -10,12 +10,12 @@ use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::ProductError;
 
 /// How a task ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     /// Rendered and written.
@@ -46,8 +46,10 @@ impl std::str::FromStr for Status {
     }
 }
 
-/// One task's line.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// One task's line (read from JSON by Python's batches, which hand their lines over as JSON:
+/// every key, no other).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ManifestLine {
     /// Its place in the task list (a batch's view index), from 0.
     pub task: usize,

@@ -33,7 +33,8 @@ pub fn normalized(path: &Path) -> PathBuf {
     out
 }
 
-/// The folder `pattern` names: the folders before its first name with a field, normalized
+/// The folder `pattern` names: the folders before its first name with a field, normalized,
+/// their `{{` and `}}` the braces every name the pattern gives has there
 /// (`out/{scene}/{camera}.png` → `out`; `{camera}.png` → the current folder, empty).
 pub fn folder_of(pattern: &str) -> PathBuf {
     let path = Path::new(pattern);
@@ -41,12 +42,9 @@ pub fn folder_of(pattern: &str) -> PathBuf {
     names.pop(); // The file's name.
     let literal = names
         .iter()
-        .take_while(|c| {
-            !c.as_os_str()
-                .to_string_lossy()
-                .replace("{{", "")
-                .contains('{')
-        })
+        .map(|c| c.as_os_str().to_string_lossy())
+        .take_while(|c| !c.replace("{{", "").contains('{'))
+        .map(|c| c.replace("{{", "{").replace("}}", "}"))
         .collect::<PathBuf>();
     normalized(&literal)
 }
@@ -239,7 +237,14 @@ mod tests {
             Path::new("out/sub")
         );
         assert_eq!(folder_of("{camera}.png"), Path::new(""));
-        assert_eq!(folder_of("a/{{b}}/c/x.png"), Path::new("a/{{b}}/c"));
+        assert_eq!(folder_of("a/{{b}}/c/x.png"), Path::new("a/{b}/c"));
+        let braces = Fields {
+            camera: "x",
+            ..fields()
+        };
+        let name = expand("a/{{b}}/{camera}.png", &braces).unwrap();
+        assert_eq!(name, "a/{b}/x.png");
+        assert!(check_inside("a/{{b}}/{camera}.png", Path::new(&name)).is_ok());
         let inside = |p: &str, e: &str| check_inside(p, Path::new(e)).map_err(|e| e.0);
         assert!(inside("f{frame}/../x.pfm", "f1/../x.pfm").is_ok());
         assert!(inside("../out/{camera}.png", "../out/a.png").is_ok());

@@ -27,7 +27,7 @@
 
 use std::path::{Component, Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Map, Value};
 
 use super::ProductError;
@@ -57,8 +57,9 @@ impl std::str::FromStr for PosesFormat {
 }
 
 /// One image's frame of penumbra's layout. The camera's numbers are its `f32`s widened to
-/// `f64`, as written.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// `f64`, as written; a frame read back (Python's `penumbra.poses.nerf` of a penumbra
+/// layout) keeps them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PoseFrame {
     /// The frame (a path camera's, or a view's index); `None` for a still camera.
     pub frame: Option<i64>,

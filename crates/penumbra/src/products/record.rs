@@ -13,6 +13,7 @@
 //! image is replaced and renamed into place after it, so that no record describes an image
 //! it was not written with.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -20,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::{ProductError, RecordSettings};
 use crate::fnv::FileDigest;
 use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
-use crate::scene::{Scene, SceneFile};
+use crate::scene::SceneFile;
 use crate::staged::StagedFile;
 
 /// The largest record read back: far more than any record penumbra writes.
@@ -89,12 +90,13 @@ pub struct ObjectEntry {
     pub ids: [u32; 2],
 }
 
-/// The entries of `file`'s `[[objects]]` and the ids `scene` gave them.
-pub fn objects(file: &SceneFile, scene: &Scene) -> Vec<ObjectEntry> {
+/// The entries of `file`'s `[[objects]]` and the object ids its build gave each
+/// ([`Scene::objects`](crate::Scene::objects)).
+pub fn objects(file: &SceneFile, ids: &[Range<u32>]) -> Vec<ObjectEntry> {
     file.desc
         .objects
         .iter()
-        .zip(&scene.objects)
+        .zip(ids)
         .enumerate()
         .map(|(i, (o, ids))| ObjectEntry {
             key: format!("objects[{i}]"),
@@ -148,6 +150,28 @@ pub fn stage(mut record: Record, files: &[&StagedFile]) -> Result<StagedFile, Pr
     record.digests = Some(digests.collect::<Result<_, _>>()?);
     let text = serde_json::to_string(&record).map_err(|e| ProductError::io(&image, e))? + "\n";
     Ok(StagedFile::write_bytes(&path_of(&image), text.as_bytes())?)
+}
+
+/// Renames an image's files into place together: `image` and the files `beside` it (its AOV
+/// files), staged, with the `record` that lists them (the image, then `beside`, with their
+/// sizes and digests), when given. The old record is removed first, whether or not a new one
+/// is written, and the new one is renamed last: no record ever describes an image it was not
+/// written with. On an error the files not yet renamed are removed.
+pub fn commit_with_record(
+    image: StagedFile,
+    beside: Vec<StagedFile>,
+    record: Option<Record>,
+) -> Result<(), ProductError> {
+    let staged = match record {
+        Some(r) => Some(stage(
+            r,
+            &std::iter::once(&image).chain(&beside).collect::<Vec<_>>(),
+        )?),
+        None => None,
+    };
+    remove(image.path())?;
+    let files = beside.into_iter().chain([image]).chain(staged);
+    Ok(crate::commit_all(files.collect())?)
 }
 
 /// Writes `record` beside its image as it is (digests and all), whole or not at all.
@@ -245,13 +269,16 @@ mod tests {
         let image = dir.join("a.pfm");
         let depth = dir.join("a.depth.pfm");
         assert_eq!(finished(&image, &settings()), None);
-        let staged = [
-            StagedFile::write_bytes(&image, b"image").unwrap(),
-            StagedFile::write_bytes(&depth, b"depth").unwrap(),
-        ];
+        let stage_both = || {
+            let image = StagedFile::write_bytes(&image, b"image").unwrap();
+            (
+                image,
+                vec![StagedFile::write_bytes(&depth, b"depth").unwrap()],
+            )
+        };
         let record = Record::new(settings(), &image, (2, 1), None, Vec::new());
-        let r = stage(record, &staged.iter().collect::<Vec<_>>()).unwrap();
-        crate::commit_all(staged.into_iter().chain([r]).collect()).unwrap();
+        let (staged, beside) = stage_both();
+        commit_with_record(staged, beside, Some(record)).unwrap();
         assert_eq!(
             finished(&image, &settings()),
             Some(vec![image.clone(), depth.clone()])
@@ -276,6 +303,11 @@ mod tests {
         remove(&image).unwrap();
         remove(&image).unwrap();
         assert!(!path_of(&image).exists());
+        // Written again without a record: the old one goes too.
+        std::fs::write(path_of(&image), &text).unwrap();
+        let (staged, beside) = stage_both();
+        commit_with_record(staged, beside, None).unwrap();
+        assert!(!path_of(&image).exists() && image.exists() && depth.exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
