@@ -8,12 +8,12 @@ retried by Ray (up to :data:`MAX_RETRIES` times) when its worker dies.
 from __future__ import annotations
 
 import os
-import socket
 from collections import OrderedDict
 from typing import Any, Dict, List, Optional, Tuple
 
 import ray
 
+from . import _core
 from ._scene import Scene, load_pack
 
 #: Worlds a worker process keeps built, the most recently used first.
@@ -79,18 +79,10 @@ def render_task(
         "builds": _builds,
         "pid": os.getpid(),
         "node": ray.get_runtime_context().get_node_id(),
-        "host": socket.gethostname(),
-        "peak_memory_bytes": _peak_memory(),
+        # As the command line's manifest has them.
+        "host": _core.host_name(),
+        "peak_memory_bytes": _core.peak_memory_bytes(),
     }
-
-
-def _peak_memory() -> Optional[int]:
-    """This process's peak resident memory in bytes (Linux counts ru_maxrss in KiB)."""
-    try:
-        import resource
-    except ImportError:  # not on Windows
-        return None
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 # What the driver has shipped in the current Ray session: each scene's pack digest (the pack is

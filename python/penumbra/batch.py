@@ -227,14 +227,13 @@ def view_line(r: Dict[str, Any]) -> str:
     return f"{r['name']}\t{r['path']}\t{how}"
 
 
-def open_manifest(path: Optional[str]) -> Optional[TextIO]:
-    """The manifest file opened for appending (its folder made), or None without one."""
-    if path is None:
-        return None
-    folder = os.path.dirname(path)
-    if folder:
-        os.makedirs(folder, exist_ok=True)
-    return open(path, "a", encoding="utf-8", buffering=1)
+def open_manifest(path: Optional[str]) -> Any:
+    """The manifest file opened for appending (its folder made) by the command line's code,
+    whose ``append`` writes a line (JSON text of :func:`manifest_line`'s dict) with one
+    ``write``; None without one. Raises ``OSError`` naming the file."""
+    from . import _core
+
+    return None if path is None else _core.Manifest(path)
 
 
 def manifest_line(
@@ -357,9 +356,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return 2
     try:
         args.manifest_file = open_manifest(args.manifest)
-    except OSError as e:
-        print(f"penumbra.batch: --manifest {args.manifest}: cannot write the manifest: {e}",
-              file=sys.stderr)
+    except OSError as e:  # "FILE: cannot write the manifest: ..."
+        print(f"penumbra.batch: --manifest {e}", file=sys.stderr)
         return 2
     try:
         if args.json:
@@ -411,8 +409,7 @@ def _run(
         if args.manifest_file is not None:
             i = index[r["name"]]
             line = manifest_line(i, jobs["views"][i], r, scene.settings["seed"])
-            args.manifest_file.write(json.dumps(line) + "\n")
-            args.manifest_file.flush()
+            args.manifest_file.append(json.dumps(line))
 
     cpus, what = jobs["cpus_per_task"], f"{args.jobs}: cpus_per_task"
     if args.cpus_per_task is not None:

@@ -27,6 +27,7 @@ pixel's center, so masks have hard edges.
 
 from __future__ import annotations
 
+import json
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
@@ -34,7 +35,6 @@ import numpy as np
 
 from . import _args, _core
 from ._camera import Camera
-from ._staged import write_json
 
 #: The id of pixels that show no object.
 NO_ID = _core.NO_ID
@@ -206,4 +206,4 @@ def write_annotations(
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
-    write_json(path, value)
+    _core.write_bytes(path, (json.dumps(value) + "\n").encode("utf-8"))

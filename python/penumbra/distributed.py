@@ -33,8 +33,8 @@ from ._cluster import check_num_cpus, connect
 from ._ray_tasks import CACHED_WORLDS, MAX_RETRIES, render_task, ship
 from ._ray_wait import gather
 from ._scene import Scene
-from ._view_files import done, write_view
-from .record import record
+from ._view_files import write_view
+from .record import done, record
 from .views import (
     RENDER_KEYS,
     ViewError,
@@ -221,7 +221,7 @@ def render_views(
     todo = [
         i
         for i, (v, p) in enumerate(zip(batch, paths))
-        if force or not meta or not done(p, bool(v["aovs"]), records[i]["settings"])
+        if force or not meta or not done(p, records[i]["settings"])
     ]
     if on_view is not None:
         skipped = set(range(len(batch))) - set(todo)

@@ -2,7 +2,8 @@
 (docs/spec.md §10): ``K`` in OpenCV's convention (pixel centres at integer coordinates, so a
 centred camera has cx = (W - 1)/2), ``camera_to_world`` in OpenCV axes (+x right, +y down,
 +z forward), ``camera_to_world_opengl`` (+x right, +y up, +z backward) and
-``world_to_camera``. The numbers are the command line's, computed by the same code.
+``world_to_camera``. The numbers are the command line's, computed by the same code, and the
+poses files are written by it (``penumbra::products::poses``).
 
 >>> from penumbra import Camera
 >>> pose = camera_pose(Camera((0, 0, 5), (0, 0, 0), (0, 1, 0), 90), 64, 48)
@@ -14,6 +15,7 @@ centred camera has cx = (W - 1)/2), ``camera_to_world`` in OpenCV axes (+x right
 
 from __future__ import annotations
 
+import json
 import os
 from typing import Any, Dict, List, Mapping, Sequence, Union
 
@@ -21,11 +23,7 @@ import numpy as np
 
 from . import _args, _core
 from ._camera import Camera
-from ._staged import write_json
 from .views import output_path, views as normalized
-
-#: The layouts :func:`write_poses` writes.
-FORMATS = ("penumbra", "nerf")
 
 
 def camera_pose(camera: Camera, width: int, height: int) -> Dict[str, np.ndarray]:
@@ -46,6 +44,30 @@ def camera_pose(camera: Camera, width: int, height: int) -> Dict[str, np.ndarray
     }
 
 
+def _frames(
+    call: str,
+    specs: Sequence[Union[Camera, Mapping[str, Any]]],
+    width: int,
+    height: int,
+    output: str,
+) -> str:
+    """The frames of penumbra's layout (JSON text) of the views ``specs``, each with an
+    explicit camera, as :func:`poses` describes them."""
+    width = _args.size(call, "width", width)
+    height = _args.size(call, "height", height)
+    frames = []
+    for i, v in enumerate(normalized(specs)):
+        camera = v["camera"]
+        if not isinstance(camera, Camera):
+            raise ValueError(
+                f"views[{i}]: poses need an explicit camera (a penumbra.Camera or "
+                f"position/look_at), not {camera!r}"
+            )
+        size = (v["width"] or width, v["height"] or height)
+        frames.append((i, v["name"], output_path(output, v, i), camera._args(), *size))
+    return str(_core.pose_frames(frames))
+
+
 def poses(
     specs: Sequence[Union[Camera, Mapping[str, Any]]],
     width: int,
@@ -58,33 +80,11 @@ def poses(
     name), ``file`` (``output`` formatted as :func:`penumbra.views.output_path` does),
     ``width``, ``height`` (the view's own, else these), ``fov``, ``K`` and the poses as lists
     of rows, and the camera's ``position``, ``look_at`` and ``up``."""
-    width = _args.size("poses", "width", width)
-    height = _args.size("poses", "height", height)
-    frames = []
-    for i, v in enumerate(normalized(specs)):
-        camera = v["camera"]
-        if not isinstance(camera, Camera):
-            raise ValueError(
-                f"views[{i}]: poses need an explicit camera (a penumbra.Camera or "
-                f"position/look_at), not {camera!r}"
-            )
-        w, h = v["width"] or width, v["height"] or height
-        pose = camera_pose(camera, w, h)
-        frames.append(
-            {
-                "frame": i,
-                "camera": v["name"],
-                "file": output_path(output, v, i),
-                "width": w,
-                "height": h,
-                "fov": float(np.float32(camera.fov)),
-                **{key: m.tolist() for key, m in pose.items()},
-                "position": [float(c) for c in np.float32(camera.position)],
-                "look_at": [float(c) for c in np.float32(camera.look_at)],
-                "up": [float(c) for c in np.float32(camera.up)],
-            }
-        )
-    return {"frames": frames}
+    frames = _frames("poses", specs, width, height, output)
+    value: Dict[str, List[Dict[str, Any]]] = json.loads(
+        _core.poses_layout("penumbra", frames, "poses.json")
+    )
+    return value
 
 
 def nerf(frames: Dict[str, List[Dict[str, Any]]], folder: str = ".") -> Dict[str, Any]:
@@ -93,36 +93,10 @@ def nerf(frames: Dict[str, List[Dict[str, Any]]], folder: str = ".") -> Dict[str
     at +1/2: K's plus 1/2), ``w``, ``h``, ``camera_angle_x``/``_y``, zero distortion, and
     per frame ``file_path`` (relative to ``folder``, where the file goes) and
     ``transform_matrix`` (``camera_to_world_opengl``), with the intrinsics repeated."""
-    out: Dict[str, Any] = {"camera_model": "OPENCV"}
-    listed = []
-    for f in frames["frames"]:
-        k = f["K"]
-        w, h = f["width"], f["height"]
-        intrinsics = {
-            "fl_x": k[0][0],
-            "fl_y": k[1][1],
-            "cx": k[0][2] + 0.5,
-            "cy": k[1][2] + 0.5,
-            "w": w,
-            "h": h,
-            "camera_angle_x": 2.0 * float(np.arctan(w / (2.0 * k[0][0]))),
-            "camera_angle_y": 2.0 * float(np.arctan(h / (2.0 * k[1][1]))),
-        }
-        if not listed:
-            out.update(intrinsics)
-            out.update({"k1": 0.0, "k2": 0.0, "p1": 0.0, "p2": 0.0})
-        rel = os.path.relpath(os.path.abspath(f["file"]), os.path.abspath(folder))
-        listed.append(
-            {
-                "file_path": rel,
-                "transform_matrix": f["camera_to_world_opengl"],
-                **intrinsics,
-                "camera": f["camera"],
-                "frame": f["frame"],
-            }
-        )
-    out["frames"] = listed
-    return out
+    listed = json.dumps(frames["frames"])
+    where = os.path.join(folder, "transforms.json")
+    value: Dict[str, Any] = json.loads(_core.poses_layout("nerf", listed, where))
+    return value
 
 
 def write_poses(
@@ -134,12 +108,8 @@ def write_poses(
     format: str = "penumbra",
 ) -> None:
     """Writes the :func:`poses` of ``specs`` to ``path`` (JSON) as ``penumbra render --poses``
-    does, or with ``format="nerf"`` as ``--poses-format nerf`` does (:func:`nerf`); the file
-    appears complete or not at all."""
-    if format not in FORMATS:
-        raise ValueError(f"format must be one of {', '.join(FORMATS)}, not {format!r}")
-    value: Any = poses(specs, width, height, output)
-    if format == "nerf":
-        value = nerf(value, os.path.dirname(os.fspath(path)) or ".")
-    path = os.fspath(path)
-    write_json(path, value, indent=2)
+    does, or with ``format="nerf"`` as ``--poses-format nerf`` does (:func:`nerf`), with the
+    command line's code; the file appears complete or not at all (its folder is made when
+    missing)."""
+    frames = _frames("write_poses", specs, width, height, output)
+    _core.write_poses(os.fspath(path), format, frames)

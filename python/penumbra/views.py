@@ -290,7 +290,8 @@ def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
     name, by the rule the command line's ``{camera}`` follows: path separators, ``:`` and
     control characters become ``_``, and so does a leading ``.`` or ``-`` (``..`` gives
     ``_.``), so that no view writes outside the pattern's folder; a pattern whose ``..``
-    after a field leaves that folder (``out/{name}/../../x.png``) is a ``ValueError``.
+    after a field leaves that folder (``out/{name}/../../x.png``) is a ``ValueError``, by the
+    command line's check.
 
     >>> output_path("out/{name}/{index}.png", {"name": "../up"}, 3)
     'out/_._up/3.png'
@@ -301,25 +302,11 @@ def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
         raise ValueError(
             f"output pattern {pattern!r}: {e} (it may use {{name}} and {{index}})"
         ) from None
-    folder = os.path.normpath(_pattern_folder(pattern) or ".")
-    rel = os.path.relpath(os.path.normpath(path), folder)
-    if rel == os.pardir or rel.startswith(os.pardir + os.sep):
-        raise ValueError(
-            f"output pattern {pattern!r} gives {path}, outside its folder {folder}: "
-            "a `..` after a field leaves it"
-        )
+    try:
+        _core.check_output_inside(pattern, path)
+    except ValueError as e:
+        raise ValueError(f"output pattern {e}") from None
     return path
-
-
-def _pattern_folder(pattern: str) -> str:
-    """The folder ``pattern`` names: its folders before the first name with a field."""
-    names = pattern.replace("\\", "/").split("/")[:-1]
-    literal = []
-    for n in names:
-        if "{" in n.replace("{{", ""):
-            break
-        literal.append(n)
-    return "/".join(literal).replace("{{", "{").replace("}}", "}")
 
 
 def output_paths(pattern: str, views: Sequence[Mapping[str, Any]]) -> List[str]:
@@ -338,6 +325,6 @@ def output_paths(pattern: str, views: Sequence[Mapping[str, Any]]) -> List[str]:
 
 
 def aov_path(image_path: str) -> str:
-    """Where the AOVs of the image at ``image_path`` go: ``out/a.png`` → ``out/a.aovs.npz``."""
-    stem, _ = os.path.splitext(image_path)
-    return stem + ".aovs.npz"
+    """Where the AOVs of the image at ``image_path`` go: ``out/a.png`` → ``out/a.aovs.npz``,
+    as a batch's records list them."""
+    return os.fspath(_core.aov_path(image_path))

@@ -5,6 +5,7 @@ never opened."""
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import threading
@@ -13,9 +14,8 @@ import numpy as np
 import pytest
 
 import penumbra
-from penumbra import record, views
-from penumbra._staged import write_json
-from penumbra._view_files import complete, write_view
+from penumbra import _core, record, views
+from penumbra._view_files import write_view
 
 from conftest import SCENES, run_cli
 
@@ -35,9 +35,15 @@ def test_an_image_that_cannot_be_written_is_named_not_its_temporary_file(tmp_pat
         # The image, or with AOVs the first file staged, its .aovs.npz.
         asked = views.aov_path(path) if with_aovs else path
         assert asked in message and ".tmp-" not in message, message
+    # Every whole file Python writes goes through the one staged writer: its error is the
+    # system's (an OSError subclass with its errno) and names the file asked for.
     with pytest.raises(OSError) as e:
-        write_json(path[:-4] + ".json", {"a": 1})
-    assert ".tmp-" not in str(e.value) and "a" * 240 + ".json" in str(e.value)
+        _core.write_bytes(path[:-4] + ".json", b"{}")
+    assert ".tmp-" not in str(e.value) and e.value.filename == path[:-4] + ".json"
+    assert e.value.errno == errno.ENAMETOOLONG
+    with pytest.raises(FileNotFoundError) as e:
+        _core.write_bytes(str(tmp_path / "no" / "such" / "x.json"), b"{}")
+    assert e.value.filename == str(tmp_path / "no" / "such" / "x.json")
     assert os.listdir(tmp_path) == []
 
 
@@ -50,14 +56,14 @@ def test_a_record_keeps_the_digests_that_tell_a_whole_image(tmp_path):
     whole = open(path, "rb").read()
     assert kept["digests"] == [record.digest(path)]
     assert kept["digests"][0]["bytes"] == len(whole)
-    assert record.intact(kept) and complete(path, False, True)
+    assert record.intact(kept) and record.done(path, value["settings"])
     # Cut short after its record was written; then the same size, one byte changed.
     with open(path, "wb") as f:
         f.write(whole[: len(whole) // 2])
-    assert not record.intact(kept) and not complete(path, False, True)
+    assert not record.intact(kept) and not record.done(path, value["settings"])
     with open(path, "wb") as f:
         f.write(whole[:-1] + bytes([whole[-1] ^ 1]))
-    assert not complete(path, False, True)
+    assert not record.intact(kept) and not record.done(path, value["settings"])
     # No temporary file is left beside the files.
     assert sorted(os.listdir(tmp_path)) == ["front.meta.json", "front.pfm"]
 
@@ -104,3 +110,38 @@ def test_patterns_that_climb_out_or_collide_are_refused():
         "out/1/../x1.png",
     ]
     assert views.output_path("../out/{name}.png", {"name": ".."}, 0) == "../out/_..png"
+
+
+def test_a_views_aovs_are_the_npz_numpy_reads_back(tmp_path):
+    # Written by the library's NPZ writer (products::npz), read by numpy as its own.
+    rng = np.random.default_rng(3)
+    aovs = {
+        "depth": rng.random((4, 6), dtype=np.float32),
+        "normal": rng.random((6, 4, 3), dtype=np.float32).transpose(1, 0, 2),  # not C order
+        "object_id": np.arange(24, dtype=np.uint32).reshape(4, 6) | np.uint32(1 << 31),
+    }
+    path = str(tmp_path / "a.png")
+    write_view(path, _image(), aovs)
+    with np.load(views.aov_path(path)) as back:
+        assert back.files == list(aovs)
+        for name, a in aovs.items():
+            assert back[name].dtype == a.dtype and np.array_equal(back[name], a), name
+    with pytest.raises(TypeError, match='AOV "depth": a float32 or uint32 .* not a float64'):
+        write_view(str(tmp_path / "b.png"), _image(), {"depth": np.zeros((4, 6))})
+    assert sorted(os.listdir(tmp_path)) == ["a.aovs.npz", "a.png"]
+
+
+def test_a_record_of_an_older_layout_is_not_done(tmp_path):
+    # Earlier versions kept `render` as Debug text: no settings of today's, so not done.
+    scene = penumbra.load(SCENES / "cornell.toml")
+    path = str(tmp_path / "front.pfm")
+    value = record.record(scene, "front", path)
+    write_view(path, _image(), {}, value)
+    assert record.done(path, value["settings"])
+    kept = record.read_record(record.record_path(path))
+    kept["settings"]["render"] = "RenderSettings { view: Named(\"front\"), width: 512 }"
+    with open(record.record_path(path), "w") as f:
+        json.dump(kept, f)
+    assert record.intact(kept) and not record.done(path, value["settings"])
+    with pytest.raises(ValueError, match="another image"):
+        record.write_record(tmp_path / "other.pfm", value)

@@ -6,6 +6,7 @@ penumbra's pinhole cannot be is refused naming the frame and the key."""
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -62,6 +63,18 @@ def test_python_written_poses_read_back_as_their_views(tmp_path):
     assert [(v["name"], v["camera"], v["width"], v["height"]) for v in read] == [
         ("a", cams[0], 32, 24), ("b", cams[1], 8, 24)
     ]
+    # One layout, written and returned by the same code: the file is poses()'s value, and
+    # NeRF's file nerf()'s of it, every number to the bit.
+    assert json.loads((tmp_path / "p.json").read_text()) == poses.poses(
+        specs, 32, 24, output="out/{name}.png")
+    poses.write_poses(tmp_path / "sub" / "t.json", specs, 32, 24, output="out/{name}.png",
+                      format="nerf")
+    written = json.loads((tmp_path / "sub" / "t.json").read_text())
+    frames = poses.poses(specs, 32, 24, output="out/{name}.png")
+    assert written == poses.nerf(frames, str(tmp_path / "sub"))
+    assert written["frames"][0]["file_path"] == os.path.relpath("out/a.png", tmp_path / "sub")
+    with pytest.raises(ValueError, match=r'unknown poses format "colmap"'):
+        poses.write_poses(tmp_path / "c.json", specs, 32, 24, format="colmap")
 
 
 def nerf_file(tmp_path, **change):

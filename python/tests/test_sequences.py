@@ -70,7 +70,8 @@ def test_an_orbit_paths_frames_are_the_images_of_views_orbit(tmp_path):
 
 def test_python_poses_are_the_command_lines(tmp_path):
     # The orbit as a path of the scene file (CLI) and as views.orbit (Python): the same K,
-    # poses and NeRF transforms, number for number.
+    # poses and NeRF transforms, number for number. Both files are written by one function
+    # (penumbra::products::poses::write): what differs is where the cameras come from.
     center, radius, height, frames, start, fov = (0.0, 1.0, 0.0), 2.5, 0.4, 5, 15, 45
     for fmt in ("penumbra", "nerf"):
         run_cli(

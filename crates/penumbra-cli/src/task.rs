@@ -6,11 +6,11 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressStyle};
+use penumbra::products::RecordSettings;
 use penumbra::{
     AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderStats, Rgb,
     Scene, SceneFile, StagedFile,
 };
-use serde_json::Value;
 
 use crate::aov::{self, Passes};
 use crate::args::RenderArgs;
@@ -36,7 +36,7 @@ pub fn run(
     file: &SceneFile,
     scene: &Scene,
     job: &Job,
-    recorded: Option<Value>,
+    recorded: Option<RecordSettings>,
     preview: &mut Option<Preview>,
     interrupt: &Interrupt,
 ) -> Result<Done, Failure> {
@@ -112,9 +112,10 @@ pub fn run(
     // The image and the files beside it, each staged whole, then renamed into place
     // together: its pass files (none for an EXR, which holds them), the image, its record.
     let (mut files, aov_files) = match (&args.aov, &aovs) {
-        (Some(passes), Some(aovs)) if job.output.format == OutputFormat::Exr => {
-            (vec![aov::stage_exr(path, &film, aovs, passes)?], Vec::new())
-        }
+        (Some(passes), Some(aovs)) if job.output.format == OutputFormat::Exr => (
+            vec![aov::stage_exr(path, &film, aovs, passes, interrupt)?],
+            Vec::new(),
+        ),
         (Some(passes), Some(aovs)) => {
             let mut files = aov::stage_files(path, aovs, passes, interrupt)?;
             let paths: Vec<PathBuf> = files.iter().map(|f| f.path().to_owned()).collect();

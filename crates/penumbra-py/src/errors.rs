@@ -2,6 +2,7 @@
 //! with their location, unreadable files as `OSError` subclasses, bad settings as
 //! `ValueError`, an interrupted render as `KeyboardInterrupt`.
 
+use penumbra::products::ProductError;
 use penumbra::{AssetKind, ErrorKind, ImageError, RaycastError, RenderError};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -93,6 +94,36 @@ pub(crate) fn image_error(call: &str, e: ImageError) -> PyErr {
         ImageError::OutOfMemory { .. } => PyMemoryError::new_err(message),
         ImageError::Write { .. } => PyOSError::new_err(message),
         ImageError::Cancelled => PyKeyboardInterrupt::new_err(message),
+    }
+}
+
+/// A file that could not be written, as Python sees it: when the system said why (an error
+/// number), the `OSError` subclass `open()` raises for it (`PermissionError`,
+/// `FileNotFoundError`, ...) naming the file asked for, never the temporary file it was
+/// staged under; any other image error as [`image_error`] has it.
+pub(crate) fn write_error(call: &str, e: ImageError) -> PyErr {
+    if let ImageError::Write { path, message } = &e {
+        // The system's reason ends the message as io::Error writes it: "... (os error 13)".
+        let numbered = message
+            .strip_suffix(')')
+            .and_then(|m| m.rsplit_once(" (os error "))
+            .and_then(|(reason, n)| Some((reason, n.parse::<i32>().ok()?)));
+        if let Some((reason, errno)) = numbered {
+            let path = path.display().to_string();
+            return PyOSError::new_err((errno, format!("{call}: cannot write: {reason}"), path));
+        }
+    }
+    image_error(call, e)
+}
+
+/// A batch's file that could not be made or written (see [`write_error`]): values the
+/// format cannot hold are a `ValueError`, no memory a `MemoryError`, the rest `OSError`.
+pub(crate) fn product_error(call: &str, e: ProductError) -> PyErr {
+    match e {
+        ProductError::Image(e) => write_error(call, e),
+        ProductError::Memory(_) => PyMemoryError::new_err(format!("{call}: {e}")),
+        ProductError::Invalid { .. } => PyValueError::new_err(format!("{call}: {e}")),
+        ProductError::Io { .. } => PyOSError::new_err(format!("{call}: {e}")),
     }
 }
 

@@ -10,7 +10,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
-use crate::errors::{buffer, image_error};
+use crate::errors::{buffer, image_error, write_error};
+use crate::staged::Staged;
 
 /// The pixels of an (H, W, 3) float32 array as a film.
 fn film(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Film> {
@@ -50,13 +51,13 @@ pub fn write_image(
     ImageError::check_gamma(gamma).map_err(|e| image_error("write_image", e))?;
     let film = film(&array)?;
     py.detach(|| penumbra::write_image(&film, &path, gamma))
-        .map_err(|e| image_error("write_image", e))
+        .map_err(|e| write_error("write_image", e))
 }
 
-/// Writes an (H, W, 3) float32 linear RGB array for `path` (its extension names the format)
-/// under a temporary name beside it, as the command line stages an image, and returns that
-/// name with the file's size and FNV-1a digest (16 hex digits), for the caller to rename into
-/// place with the files that go with it (a batch's AOVs and record). Errors name `path`.
+/// Stages an (H, W, 3) float32 linear RGB array for `path` (its extension names the format)
+/// under a temporary name beside it, as the command line stages an image, for `commit_view`
+/// to rename into place with the files that go with it (a batch's AOVs and record). Errors
+/// name `path`.
 #[pyfunction]
 #[pyo3(signature = (path, array, gamma = None))]
 pub fn stage_image(
@@ -64,16 +65,15 @@ pub fn stage_image(
     path: PathBuf,
     array: PyReadonlyArray3<'_, f32>,
     gamma: Option<f32>,
-) -> PyResult<(PathBuf, u64, String)> {
+) -> PyResult<Staged> {
     ImageError::check_gamma(gamma).map_err(|e| image_error("write_image", e))?;
     let film = film(&array)?;
     py.detach(|| {
         let never = std::sync::atomic::AtomicBool::new(false);
-        let staged = penumbra::stage_image(&film, &path, gamma, &never)?;
-        let digest = staged.digest()?;
-        Ok((staged.into_temporary(), digest.bytes, digest.hex()))
+        penumbra::stage_image(&film, &path, gamma, &never)
     })
-    .map_err(|e| image_error("write_image", e))
+    .map(Staged::from)
+    .map_err(|e| write_error("write_image", e))
 }
 
 /// The size and FNV-1a digest (16 hex digits) of the regular file at `path`, as records keep

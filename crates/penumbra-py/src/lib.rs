@@ -10,11 +10,14 @@ mod camera;
 mod errors;
 mod image;
 mod interrupt;
+mod layouts;
 mod names;
 mod pack;
 mod raycast;
+mod records;
 mod render;
 mod scene;
+mod staged;
 
 /// The compiled core of the `penumbra` package.
 #[pymodule]
@@ -40,6 +43,24 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(image::write_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::stage_image, m)?)?;
     m.add_function(wrap_pyfunction!(image::file_digest, m)?)?;
+    m.add_class::<staged::Staged>()?;
+    m.add_function(wrap_pyfunction!(staged::write_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(staged::stage_npz, m)?)?;
+    m.add_function(wrap_pyfunction!(records::record_path, m)?)?;
+    m.add_function(wrap_pyfunction!(records::aov_path, m)?)?;
+    m.add_function(wrap_pyfunction!(records::read_record, m)?)?;
+    m.add_function(wrap_pyfunction!(records::record_intact, m)?)?;
+    m.add_function(wrap_pyfunction!(records::record_finished, m)?)?;
+    m.add_function(wrap_pyfunction!(records::write_record, m)?)?;
+    m.add_function(wrap_pyfunction!(records::commit_view, m)?)?;
+    m.add("MAX_RECORD_BYTES", records::MAX_RECORD_BYTES)?;
+    m.add_function(wrap_pyfunction!(layouts::pose_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(layouts::poses_layout, m)?)?;
+    m.add_function(wrap_pyfunction!(layouts::write_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(layouts::check_output_inside, m)?)?;
+    m.add_class::<layouts::CoreManifest>()?;
+    m.add_function(wrap_pyfunction!(layouts::host_name, m)?)?;
+    m.add_function(wrap_pyfunction!(layouts::peak_memory_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(image::to_srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(image::encode_png, m)?)?;
     m.add(

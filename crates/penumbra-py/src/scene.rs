@@ -18,23 +18,30 @@ use crate::render::{render_scene, CameraArgs, Request};
 /// scene file's default render settings.
 #[pyclass(frozen, module = "penumbra._core")]
 pub struct CoreScene {
-    world: Arc<World>,
-    settings: RenderSettings,
+    pub(crate) world: Arc<World>,
+    pub(crate) settings: RenderSettings,
     /// The file's `render.samples`, the sample count a sampler change falls back to.
-    file_samples: Option<u32>,
+    pub(crate) file_samples: Option<u32>,
     /// The file's `film.gamma` (`None`: 8-bit images take the sRGB curve).
-    gamma: Option<f32>,
+    pub(crate) gamma: Option<f32>,
     load_seconds: f64,
     /// The parsed file and the files its build read: what a pack of the scene holds.
     pub(crate) file: SceneFile,
     pub(crate) files: Vec<PathBuf>,
     /// For each `objects` entry, the object ids it added.
-    objects: Vec<std::ops::Range<u32>>,
+    pub(crate) objects: Vec<std::ops::Range<u32>>,
     /// Where each object's triangles are, for `surface_attributes`: made by its first call,
     /// not once per call (a walk over every triangle).
     object_index: OnceLock<ObjectIndex>,
     /// The cameras with keys or a path, by name.
     paths: Vec<(String, penumbra::CameraPath)>,
+}
+
+impl CoreScene {
+    /// The digest of the scene's text and every file its build read.
+    pub(crate) fn digest(&self, py: Python<'_>) -> String {
+        py.detach(|| self.file.digest(&self.files))
+    }
 }
 
 /// Parses and builds with the GIL released.
@@ -173,17 +180,24 @@ impl CoreScene {
         Ok(d)
     }
 
-    /// The settings a render with these keyword arguments (those of `render`) uses, resolved
-    /// against the file's, as the text `penumbra render`'s record keeps them (every f32 to
-    /// the bit). Raises as `render` does for bad settings.
-    #[pyo3(signature = (**kwargs))]
-    fn settings_record(&self, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<String> {
-        let request = Request::from_kwargs(kwargs)?;
-        let settings = request
-            .patch
-            .apply(&self.settings, self.file_samples)
-            .map_err(|e| crate::errors::render_error(penumbra::RenderError::Settings(e)))?;
-        Ok(format!("{settings:?}"))
+    /// The record (JSON text, see `penumbra::products::record`) of the image `image` that a
+    /// render with these keyword arguments (those of `render`: the camera, the settings, the
+    /// AOVs) makes, as `penumbra render --meta` writes it, without digests: its `settings`
+    /// (the render's resolved against the file's, by name, every number to the bit; no camera
+    /// is the first, by name), the image's files (the image, then its `.aovs.npz` when there
+    /// are AOVs), size, K and poses, the objects' ids, and `view`. `scene_digest` saves
+    /// computing it again. Raises `ValueError` for an image whose extension names no format
+    /// and as `render` does for bad settings.
+    #[pyo3(signature = (image, view = None, scene_digest = None, **kwargs))]
+    fn record(
+        &self,
+        py: Python<'_>,
+        image: PathBuf,
+        view: Option<String>,
+        scene_digest: Option<String>,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<String> {
+        crate::records::make(py, self, &image, view, scene_digest, kwargs)
     }
 
     /// The camera `name` (None: the first, the default) as (position, look_at, up, fov);
@@ -197,17 +211,17 @@ impl CoreScene {
         Some((p, l, u, camera.fov_y_deg()))
     }
 
-    /// The digest of the scene's text and every file its build read, as `penumbra render
-    /// --meta` records it (see `penumbra::SceneFile::digest`).
     /// The file's `film.gamma`: 8-bit images encode `c^(1/gamma)`; `None` for the sRGB curve.
     #[getter]
     fn gamma(&self) -> Option<f32> {
         self.gamma
     }
 
+    /// The digest of the scene's text and every file its build read, as `penumbra render
+    /// --meta` records it (see `penumbra::SceneFile::digest`).
     #[getter]
     fn scene_digest(&self, py: Python<'_>) -> String {
-        py.detach(|| self.file.digest(&self.files))
+        self.digest(py)
     }
 
     /// For each `objects` entry, in file order, its first object id and how many it added.

@@ -66,6 +66,7 @@ mod memory;
 mod names;
 mod pool;
 mod pose;
+pub mod products;
 mod raycast;
 mod reach;
 mod render;

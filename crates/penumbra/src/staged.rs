@@ -96,14 +96,6 @@ impl StagedFile {
         })
     }
 
-    /// Hands the temporary file over to the caller (who renames it into place or removes
-    /// it; dropping the result removes nothing): for a writer that commits files of its own
-    /// beside penumbra's, such as Python's batches.
-    pub fn into_temporary(mut self) -> PathBuf {
-        std::mem::take(&mut self.tmp)
-        // `self.tmp` is now empty: the drop removes nothing.
-    }
-
     /// Renames the file into place.
     pub fn commit(self) -> Result<(), ImageError> {
         std::fs::rename(&self.tmp, &self.path).map_err(|e| ImageError::Write {
@@ -116,9 +108,7 @@ impl StagedFile {
 
 impl Drop for StagedFile {
     fn drop(&mut self) {
-        if !self.tmp.as_os_str().is_empty() {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        let _ = std::fs::remove_file(&self.tmp);
     }
 }
 
@@ -265,10 +255,12 @@ mod tests {
         // A name staged now reads back as this process's.
         let dir = scratch("names");
         let staged = StagedFile::write_bytes(&dir.join("b.pfm"), b"x").unwrap();
-        let tmp = staged.into_temporary();
-        let name = tmp.file_name().unwrap().to_str().unwrap().to_owned();
-        assert_eq!(staged_for(&name), Some(("b.pfm", std::process::id())));
-        assert!(tmp.is_file(), "handed over, not removed");
+        let [name] = &names(&dir)[..] else {
+            panic!("{:?}", names(&dir))
+        };
+        assert_eq!(staged_for(name), Some(("b.pfm", std::process::id())));
+        drop(staged);
+        assert!(names(&dir).is_empty(), "dropped: removed");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -1,0 +1,239 @@
+//! Every image's camera as computer vision reads it (see [`CameraPose`] and docs/spec.md,
+//! "Poses and intrinsics"), in one of two layouts ([`PosesFormat`]), as `penumbra render
+//! --poses` and Python's `penumbra.poses.write_poses` write them:
+//!
+//! - `penumbra`: `{"frames": [...]}`, per image its `frame`, `camera`, `file`, `width`,
+//!   `height`, `fov` (vertical, degrees), `K` (OpenCV: pixel centres at integer coordinates),
+//!   `camera_to_world` (OpenCV axes), `camera_to_world_opengl`, `world_to_camera`, and the
+//!   camera's `position`, `look_at` and `up`;
+//! - `nerf`: a `transforms.json` as instant-ngp and nerfstudio read it: `camera_model`
+//!   "OPENCV", `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h` (NeRF's pixel centres at +½, so a centred
+//!   camera has cx = W/2), `camera_angle_x`/`_y`, zero distortion, and per frame `file_path`
+//!   (relative to the file's folder) and `transform_matrix` (camera to world, OpenGL axes),
+//!   with the intrinsics repeated per frame for paths whose fov changes.
+//!
+//! ```
+//! use glam::Vec3;
+//! use penumbra::products::poses::{layout, PoseFrame, PosesFormat};
+//! use penumbra::{Camera, CameraPose};
+//!
+//! let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0)?;
+//! let frame = PoseFrame::new(Some(0), "front", "out/front.png", &camera, CameraPose::new(&camera, 64, 48, (0, 0)), (64, 48));
+//! let nerf = layout(PosesFormat::Nerf, &[frame], std::path::Path::new("out/transforms.json"));
+//! assert_eq!(nerf["cx"], 32.0); // NeRF's centre: W/2
+//! assert_eq!(nerf["frames"][0]["file_path"], "front.png");
+//! # Ok::<(), penumbra::CameraError>(())
+//! ```
+
+use std::path::{Component, Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Map, Value};
+
+use super::ProductError;
+use crate::camera::Camera;
+use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
+use crate::staged::StagedFile;
+
+/// The two layouts of a poses file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PosesFormat {
+    /// penumbra's own: `{"frames": [...]}`.
+    Penumbra,
+    /// NeRF's `transforms.json`.
+    Nerf,
+}
+
+impl std::str::FromStr for PosesFormat {
+    type Err = crate::UnknownName;
+
+    fn from_str(name: &str) -> Result<PosesFormat, crate::UnknownName> {
+        let all = [PosesFormat::Penumbra, PosesFormat::Nerf];
+        crate::names::parse_name("poses format", name, &all, |f| match f {
+            PosesFormat::Penumbra => "penumbra",
+            PosesFormat::Nerf => "nerf",
+        })
+    }
+}
+
+/// One image's frame of penumbra's layout. The camera's numbers are its `f32`s widened to
+/// `f64`, as written; a frame read back (Python's `penumbra.poses.nerf` of a penumbra
+/// layout) keeps them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseFrame {
+    /// The frame (a path camera's, or a view's index); `None` for a still camera.
+    pub frame: Option<i64>,
+    /// The camera's (or the view's) name.
+    pub camera: String,
+    /// The image file.
+    pub file: String,
+    /// Its width in pixels.
+    pub width: u32,
+    /// Its height in pixels.
+    pub height: u32,
+    /// Vertical field of view in degrees.
+    pub fov: f64,
+    /// K.
+    #[serde(rename = "K")]
+    pub k: Mat3Rows,
+    /// Camera to world, OpenCV axes.
+    pub camera_to_world: Mat4Rows,
+    /// Camera to world, OpenGL axes.
+    pub camera_to_world_opengl: Mat4Rows,
+    /// World to camera, OpenCV axes.
+    pub world_to_camera: Mat4Rows,
+    /// The eye.
+    pub position: [f64; 3],
+    /// The point looked at.
+    pub look_at: [f64; 3],
+    /// The up direction.
+    pub up: [f64; 3],
+}
+
+impl PoseFrame {
+    /// The frame of the image `file`, `width × height`, of `camera` seen as `pose`.
+    pub fn new(
+        frame: Option<i64>,
+        name: &str,
+        file: &str,
+        camera: &Camera,
+        pose: CameraPose,
+        (width, height): (u32, u32),
+    ) -> PoseFrame {
+        let wide = |v: glam::Vec3| v.as_dvec3().to_array();
+        PoseFrame {
+            frame,
+            camera: name.to_owned(),
+            file: file.to_owned(),
+            width,
+            height,
+            fov: f64::from(camera.fov_y_deg()),
+            k: pose.k,
+            camera_to_world: pose.camera_to_world,
+            camera_to_world_opengl: pose.camera_to_world_opengl,
+            world_to_camera: pose.world_to_camera,
+            position: wide(camera.position()),
+            look_at: wide(camera.look_at()),
+            up: wide(camera.up()),
+        }
+    }
+}
+
+/// The poses file of `frames` in `format`, for the file at `path` (NeRF's `file_path`s are
+/// relative to its folder).
+pub fn layout(format: PosesFormat, frames: &[PoseFrame], path: &Path) -> Value {
+    match format {
+        PosesFormat::Penumbra => json!({ "frames": frames }),
+        PosesFormat::Nerf => nerf(frames, path.parent().unwrap_or(Path::new(""))),
+    }
+}
+
+/// Writes the poses of `frames` to `path` in `format` (pretty JSON and a newline), whole or
+/// not at all; its folder is made when missing.
+pub fn write(path: &Path, format: PosesFormat, frames: &[PoseFrame]) -> Result<(), ProductError> {
+    let value = layout(format, frames, path);
+    let text = serde_json::to_string_pretty(&value).map_err(|e| ProductError::io(path, e))? + "\n";
+    if let Some(dir) = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty() && !d.is_dir())
+    {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| ProductError::io(path, format_args!("cannot make its folder: {e}")))?;
+    }
+    Ok(StagedFile::write_bytes(path, text.as_bytes())?.commit()?)
+}
+
+/// NeRF's intrinsics of one image: pixel centres at +½, so cx and cy are K's plus ½.
+fn nerf_intrinsics(f: &PoseFrame) -> Map<String, Value> {
+    let (fx, fy) = (f.k[0][0], f.k[1][1]);
+    let (w, h) = (f64::from(f.width), f64::from(f.height));
+    let mut m = Map::new();
+    m.insert("fl_x".into(), json!(fx));
+    m.insert("fl_y".into(), json!(fy));
+    m.insert("cx".into(), json!(f.k[0][2] + 0.5));
+    m.insert("cy".into(), json!(f.k[1][2] + 0.5));
+    m.insert("w".into(), json!(f.width));
+    m.insert("h".into(), json!(f.height));
+    m.insert(
+        "camera_angle_x".into(),
+        json!(2.0 * (w / (2.0 * fx)).atan()),
+    );
+    m.insert(
+        "camera_angle_y".into(),
+        json!(2.0 * (h / (2.0 * fy)).atan()),
+    );
+    m
+}
+
+fn nerf(frames: &[PoseFrame], folder: &Path) -> Value {
+    let folder = absolute(folder);
+    let mut top = Map::new();
+    top.insert("camera_model".into(), json!("OPENCV"));
+    let mut listed = Vec::with_capacity(frames.len());
+    for f in frames {
+        let intrinsics = nerf_intrinsics(f);
+        if listed.is_empty() {
+            top.extend(intrinsics.clone());
+            for k in ["k1", "k2", "p1", "p2"] {
+                top.insert(k.into(), json!(0.0));
+            }
+        }
+        let file_path = relative(&absolute(Path::new(&f.file)), &folder);
+        let mut frame = Map::new();
+        frame.insert("file_path".into(), json!(file_path.display().to_string()));
+        frame.insert("transform_matrix".into(), json!(f.camera_to_world_opengl));
+        frame.extend(intrinsics);
+        frame.insert("camera".into(), json!(f.camera));
+        frame.insert("frame".into(), json!(f.frame));
+        listed.push(Value::Object(frame));
+    }
+    top.insert("frames".into(), Value::Array(listed));
+    Value::Object(top)
+}
+
+/// `path` from the current folder, each `.` dropped and each `..` taking off the name before
+/// it (as Python's `os.path.abspath` does).
+fn absolute(path: &Path) -> PathBuf {
+    let joined = std::env::current_dir()
+        .map(|d| d.join(path))
+        .unwrap_or_else(|_| path.to_owned());
+    super::output_name::normalized(&joined)
+}
+
+/// `file` relative to `folder`, both absolute and normalized, with `..` for each of
+/// `folder`'s names that `file` is not under (as Python's `os.path.relpath` gives it).
+fn relative(file: &Path, folder: &Path) -> PathBuf {
+    let (a, b): (Vec<Component>, Vec<Component>) =
+        (file.components().collect(), folder.components().collect());
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if common == 0 {
+        return file.to_owned(); // Another root (a Windows drive): kept whole.
+    }
+    let mut out: PathBuf = b[common..].iter().map(|_| Component::ParentDir).collect();
+    out.extend(&a[common..]);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_are_relative_to_the_poses_folder() {
+        let r = |f: &str, d: &str| relative(Path::new(f), Path::new(d));
+        assert_eq!(r("/a/b/c.png", "/a/b"), Path::new("c.png"));
+        assert_eq!(r("/a/b/c/d.png", "/a/b"), Path::new("c/d.png"));
+        assert_eq!(r("/a/x/c.png", "/a/b"), Path::new("../x/c.png"));
+        assert_eq!(absolute(Path::new("/a/./b/../c")), Path::new("/a/c"));
+    }
+
+    #[test]
+    fn formats_parse_by_name() {
+        assert_eq!("nerf".parse::<PosesFormat>().unwrap(), PosesFormat::Nerf);
+        let e = "colmap".parse::<PosesFormat>().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            r#"unknown poses format "colmap" (use "penumbra" or "nerf")"#
+        );
+    }
+}
