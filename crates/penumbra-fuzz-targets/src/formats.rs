@@ -50,11 +50,14 @@ pub(crate) fn check_ply_rows(data: &[u8], info: &ObjInfo) {
         return;
     }
     let (triangles, vertices) = (info.triangles, info.vertices);
-    let Some(end) = data
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .map(|i| i + 11)
-    else {
+    // The header ends where the reader ends it: at the first line whose only word is
+    // `end_header` (spaces and tabs around it allowed).
+    let mut start = 0;
+    let Some(end) = data.split_inclusive(|&b| b == b'\n').find_map(|line| {
+        start += line.len();
+        let words = std::str::from_utf8(line).ok()?.split_whitespace();
+        words.eq(["end_header"]).then_some(start)
+    }) else {
         return;
     };
     let (Ok(header), Ok(body)) = (
