@@ -46,6 +46,7 @@ pub(crate) trait Placements {
 
 type HitOf<P> = <<P as Placements>::Tree as Tree>::Hit;
 type StackOf<P> = <<P as Placements>::Tree as Tree>::Stack;
+type RayOf<P> = <<P as Placements>::Tree as Tree>::Ray;
 
 /// The closest of `best` and the placements' hits of the ray `origin + t·direction` with `t`
 /// in `range`, under the tree's rule.
@@ -111,10 +112,8 @@ pub(crate) fn any<P: Placements, I: Isa>(
         let scale = P::Tree::EXIT_SCALE;
         return walk_any(top, (origin, inv_dir), range, scale, |slots| {
             ids[slots].iter().any(|&index| {
-                let entry = placements.entry(index);
-                let map = entry.object_from_world;
-                let ray = P::Tree::prepare(map.transform_point3(o), map.transform_vector3(d));
-                ray.is_some_and(|r| entry.mesh.any::<I>(&r, range, entry.filter, stack))
+                entered(placements, index, ray)
+                    .is_some_and(|(e, r)| e.mesh.any::<I>(&r, range, e.filter, stack))
             })
         });
     }
@@ -169,7 +168,7 @@ fn walk<'p, P: Placements>(
     (o, d): (Vec3, Vec3),
     t_min: f32,
     bound: &mut f32,
-    mut visit: impl FnMut(u32, Entry<'p, P::Tree>, &<P::Tree as Tree>::Ray, &mut f32),
+    mut visit: impl FnMut(u32, Entry<'p, P::Tree>, &RayOf<P>, &mut f32),
 ) {
     let (top, ids) = placements.top();
     if top.is_empty() {
@@ -180,12 +179,23 @@ fn walk<'p, P: Placements>(
     let enter = |node: &BvhNode, t: f32| slab_scaled(node, origin, inv_dir, (t_min, t), scale);
     walk_nearest(top, bound, enter, |slots, bound| {
         for &index in &ids[slots] {
-            let entry = placements.entry(index);
-            let map = entry.object_from_world;
-            let ray = P::Tree::prepare(map.transform_point3(o), map.transform_vector3(d));
-            if let Some(ray) = ray {
+            if let Some((entry, ray)) = entered(placements, index, (o, d)) {
                 visit(index, entry, &ray, bound);
             }
         }
     });
+}
+
+/// Placement `index` and the world ray `(o, d)` in its object space (the same `t`), when the
+/// mapped ray can hit anything.
+#[inline(always)]
+fn entered<P: Placements>(
+    placements: &P,
+    index: u32,
+    (o, d): (Vec3, Vec3),
+) -> Option<(Entry<'_, P::Tree>, RayOf<P>)> {
+    let entry = placements.entry(index);
+    let map = entry.object_from_world;
+    let ray = P::Tree::prepare(map.transform_point3(o), map.transform_vector3(d))?;
+    Some((entry, ray))
 }

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::instances::{inverse, world_box};
 use super::placed::{self, Entry, Placements};
-use super::test_meshes::{icosphere, subdivided_cube, MeshData};
+use super::test_meshes::{icosphere, random_transform, subdivided_cube, MeshData};
 use super::tree::{Rule, Tree};
 use super::wide::WideBvh;
 use super::{build, Bvh, BvhNode};
@@ -40,21 +40,6 @@ impl<T: Tree> Placements for Scene<T> {
             border: None,
         }
     }
-}
-
-/// A random placement: scales of 0.3 to 2 (mirrored half the time), any rotation, within ±3.
-fn random_transform(rng: &mut Rng) -> Transform {
-    let mut f = |lo: f32, hi: f32| lo + (hi - lo) * rng.uniform();
-    let mut scale = Vec3::new(f(0.3, 2.0), f(0.3, 2.0), f(0.3, 2.0));
-    if f(0.0, 1.0) < 0.5 {
-        scale.x = -scale.x;
-    }
-    let rotate = Vec3::new(f(0.0, 360.0), f(0.0, 360.0), f(0.0, 360.0));
-    Transform::from_srt(
-        scale,
-        rotate,
-        Vec3::new(f(-3.0, 3.0), f(-3.0, 3.0), f(-3.0, 3.0)),
-    )
 }
 
 /// The scene of `seed` with each mesh's tree made by `tree`.

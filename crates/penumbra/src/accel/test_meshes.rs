@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::{Mat3, Vec3};
 
+use crate::math::Transform;
 use crate::sampling::Rng;
 
 /// Vertex positions and index triples.
@@ -250,4 +251,17 @@ pub(crate) fn aimed_rays(mesh: &MeshData, targets: &[Target], seed: u64) -> Vec<
         }
     }
     rays
+}
+
+/// A random placement: scales of 0.3 to 2 (each mirrored half the time), any rotation, within
+/// ±3 of the origin.
+pub(crate) fn random_transform(rng: &mut Rng) -> Transform {
+    let mut f = |lo: f32, hi: f32| lo + (hi - lo) * rng.uniform();
+    let mut scale = Vec3::new(f(0.3, 2.0), f(0.3, 2.0), f(0.3, 2.0));
+    if f(0.0, 1.0) < 0.5 {
+        scale.x = -scale.x;
+    }
+    let rotate = Vec3::new(f(0.0, 360.0), f(0.0, 360.0), f(0.0, 360.0));
+    let translate = Vec3::new(f(-3.0, 3.0), f(-3.0, 3.0), f(-3.0, 3.0));
+    Transform::from_srt(scale, rotate, translate)
 }

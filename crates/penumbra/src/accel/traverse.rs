@@ -200,6 +200,35 @@ pub(super) fn occluded_kept(
     t_max: f32,
     keep: impl Fn(u32, f32, f32) -> bool,
 ) -> bool {
+    walk_kept(bvh, ray, (t_min, t_max), keep, |_| true)
+}
+
+/// Calls `f` with every hit with `t` in `(t_min, t_max)` that `keep(prim_id, b1, b2)` keeps,
+/// in the walk's order.
+pub(super) fn each_kept(
+    bvh: &Bvh,
+    ray: &Ray,
+    range: (f32, f32),
+    keep: impl Fn(u32, f32, f32) -> bool,
+    f: &mut impl FnMut(Hit),
+) {
+    walk_kept(bvh, ray, range, keep, |hit| {
+        f(hit);
+        false
+    });
+}
+
+/// The any-hit walk over the tree's triangles: `found(hit)` for each hit with `t` in `(t_min,
+/// t_max)` that `keep(prim_id, b1, b2)` keeps, in the walk's order, until it returns true;
+/// true when it did.
+#[inline(always)]
+fn walk_kept(
+    bvh: &Bvh,
+    ray: &Ray,
+    (t_min, t_max): (f32, f32),
+    keep: impl Fn(u32, f32, f32) -> bool,
+    mut found: impl FnMut(Hit) -> bool,
+) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
@@ -212,50 +241,19 @@ pub(super) fn occluded_kept(
         |slots| {
             let (tris, ids) = (&bvh.tris[slots.clone()], &bvh.prim_ids[slots]);
             tris.iter().zip(ids).any(|(tri, &id)| {
-                tri.hit(ray, t_min, t_max)
-                    .is_some_and(|h| keep(id, h.b1, h.b2))
-            })
-        },
-    )
-}
-
-/// Calls `f` with every hit with `t` in `(t_min, t_max)` that `keep(prim_id, b1, b2)` keeps,
-/// in the walk's order: the any-hit walk that never stops.
-pub(super) fn each_kept(
-    bvh: &Bvh,
-    ray: &Ray,
-    (t_min, t_max): (f32, f32),
-    keep: impl Fn(u32, f32, f32) -> bool,
-    f: &mut impl FnMut(Hit),
-) {
-    if bvh.nodes.is_empty() {
-        return;
-    }
-    let (origin, inv_dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction).recip());
-    walk_any(
-        &bvh.nodes,
-        (origin, inv_dir),
-        (t_min, t_max),
-        1.0,
-        |slots| {
-            for i in slots {
-                let id = bvh.prim_ids[i];
-                if let Some(h) = bvh.tris[i]
-                    .hit(ray, t_min, t_max)
-                    .filter(|h| keep(id, h.b1, h.b2))
-                {
-                    f(Hit {
+                let hit = tri.hit(ray, t_min, t_max).filter(|h| keep(id, h.b1, h.b2));
+                hit.is_some_and(|h| {
+                    found(Hit {
                         t: h.t,
                         b1: h.b1,
                         b2: h.b2,
                         triangle: id,
                         instance: None,
-                    });
-                }
-            }
-            false
+                    })
+                })
+            })
         },
-    );
+    )
 }
 
 /// The closest hit of every ray of `rays`, written to `hits`; see [`Bvh::intersect_batch`].

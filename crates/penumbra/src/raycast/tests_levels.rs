@@ -6,7 +6,7 @@
 use glam::{Mat4, Vec3};
 
 use super::*;
-use crate::accel::test_meshes::{icosphere, subdivided_cube, MeshData};
+use crate::accel::test_meshes::{icosphere, random_transform, subdivided_cube, MeshData};
 use crate::accel::wide::kernels::{closest_hits, counts, occlusions, Nearests};
 use crate::accel::wide::nearest::closest_f64;
 use crate::accel::wide::packets::ClosestHit;
@@ -14,19 +14,6 @@ use crate::math::Transform;
 use crate::pool::test_pool;
 use crate::sampling::Rng;
 use crate::simd::{dispatch, supported_paths};
-
-/// A random placement: scales of 0.3 to 2 (each mirrored half the time), any rotation, within
-/// ±3 of the origin.
-fn random_transform(rng: &mut Rng) -> Transform {
-    let mut f = |lo: f32, hi: f32| lo + (hi - lo) * rng.uniform();
-    let mut scale = Vec3::new(f(0.3, 2.0), f(0.3, 2.0), f(0.3, 2.0));
-    if f(0.0, 1.0) < 0.5 {
-        scale.x = -scale.x;
-    }
-    let rotate = Vec3::new(f(0.0, 360.0), f(0.0, 360.0), f(0.0, 360.0));
-    let translate = Vec3::new(f(-3.0, 3.0), f(-3.0, 3.0), f(-3.0, 3.0));
-    Transform::from_srt(scale, rotate, translate)
-}
 
 /// `t`'s matrix by rows.
 fn rows(t: &Transform) -> [[f32; 4]; 4] {
