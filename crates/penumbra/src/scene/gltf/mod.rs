@@ -51,6 +51,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::files::Files;
 use crate::geometry::Mesh;
+use crate::names::escape_controls;
 use crate::texture::{Filter, Wrap};
 
 /// Largest `.gltf`, `.glb` or `.bin` file read: as for OBJ files.
@@ -67,10 +68,12 @@ pub struct GltfError {
 }
 
 impl GltfError {
+    /// The error at `at`; control characters in either (from the file's own names and URIs)
+    /// are written as escapes, so that the message stays one line.
     fn new(at: impl Into<String>, message: impl Into<String>) -> GltfError {
         GltfError {
-            at: at.into(),
-            message: message.into(),
+            at: escape_controls(&at.into()),
+            message: escape_controls(&message.into()),
         }
     }
 }

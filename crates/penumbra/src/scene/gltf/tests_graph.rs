@@ -66,3 +66,13 @@ fn json_that_does_not_deserialize_names_its_json_path() {
     let e = read(&v).unwrap_err();
     assert_eq!(e.at, "meshes[0].primitives[0].mode", "{e}");
 }
+
+#[test]
+fn a_uri_with_control_characters_is_named_on_one_line() {
+    let mut v = triangle();
+    v["buffers"][0]["uri"] = json!("no\tsuch\nfile\u{1b}[31m.bin");
+    let e = read(&v).unwrap_err();
+    let text = e.to_string();
+    assert!(!text.chars().any(char::is_control), "{text:?}");
+    assert!(text.contains(r"no\tsuch\nfile\u{1b}[31m.bin"), "{text}");
+}
