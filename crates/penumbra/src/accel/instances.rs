@@ -245,12 +245,6 @@ pub(super) fn build_meshes(meshes: &[Mesh], pool: Option<&rayon::ThreadPool>) ->
     Arc::new(trees)
 }
 
-/// True when `a` is closer than `b`: a smaller `t`, or the same `t` and a smaller key (the
-/// world's own triangles first, then by instance, then by triangle: [`Tree::tie_key`]).
-pub(super) fn closer(a: &Hit, b: &Hit) -> bool {
-    (a.t, Bvh::tie_key(a)) < (b.t, Bvh::tie_key(b))
-}
-
 /// The world-space box of `mesh` placed by `transform`: its root box placed, grown by a
 /// relative 2⁻¹⁶ of its size and position for the rounding of the map, so that it holds every
 /// point a ray can hit on the placed mesh.

@@ -1,6 +1,7 @@
 //! The second level, written once over any [`Tree`]: meshes built once (in object space) and
 //! placed any number of times, under a top-level binary tree over the placements' world
-//! boxes. A ray walks the top tree nearest first; at a placement it enters the mesh's tree
+//! boxes. A closest- or every-hit query walks the top tree nearest first, an any-hit query as
+//! [`Tree::ANY_NEAREST_FIRST`] says; at a placement the ray enters the mesh's tree
 //! through the placement's world-to-object map. The direction is mapped but not renormalized,
 //! so `t` means the same in both spaces and a hit needs no conversion.
 //!
@@ -19,6 +20,13 @@ use super::tree::{Filter, Rule, Tree};
 use super::BvhNode;
 use crate::accel::prim::boundary::Boundary;
 use crate::simd::Isa;
+
+/// True when `a` is closer than `b` under the tree's rule: a smaller `t`, or the same `t` and
+/// a smaller [`Tree::tie_key`].
+#[inline(always)]
+pub(crate) fn closer<T: Tree>(a: &T::Hit, b: &T::Hit) -> bool {
+    (T::t(a), T::tie_key(a)) < (T::t(b), T::tie_key(b))
+}
 
 /// What a placement gives a ray that enters it.
 pub(crate) struct Entry<'a, T> {
@@ -78,14 +86,7 @@ pub(crate) fn closest<P: Placements, I: Isa>(
                 return;
             };
             let hit = P::Tree::placed(hit, entry.id, index);
-            let closer = best.as_ref().is_none_or(|b| {
-                let (a, b) = (
-                    (P::Tree::t(&hit), P::Tree::tie_key(&hit)),
-                    (P::Tree::t(b), P::Tree::tie_key(b)),
-                );
-                a < b
-            });
-            if closer {
+            if best.as_ref().is_none_or(|b| closer::<P::Tree>(&hit, b)) {
                 *t = P::Tree::t(&hit);
                 best = Some(hit);
             }

@@ -28,7 +28,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::instances::{build_meshes, closer, Instances};
+use super::instances::{build_meshes, Instances};
+use super::placed::closer;
 use super::{build, Bvh, Tree};
 use crate::geometry::{Geometry, Hit, Mesh};
 use crate::material::Material;
@@ -162,7 +163,7 @@ impl Cutouts {
     }
 
     /// The closest of `best` and the kept hits of cut-out triangles with `t` in `(t_min,
-    /// t_max)`, by the rule of `instances::closer` (ties go to the smaller key).
+    /// t_max)`, by the rule of `placed::closer` (ties go to the smaller key).
     pub(crate) fn intersect(
         &self,
         ray: &Ray,
@@ -180,7 +181,7 @@ impl Cutouts {
             ..h
         });
         let best = match (best, own) {
-            (Some(b), Some(h)) if !closer(&h, &b) => Some(b),
+            (Some(b), Some(h)) if !closer::<Bvh>(&h, &b) => Some(b),
             (b, h) => h.or(b),
         };
         self.instances.intersect(ray, t_min, t_max, best)
