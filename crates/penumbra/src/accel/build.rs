@@ -7,7 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::split::{bounds_of, split, Bins};
-use super::{accel, Bvh, BvhNode, PARALLEL_MIN};
+use super::{accel, Bvh, BvhNode, MAX_DEPTH, PARALLEL_MIN};
 use crate::math::Aabb;
 
 /// Nodes with at least this many primitives bin them in parallel (when building on a pool).
@@ -216,4 +216,51 @@ fn build_into(
         s.right,
         bins,
     );
+}
+
+/// One tree over the triangles of `a`, then those of `b` (each keeping its prim ids): a root
+/// over the two roots, nothing built. `None` when the result would be deeper than a build
+/// makes a tree (`MAX_DEPTH`), which the walks' fixed stacks are sized for.
+pub(super) fn join(a: Bvh, mut b: Bvh) -> Option<Bvh> {
+    if a.nodes.is_empty() || b.nodes.is_empty() {
+        return Some(if a.nodes.is_empty() { b } else { a });
+    }
+    if depth(&a.nodes).max(depth(&b.nodes)) + 1 > MAX_DEPTH {
+        return None;
+    }
+    let shift = a.tris.len() as u32;
+    for n in b.nodes.iter_mut().filter(|n| n.is_leaf()) {
+        n.first += shift;
+    }
+    let (ra, rb) = (a.nodes[0].bounds(), b.nodes[0].bounds());
+    let root = BvhNode {
+        min: ra.min.min(rb.min).into(),
+        first: 1,
+        max: ra.max.max(rb.max).into(),
+        count: 0,
+    };
+    let nodes = join_subtrees(root, a.nodes, b.nodes);
+    let (mut tris, mut prim_ids) = (a.tris, a.prim_ids);
+    tris.extend(b.tris);
+    prim_ids.extend(b.prim_ids);
+    Some(Bvh {
+        nodes,
+        tris,
+        prim_ids,
+    })
+}
+
+/// The depth of the deepest leaf of `nodes` (the root's is 0).
+fn depth(nodes: &[BvhNode]) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0u32, 0usize)];
+    while let Some((index, d)) = stack.pop() {
+        let n = &nodes[index as usize];
+        if n.is_leaf() {
+            deepest = deepest.max(d);
+        } else {
+            stack.extend([(n.first, d + 1), (n.first + 1, d + 1)]);
+        }
+    }
+    deepest
 }

@@ -11,12 +11,14 @@
 //! A world with cut-out materials has cut-out levels too (see `cutouts`): every query asks
 //! them last, and a batched query asks them for each of its rays still open, one at a time.
 
+use std::borrow::Cow;
+
 use glam::Vec3;
 
 use super::cutouts::{self, Cutouts, Parts};
 use super::instance_batches;
 use super::instances::Instances;
-use super::{Bvh, Pairs, Segments};
+use super::{build, Bvh, Pairs, Segments};
 use crate::geometry::{Geometry, Hit};
 use crate::math::Ray;
 use crate::simd::SimdPath;
@@ -50,6 +52,18 @@ impl Levels {
     /// The tree over the world's own triangles (their opaque ones, with cut-outs).
     pub fn flat(&self) -> &Bvh {
         &self.flat
+    }
+
+    /// The tree over all of the world's own triangles (`geometry`), naming each by its index
+    /// there: [`Levels::flat`], or with cut-outs the opaque and the cut-out trees under one
+    /// new root, nothing built (unless that root would make the tree deeper than a build
+    /// makes one: then it is built).
+    pub(crate) fn own_tree(&self, geometry: &Geometry) -> Cow<'_, Bvh> {
+        let Some(cut) = &self.cutouts else {
+            return Cow::Borrowed(&self.flat);
+        };
+        let joined = build::join(self.flat.clone(), cut.flat_in_world());
+        Cow::Owned(joined.unwrap_or_else(|| Bvh::build(geometry)))
     }
 
     /// The meshes placed by instances.

@@ -389,6 +389,8 @@ fn depth_stays_within_the_traversal_stack() {
     let ray = Ray::new(Vec3::new(-1.0, 1e-30, 0.0), Vec3::X);
     let _ = bvh.intersect(&ray, 0.0, f32::INFINITY);
     let _ = bvh.occluded(&ray, 0.0, f32::INFINITY);
+    // At the cap, a root above it (`build::join`) would be too deep: it is refused.
+    assert!(build::join(bvh.clone(), build_checked(&soup(&tris[..2]))).is_none());
 }
 
 /// Triangles under `node`, counted over its leaves.

@@ -35,8 +35,7 @@ impl RaycastingScene {
     /// (geometry id = object id; primitive ids count the object's triangles in the order it
     /// added them, or an instance's mesh's). An instance places its mesh's tree, as in the
     /// renderer; the world's trees are used as they are, not built again (with cut-out
-    /// materials, the world's own tree holds its opaque triangles only, and ray casting builds
-    /// one over all of them on the first query). Cut-out materials come along: a ray passes
+    /// materials, its opaque and cut-out trees are joined under one new root). Cut-out materials come along: a ray passes
     /// through a triangle where its material's alpha test cuts it away, in every ray query
     /// (the closest-point queries ignore alpha; see the module doc).
     pub fn from_world(world: &World) -> Result<RaycastingScene, RaycastError> {
@@ -74,15 +73,15 @@ impl RaycastingScene {
                 alpha,
             });
         }
+        // The world's trees, viewed eight children at a time: nothing is built.
+        let t = &all;
+        let ids = |i: usize| [t.geometry.triangles[i].object, t.local_ids[i]];
+        let flat = world.accel().own_tree(own).into_owned();
+        let tree = WideBvh::from_bvh(flat, |i| own.corners(i), ids);
+        let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
+        let levels = WideLevels::new(tree, t.alpha.clone(), meshes, t.placements.clone(), None);
         let accel = LazyAccel::default();
-        if !world.accel().has_cutouts() {
-            let t = &all;
-            let ids = |i: usize| [t.geometry.triangles[i].object, t.local_ids[i]];
-            let tree = WideBvh::from_bvh(world.accel().flat().clone(), |i| own.corners(i), ids);
-            let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
-            let levels = WideLevels::new(tree, t.alpha.clone(), meshes, t.placements.clone(), None);
-            accel.set(Arc::new(levels));
-        }
+        accel.set(Arc::new(levels));
         Ok(RaycastingScene {
             triangles: Arc::new(all),
             geometries: objects,

@@ -162,6 +162,15 @@ impl Cutouts {
         &self.flat
     }
 
+    /// [`Cutouts::flat`], naming its triangles by their index in the world's geometry.
+    pub(crate) fn flat_in_world(&self) -> Bvh {
+        let mut bvh = self.flat.clone();
+        for id in &mut bvh.prim_ids {
+            *id = self.flat_ids[*id as usize];
+        }
+        bvh
+    }
+
     /// The closest of `best` and the kept hits of cut-out triangles with `t` in `(t_min,
     /// t_max)`, by the rule of `placed::closer` (ties go to the smaller key).
     pub(crate) fn intersect(

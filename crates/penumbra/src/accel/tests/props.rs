@@ -79,6 +79,29 @@ proptest! {
         }
     }
 
+    /// Two trees over the two parts of a soup, joined under one root (as a world's opaque and
+    /// cut-out trees are for ray casting), are a valid tree over all of it that answers as
+    /// brute force does.
+    #[test]
+    fn two_trees_joined_answer_as_one(
+        tris in arb_soup(),
+        parts in prop::collection::vec(any::<bool>(), 300),
+        rays in arb_rays(1..40),
+    ) {
+        let g = soup(&tris);
+        let (a, b): (Vec<u32>, Vec<u32>) = (0..g.len() as u32).partition(|&i| parts[i as usize]);
+        let part = |ids: &[u32]| {
+            let mut bvh = build::build(ids.len(), |j| g.corners(ids[j] as usize), None);
+            bvh.prim_ids.iter_mut().for_each(|id| *id = ids[*id as usize]);
+            bvh
+        };
+        let joined = build::join(part(&a), part(&b)).expect("shallow trees join");
+        prop_assert!(joined.validate(&g).is_ok(), "{:?}", joined.validate(&g));
+        for ray in &rays {
+            assert_agree(&g, &joined, ray);
+        }
+    }
+
     /// Closest hit and occlusion over any interval, empty ones (`t_max ≤ t_min`) included.
     #[test]
     fn queries_agree_with_brute_force_in_any_interval(
