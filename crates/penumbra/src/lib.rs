@@ -89,9 +89,7 @@ pub mod shapes {
 /// methods), and the brute-force references. Not a stable API: it follows the engine's shape.
 #[doc(hidden)]
 pub mod bench {
-    pub use crate::accel::{
-        intersect_brute_force, occluded_brute_force, Instances, Levels, Pairs, Segments,
-    };
+    pub use crate::accel::{intersect_brute_force, occluded_brute_force, Levels, Pairs, Segments};
 }
 
 pub use accel::prim::moller_trumbore::intersect_triangle;

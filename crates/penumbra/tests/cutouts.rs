@@ -280,6 +280,36 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+
+    /// Instances moved after the build (cut-out ones among them) answer as instances built
+    /// where they were moved to, bit for bit.
+    #[test]
+    fn moved_instances_answer_as_instances_built_there(
+        quads in prop::collection::vec(arb_quad(), 1..12),
+        to in prop::collection::vec(arb_quad(), 12),
+        rays in arb_rays(),
+    ) {
+        let mut moved = world(&quads, true);
+        let moves: Vec<_> = (0..quads.len()).step_by(2).map(|i| (i, to[i].3)).collect();
+        moved.set_transforms(&moves).unwrap();
+        let mut there = quads.clone();
+        for &(i, t) in &moves {
+            there[i].3 = t;
+        }
+        let fresh = world(&there, true);
+        for ray in &rays {
+            let a = moved.intersect(ray, 0.0, f32::INFINITY);
+            prop_assert_eq!(a, fresh.intersect(ray, 0.0, f32::INFINITY));
+            for t_max in [0.3f32, 1.0] {
+                prop_assert_eq!(moved.accel().occluded(ray, 0.0, t_max), fresh.accel().occluded(ray, 0.0, t_max));
+            }
+        }
+        batches_agree(&moved, &fresh, &rays)?;
+    }
+}
+
 #[test]
 fn a_world_without_cut_out_materials_has_no_cut_out_levels() {
     let quads = [(Vec3::ZERO, Vec3::X, Vec3::Y, Transform::IDENTITY, [0, 0])];

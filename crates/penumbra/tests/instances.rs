@@ -253,9 +253,25 @@ fn a_mirrored_instance_keeps_its_normals_facing_out() {
     }
 }
 
+/// Where [`room`] puts copy `k`, turned by `turn` degrees and raised by `turn / 100`.
+fn placement(k: usize, turn: f32) -> Transform {
+    let (x, z) = ((k % 5) as f32 * 1.8 - 3.6, (k / 5) as f32 * 1.8 - 3.0);
+    let mirror = if k.is_multiple_of(3) { -1.0 } else { 1.0 };
+    Transform::from_srt(
+        Vec3::new(mirror, 1.0 + 0.2 * (k % 2) as f32, 1.0),
+        Vec3::new(0.0, 17.0 * k as f32 + turn, 0.0),
+        Vec3::new(x, 0.6 + turn / 100.0, z),
+    )
+}
+
 /// A lit room holding `copies` spheres (with vertex normals) and cubes, mirrored ones among
 /// them: placed as instances or copied.
 fn room(copies: usize, instanced: bool) -> World {
+    room_turned(copies, instanced, 0.0)
+}
+
+/// [`room`] with its copies placed by [`placement`]`(k, turn)`.
+fn room_turned(copies: usize, instanced: bool, turn: f32) -> World {
     use penumbra::shapes::{cube, quad, sphere};
     use penumbra::{AreaLight, Camera, Light};
     let mut b = WorldBuilder::new();
@@ -293,13 +309,7 @@ fn room(copies: usize, instanced: bool) -> World {
     let meshes = [sphere(0.6), cube(Vec3::ONE)];
     let ids = meshes.clone().map(|m| b.add_shared_mesh(m).unwrap());
     for k in 0..copies {
-        let (x, z) = ((k % 5) as f32 * 1.8 - 3.6, (k / 5) as f32 * 1.8 - 3.0);
-        let mirror = if k % 3 == 0 { -1.0 } else { 1.0 };
-        let t = Transform::from_srt(
-            Vec3::new(mirror, 1.0 + 0.2 * (k % 2) as f32, 1.0),
-            Vec3::new(0.0, 17.0 * k as f32, 0.0),
-            Vec3::new(x, 0.6, z),
-        );
+        let t = placement(k, turn);
         let (mesh, material) = (k % 2, if k % 2 == 0 { shiny } else { white });
         if instanced {
             b.add_instance(ids[mesh], &t, &[material]).unwrap();
@@ -377,6 +387,48 @@ fn an_instanced_room_has_the_same_bits_for_any_thread_count_and_region() {
             assert_eq!(bits(a), bits(b), "region pixel ({x}, {y})");
         }
     }
+}
+
+#[test]
+fn a_moved_room_renders_the_bytes_of_a_room_built_so() {
+    use penumbra::{render, RenderOptions, RenderSettings, WorldError};
+    let settings = RenderSettings {
+        width: 64,
+        height: 48,
+        ..RenderSettings::default()
+    };
+    let image = |world: &World| {
+        let film = render(world, &settings, &RenderOptions::default())
+            .unwrap()
+            .0;
+        film.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    let mut world = room(12, true);
+    let still = image(&world);
+    // One instance, then all of them (copy 4 twice: the later move wins).
+    world.set_transform(4, &placement(4, 200.0)).unwrap();
+    let mut moves: Vec<_> = (0..12).map(|k| (k, placement(k, 30.0))).collect();
+    moves.push((4, placement(4, 30.0)));
+    world.set_transforms(&moves).unwrap();
+    let moved = image(&world);
+    assert_ne!(moved, still, "the move shows");
+    assert_eq!(moved, image(&room_turned(12, true, 30.0)));
+    // A refused move changes nothing.
+    let singular = Transform::from_srt(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+    let refused = world.set_transforms(&[(0, placement(0, 90.0)), (1, singular)]);
+    assert_eq!(refused, Err(WorldError::SingularTransform));
+    let unknown = world.set_transform(12, &placement(0, 0.0));
+    assert!(matches!(
+        unknown,
+        Err(WorldError::UnknownInstance {
+            index: 12,
+            instances: 12
+        })
+    ));
+    assert_eq!(image(&world), moved);
 }
 
 #[test]

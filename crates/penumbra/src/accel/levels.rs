@@ -20,7 +20,7 @@ use super::instance_batches;
 use super::instances::Instances;
 use super::{build, Bvh, Pairs, Segments};
 use crate::geometry::{Geometry, Hit};
-use crate::math::Ray;
+use crate::math::{Ray, Transform};
 use crate::simd::SimdPath;
 
 /// The two levels of a world's acceleration structure.
@@ -67,8 +67,26 @@ impl Levels {
     }
 
     /// The meshes placed by instances.
-    pub fn instances(&self) -> &Instances {
+    pub(crate) fn instances(&self) -> &Instances {
         &self.instances
+    }
+
+    /// Moves instances: the transform of each instance (by its world index) of `moves` is
+    /// replaced by its new one (invertible), and the top level of each set of instances that
+    /// holds one is built again; the mesh trees are untouched.
+    pub(crate) fn set_transforms(&mut self, moves: &[(usize, Transform)]) {
+        let sets = [
+            Some(&mut self.instances),
+            self.cutouts.as_mut().map(|c| c.instances_mut()),
+        ];
+        for set in sets.into_iter().flatten() {
+            let mine: Vec<(usize, Transform)> = (moves.iter())
+                .filter_map(|&(id, t)| Some((set.position(id as u32)?, t)))
+                .collect();
+            if !mine.is_empty() {
+                set.set_transforms(&mine, None);
+            }
+        }
     }
 
     /// Nodes of every tree.

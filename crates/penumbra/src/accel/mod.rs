@@ -116,7 +116,6 @@ pub(crate) mod test_meshes;
 mod tests;
 
 pub(crate) use cutouts::{AlphaTests, Parts};
-pub use instances::Instances;
 pub use levels::Levels;
 pub use segments::{Pairs, Segments};
 pub use shaft::MIN_ENDS as SHAFT_MIN_ENDS;

@@ -4,69 +4,51 @@
 //! keeping the closest by the tree's rule. The two must agree bit for bit: the top walk may
 //! skip a placement only when it cannot hold the answer.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
-use super::instances::{inverse, world_box};
-use super::placed::{self, Entry, Placements};
+use super::placed::{self, Placed, Placement};
 use super::test_meshes::{icosphere, random_transform, subdivided_cube, MeshData};
 use super::tree::{Rule, Tree};
 use super::wide::WideBvh;
-use super::{build, Bvh, BvhNode};
-use crate::math::Transform;
+use super::{build, Bvh};
 use crate::sampling::Rng;
 use crate::simd::Baseline;
 
-/// Meshes of tree type `T` placed by `placements` (mesh, object-to-world map) under a top tree.
-struct Scene<T> {
-    meshes: Vec<T>,
-    placements: Vec<(usize, glam::Affine3A)>,
-    top: (Vec<BvhNode>, Vec<u32>),
-}
-
-impl<T: Tree> Placements for Scene<T> {
-    type Tree = T;
-
-    fn top(&self) -> (&[BvhNode], &[u32]) {
-        (&self.top.0, &self.top.1)
-    }
-
-    fn entry(&self, index: u32) -> Entry<'_, T> {
-        let (mesh, map) = &self.placements[index as usize];
-        Entry {
-            object_from_world: map,
-            mesh: &self.meshes[*mesh],
-            id: 100 + index,
-            filter: None,
-            border: None,
-        }
-    }
-}
-
-/// The scene of `seed` with each mesh's tree made by `tree`.
-fn scene<T>(seed: u64, tree: impl Fn(&MeshData, Bvh) -> T, bvh: impl Fn(&T) -> &Bvh) -> Scene<T> {
+/// Two meshes of tree type `T` (each made by `tree` from its binary tree) placed eleven times
+/// by `seed`'s random transforms, placement `i` reporting id `100 + i`; placement 10 is
+/// placement 3 again.
+fn scene<T: Tree>(seed: u64, tree: impl Fn(&MeshData, Bvh) -> T) -> Placed<T> {
     let data = [icosphere(1), subdivided_cube(2, glam::Mat3::IDENTITY)];
-    let meshes: Vec<T> = data
+    let meshes: Vec<Arc<T>> = data
         .iter()
         .map(|m| {
             let corners = |i: usize| m.1[i].map(|v| Vec3::from(m.0[v as usize]));
-            tree(m, build::build(m.1.len(), corners, None))
+            Arc::new(tree(m, build::build(m.1.len(), corners, None)))
         })
         .collect();
     let mut rng = Rng::new(seed, &[]);
-    let mut transforms: Vec<(usize, Transform)> = (0..10)
-        .map(|i| (i % 2, random_transform(&mut rng)))
+    let mut placements: Vec<Placement> = (0..10)
+        .map(|i| Placement {
+            mesh: i % 2,
+            id: 100 + i,
+            transform: random_transform(&mut rng),
+            alpha: None,
+        })
         .collect();
     // The same mesh at the same place twice: every hit of one is a tie with the other's.
-    transforms.push(transforms[3]);
-    let boxes: Vec<_> = transforms
-        .iter()
-        .map(|(m, t)| world_box(bvh(&meshes[*m]), t))
-        .collect();
-    Scene {
-        top: build::build_tree(boxes.len(), |i| boxes[i], None),
-        placements: transforms.iter().map(|(m, t)| (*m, inverse(t))).collect(),
-        meshes,
-    }
+    placements.push(Placement {
+        id: 110,
+        ..placements[3].clone()
+    });
+    Placed::new(meshes, placements, None)
+}
+
+/// `bvh` as the wide tree of mesh `m`.
+fn wide(m: &MeshData, bvh: Bvh) -> WideBvh {
+    let corners = |i: usize| m.1[i].map(|v| Vec3::from(m.0[v as usize]));
+    WideBvh::from_bvh(bvh, corners, |i| [0, i as u32])
 }
 
 /// Random rays from within ±5 in random directions.
@@ -83,10 +65,10 @@ fn rays(seed: u64, n: usize) -> Vec<(Vec3, Vec3)> {
 }
 
 /// Every placement asked on its own, the closest kept by the rule.
-fn one_by_one<T: Tree>(s: &Scene<T>, (o, d): (Vec3, Vec3), range: (f32, f32)) -> Option<T::Hit> {
+fn one_by_one<T: Tree>(s: &Placed<T>, (o, d): (Vec3, Vec3), range: (f32, f32)) -> Option<T::Hit> {
     let mut stack = T::Stack::default();
     let mut best: Option<T::Hit> = None;
-    for index in 0..s.placements.len() as u32 {
+    for index in 0..s.placements().len() as u32 {
         let e = s.entry(index);
         let map = e.object_from_world;
         let Some(ray) = T::prepare(map.transform_point3(o), map.transform_vector3(d)) else {
@@ -107,7 +89,7 @@ fn one_by_one<T: Tree>(s: &Scene<T>, (o, d): (Vec3, Vec3), range: (f32, f32)) ->
 }
 
 /// Checks the walk's closest, any and every hit against [`one_by_one`] on `seed`'s scene.
-fn check<T: Tree>(s: &Scene<T>, seed: u64) -> usize
+fn check<T: Tree>(s: &Placed<T>, seed: u64) -> usize
 where
     T::Hit: std::fmt::Debug,
 {
@@ -147,15 +129,8 @@ where
 #[test]
 fn both_trees_find_what_each_placement_finds_alone() {
     for seed in 0..4 {
-        let binary = scene(seed, |_, bvh| bvh, |b| b);
-        let wide = scene(
-            seed,
-            |m, bvh| {
-                let corners = |i: usize| m.1[i].map(|v| Vec3::from(m.0[v as usize]));
-                WideBvh::from_bvh(bvh, corners, |i| [0, i as u32])
-            },
-            WideBvh::bvh,
-        );
+        let binary = scene(seed, |_, bvh| bvh);
+        let wide = scene(seed, wide);
         assert_eq!(Bvh::RULE, Rule::Open);
         assert_eq!(WideBvh::RULE, Rule::Closed);
         let (a, b) = (check(&binary, seed), check(&wide, seed));
@@ -172,7 +147,7 @@ fn both_trees_find_what_each_placement_finds_alone() {
 fn a_tie_between_placements_goes_to_the_smaller_key() {
     // Placements 3 and 10 are the same mesh at the same place: a ray that hits one hits the
     // other at the same `t`, and the answer is placement 3's.
-    let s = scene(7, |_, bvh| bvh, |b| b);
+    let s = scene(7, |_, bvh| bvh);
     let mut stack = ();
     let mut ties = 0;
     for ray in rays(11, 2000) {
@@ -193,4 +168,43 @@ fn a_tie_between_placements_goes_to_the_smaller_key() {
         }
     }
     assert!(ties > 0, "no ray met the doubled placement first");
+}
+
+/// The answers of `s` to `seed`'s rays: each closest hit's `t` and key, and whether any.
+fn answers<T: Tree>(s: &Placed<T>, seed: u64) -> Vec<(Option<(u32, u64)>, bool)> {
+    let mut stack = T::Stack::default();
+    let range = (0.0, f32::INFINITY);
+    (rays(seed, 300).into_iter())
+        .map(|ray| {
+            let hit = placed::closest::<_, Baseline>(s, ray, range, None, &mut stack);
+            let any = placed::any::<_, Baseline>(s, ray, range, &mut stack);
+            (hit.map(|h| (T::t(&h).to_bits(), T::tie_key(&h))), any)
+        })
+        .collect()
+}
+
+/// Moves random placements of `s` to random transforms, one after another, checking after
+/// each move that the walk still finds what each placement finds alone, and at the end that
+/// it answers as the same placements placed afresh.
+fn moved_as_fresh<T: Tree>(mut s: Placed<T>, seed: u64)
+where
+    T::Hit: std::fmt::Debug,
+{
+    let mut rng = Rng::new(seed, &[2]);
+    for step in 0..6 {
+        let index = (rng.uniform() * s.placements().len() as f32) as usize;
+        s.set_transforms(&[(index, random_transform(&mut rng))], None);
+        check(&s, seed + step);
+    }
+    let meshes = s.meshes().to_vec();
+    let fresh = Placed::new(meshes, s.placements().to_vec(), None);
+    assert_eq!(answers(&s, seed), answers(&fresh, seed));
+}
+
+#[test]
+fn moved_placements_answer_as_placed_afresh() {
+    for seed in 0..3 {
+        moved_as_fresh(scene(seed, |_, bvh| bvh), seed);
+        moved_as_fresh(scene(seed, wide), seed);
+    }
 }

@@ -60,6 +60,14 @@ pub(crate) trait Tree {
     /// keeps its walk; the other order has not been measured on it.
     const ANY_NEAREST_FIRST: bool;
 
+    /// The binary tree it is made of (itself, or the wide tree's source), whose root box
+    /// bounds the mesh.
+    fn bvh(&self) -> &Bvh;
+
+    /// Its part of the surface's border for [`Tree::each`], when made ([`WideBvh::border`]);
+    /// the binary tree has none.
+    fn border(&self) -> Option<&[Boundary]>;
+
     /// `origin + t·direction` prepared for [`Tree::closest`] and the others; `None` for a ray
     /// that can hit nothing (a component not finite, a zero direction).
     fn prepare(origin: Vec3, direction: Vec3) -> Option<Self::Ray>;
@@ -112,6 +120,14 @@ impl Tree for Bvh {
     const RULE: Rule = Rule::Open;
     const EXIT_SCALE: f32 = 1.0;
     const ANY_NEAREST_FIRST: bool = false;
+
+    fn bvh(&self) -> &Bvh {
+        self
+    }
+
+    fn border(&self) -> Option<&[Boundary]> {
+        None
+    }
 
     fn prepare(origin: Vec3, direction: Vec3) -> Option<Ray> {
         Some(Ray::new(origin, direction))
@@ -182,6 +198,15 @@ impl Tree for WideBvh {
     const RULE: Rule = Rule::Closed;
     const EXIT_SCALE: f32 = EXIT_SCALE;
     const ANY_NEAREST_FIRST: bool = true;
+
+    fn bvh(&self) -> &Bvh {
+        WideBvh::bvh(self)
+    }
+
+    /// Made by `WideLevels::borders` before any query that counts.
+    fn border(&self) -> Option<&[Boundary]> {
+        self.made_border()
+    }
 
     fn prepare(origin: Vec3, direction: Vec3) -> Option<PreparedRay> {
         PreparedRay::new(origin, direction)

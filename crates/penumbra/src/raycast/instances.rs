@@ -22,9 +22,10 @@ use glam::{Mat4, Vec3};
 
 use super::lazy::{LazyAccel, Span, Triangles};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
-use crate::accel::wide::levels::{Placement, WideLevels};
+use crate::accel::placed::Placement;
+use crate::accel::wide::levels::WideLevels;
 use crate::accel::wide::WideBvh;
-use crate::accel::AlphaTests;
+use crate::accel::{AlphaTests, Bvh};
 use crate::geometry::{Geometry, Mesh, Triangle};
 use crate::math::Transform;
 use crate::scale::MAX_COORDINATE;
@@ -68,7 +69,7 @@ impl RaycastingScene {
             all.placed.insert(p.object, all.placements.len() as u32);
             all.placements.push(Placement {
                 mesh: p.mesh,
-                geometry: p.object,
+                id: p.object,
                 transform: p.transform,
                 alpha,
             });
@@ -159,7 +160,7 @@ impl RaycastingScene {
         scene.placed.insert(id, scene.placements.len() as u32);
         scene.placements.push(Placement {
             mesh,
-            geometry: id,
+            id,
             transform,
             alpha,
         });
@@ -289,7 +290,7 @@ fn placed_alpha(world: &World, mesh: u32, materials: &[u32]) -> Option<AlphaTest
 
 /// The trees of `world`'s meshes: the world's own, viewed eight children at a time.
 fn mesh_trees(world: &World) -> Vec<MeshTree> {
-    let trees = world.accel().instances().mesh_trees();
+    let trees = world.accel().instances().meshes();
     world
         .meshes()
         .iter()
@@ -297,7 +298,7 @@ fn mesh_trees(world: &World) -> Vec<MeshTree> {
         .map(|(m, mesh)| {
             let corners = |i: usize| mesh.indices[i].map(|v| mesh.positions[v as usize]);
             let tree = match trees.get(m) {
-                Some(bvh) => WideBvh::from_bvh(bvh.clone(), corners, |i| [0, i as u32]),
+                Some(bvh) => WideBvh::from_bvh(Bvh::clone(bvh), corners, |i| [0, i as u32]),
                 None => {
                     let mut geometry = Geometry::default();
                     geometry.append(mesh, &Transform::IDENTITY, &[], 0);

@@ -175,21 +175,9 @@ impl WorldBuilder {
             });
         };
         self.check_materials(materials)?;
-        if transform.is_singular() || !transform.world_from_object.is_finite() {
-            return Err(WorldError::SingularTransform);
-        }
+        check_placement(bounds, transform)?;
         if self.placed.len() >= MAX_INSTANCES {
             return Err(WorldError::TooManyInstances);
-        }
-        let placed = bounds.transformed(transform);
-        if !placed.is_empty() {
-            if !(placed.min.is_finite() && placed.max.is_finite()) {
-                return Err(WorldError::NotFinite);
-            }
-            let largest = scale::largest_coordinate(&[placed.min, placed.max]);
-            if largest > scale::MAX_COORDINATE {
-                return Err(WorldError::OutOfRange(largest));
-            }
         }
         // Copies of one object share their materials' entry.
         let last = self.placed.last().map(|p| p.materials);
@@ -360,6 +348,25 @@ fn check_indices(mesh: &Mesh) -> Result<(), WorldError> {
                 index,
                 vertices,
             });
+        }
+    }
+    Ok(())
+}
+
+/// `Ok` when `transform` may place a mesh whose vertices `bounds` bounds: it is finite and
+/// invertible, and puts the mesh within ±[`scale::MAX_COORDINATE`].
+pub(super) fn check_placement(bounds: Aabb, transform: &Transform) -> Result<(), WorldError> {
+    if transform.is_singular() || !transform.world_from_object.is_finite() {
+        return Err(WorldError::SingularTransform);
+    }
+    let placed = bounds.transformed(transform);
+    if !placed.is_empty() {
+        if !(placed.min.is_finite() && placed.max.is_finite()) {
+            return Err(WorldError::NotFinite);
+        }
+        let largest = scale::largest_coordinate(&[placed.min, placed.max]);
+        if largest > scale::MAX_COORDINATE {
+            return Err(WorldError::OutOfRange(largest));
         }
     }
     Ok(())

@@ -33,6 +33,7 @@ use crate::math::{Aabb, Ray};
 use crate::texture::Texture;
 
 mod builder;
+mod moves;
 mod objects;
 mod placed;
 
@@ -99,6 +100,14 @@ pub enum WorldError {
         /// How many shared meshes there are.
         meshes: usize,
     },
+    /// A move names an instance that does not exist.
+    #[error("instance {index} does not exist (the world has {instances})")]
+    UnknownInstance {
+        /// The index given.
+        index: usize,
+        /// How many instances there are.
+        instances: usize,
+    },
     /// An instance's transform cannot be inverted (a zero scale, or factors beyond f32).
     #[error("the transform cannot be inverted (a zero scale, or factors beyond about 1e±38)")]
     SingularTransform,
@@ -134,7 +143,8 @@ pub struct WorldStats {
     pub bvh_build_time: Duration,
 }
 
-/// Everything a render sees: immutable once built, and shareable between threads.
+/// Everything a render sees: shareable between threads, and changed after the build only by
+/// moving instances ([`World::set_transform`]).
 #[derive(Debug)]
 pub struct World {
     geometry: Geometry,

@@ -29,7 +29,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::instances::{build_meshes, Instances};
-use super::placed::closer;
+use super::placed::{closer, Placed, Placement};
 use super::{build, Bvh, Tree};
 use crate::geometry::{Geometry, Hit, Mesh};
 use crate::material::Material;
@@ -72,8 +72,18 @@ pub(crate) fn split(
     parts: &Parts,
     pool: Option<&rayon::ThreadPool>,
 ) -> (Bvh, Instances, Option<Cutouts>) {
-    let placements = |list: &[&(u32, Transform, &[u32])]| -> Vec<(u32, Transform)> {
-        list.iter().map(|(m, t, _)| (*m, *t)).collect()
+    let placement = |index: usize, alpha: Option<Arc<AlphaTests>>| {
+        let (mesh, transform, _) = parts.instances[index];
+        Placement {
+            mesh,
+            id: index as u32,
+            transform,
+            alpha,
+        }
+    };
+    let meshes = match parts.instances.is_empty() {
+        true => Vec::new(),
+        false => build_meshes(parts.meshes, pool),
     };
     let geometry = parts.geometry;
     let used = |a: &AlphaTests| {
@@ -83,8 +93,8 @@ pub(crate) fn split(
     let Some(mut alpha) = AlphaTests::of(parts.materials, parts.textures).filter(used) else {
         // Nothing is cut out: the levels of a world without cut-outs.
         let flat = build::build(geometry.len(), |i| geometry.corners(i), pool);
-        let all: Vec<_> = parts.instances.iter().collect();
-        let instances = Instances::build(parts.meshes, &placements(&all), pool);
+        let all = (0..parts.instances.len()).map(|i| placement(i, None));
+        let instances = Placed::new(meshes, all.collect(), pool);
         return (flat, instances, None);
     };
     let (cut, opaque): (Vec<u32>, Vec<u32>) = (0..geometry.len() as u32)
@@ -97,37 +107,21 @@ pub(crate) fn split(
     // `cut` is in the world's order (a partition keeps it), so the cut-out tree's tie rule
     // (the smaller number) agrees with the world's.
     let (mut cut_list, mut opaque_list) = (Vec::new(), Vec::new());
-    let (mut cut_ids, mut opaque_ids) = (Vec::new(), Vec::new());
     // One set of tests for each mesh and materials, shared by the instances that have them.
     let mut tests = HashMap::new();
-    let mut cut_alphas = Vec::new();
-    for (index, inst) in parts.instances.iter().enumerate() {
-        let (mesh, _, materials) = *inst;
+    for (index, &(mesh, _, materials)) in parts.instances.iter().enumerate() {
         let of = || {
             alpha
                 .of_placement(&parts.meshes[mesh as usize], materials)
                 .map(Arc::new)
         };
         match tests.entry((mesh, materials)).or_insert_with(of).clone() {
-            Some(tests) => {
-                cut_list.push(inst);
-                cut_ids.push(index as u32);
-                cut_alphas.push(Some(tests));
-            }
-            None => {
-                opaque_list.push(inst);
-                opaque_ids.push(index as u32);
-            }
+            Some(tests) => cut_list.push(placement(index, Some(tests))),
+            None => opaque_list.push(placement(index, None)),
         }
     }
-    let meshes = match parts.instances.is_empty() {
-        true => Default::default(),
-        false => build_meshes(parts.meshes, pool),
-    };
-    let opaque = (opaque_ids, vec![None; opaque_list.len()]);
-    let instances = Instances::place(meshes.clone(), &placements(&opaque_list), opaque, pool);
-    let cut_set = (cut_ids, cut_alphas);
-    let cut_instances = Instances::place(meshes, &placements(&cut_list), cut_set, pool);
+    let instances = Placed::new(meshes.clone(), opaque_list, pool);
+    let cut_instances = Placed::new(meshes, cut_list, pool);
     let cutouts = Cutouts {
         flat: cut_flat,
         flat_ids: cut,
@@ -160,6 +154,11 @@ impl Cutouts {
     /// The tree over the world's own cut-out triangles.
     pub(crate) fn flat(&self) -> &Bvh {
         &self.flat
+    }
+
+    /// The instances whose materials may cut.
+    pub(crate) fn instances_mut(&mut self) -> &mut Instances {
+        &mut self.instances
     }
 
     /// [`Cutouts::flat`], naming its triangles by their index in the world's geometry.

@@ -22,43 +22,26 @@
 
 use std::sync::Arc;
 
-use glam::{Affine3A, DAffine3, Vec3, Vec3A};
+use glam::{DAffine3, Vec3, Vec3A};
 
 use super::nearest::{Frame, Nearest};
 use super::tree::{SlotHit, Stack, WideBvh};
-use crate::accel::instances::{inverse, inverse_f64, world_box};
-use crate::accel::placed::{self, Entry, Placements};
+use crate::accel::placed::{self, inverse_f64, world_box, Placed, Placement};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{unit_normal, PreparedRay};
 use crate::accel::traverse::walk_nearest;
-use crate::accel::{build, AlphaTests, BvhNode};
+use crate::accel::{AlphaTests, BvhNode};
 use crate::math::Transform;
 use crate::simd::Isa;
 
 /// The `level` of a hit on the scene's own triangles.
 pub(crate) const OWN: u32 = u32::MAX;
 
-/// One placement of a mesh, as given to [`WideLevels::new`].
-#[derive(Clone, Debug)]
-pub(crate) struct Placement {
-    /// Index of its mesh tree.
-    pub mesh: u32,
-    /// The geometry id its hits report.
-    pub geometry: u32,
-    /// Object to world; invertible.
-    pub transform: Transform,
-    /// The alpha tests of the mesh's triangles under this placement's materials, if any may
-    /// cut.
-    pub alpha: Option<Arc<AlphaTests>>,
-}
-
-/// A placement ready for queries.
+/// What the closest-point walk needs of a placement beyond its map.
 #[derive(Debug)]
-struct Placed {
-    placement: Placement,
-    object_from_world: Affine3A,
-    /// The same map in `f64`, for closest points.
-    object_from_world_f64: DAffine3,
+struct Reach {
+    /// The world-to-object map in `f64`.
+    object_from_world: DAffine3,
     /// A lower bound of the squared smallest stretch of the object-to-world map.
     shrink_sq: f64,
     /// How far, in object units, the placed corners (rounded to `f32` by the map) may be
@@ -71,12 +54,26 @@ struct Placed {
 pub(crate) struct WideLevels {
     own: WideBvh,
     own_alpha: Option<Arc<AlphaTests>>,
-    meshes: Vec<Arc<WideBvh>>,
-    placed: Vec<Placed>,
-    /// The top-level tree over the placements' world boxes, and the placement in each leaf
-    /// slot.
-    top: Vec<BvhNode>,
-    top_ids: Vec<u32>,
+    placed: Placed<WideBvh>,
+    /// Each placement's [`Reach`].
+    reaches: Vec<Reach>,
+}
+
+/// The [`Reach`] of `placement` of `mesh`.
+fn reach(placement: &Placement, mesh: &WideBvh) -> Reach {
+    let exact = inverse_f64(&placement.transform);
+    let linear = glam::DMat3::from_mat4(exact);
+    let frobenius_sq = [linear.x_axis, linear.y_axis, linear.z_axis]
+        .iter()
+        .map(|c| c.length_squared())
+        .sum::<f64>();
+    let world = world_box(mesh.bvh(), &placement.transform);
+    let pad = rounding_pad(&placement.transform, mesh.bvh(), &world) * frobenius_sq.sqrt();
+    Reach {
+        object_from_world: DAffine3::from_mat4(exact),
+        shrink_sq: (1.0 - 1e-6) / frobenius_sq,
+        pad: (pad * 1.001) as f32,
+    }
 }
 
 /// A bound of how far `transform` puts a corner of `mesh` (whose placed box is `world`) from
@@ -116,39 +113,14 @@ impl WideLevels {
         placements: Vec<Placement>,
         pool: Option<&rayon::ThreadPool>,
     ) -> WideLevels {
-        let boxes: Vec<_> = placements
-            .iter()
-            .map(|p| world_box(meshes[p.mesh as usize].bvh(), &p.transform))
-            .collect();
-        let (top, top_ids) = build::build_tree(boxes.len(), |i| boxes[i], pool);
-        let placed = placements
-            .into_iter()
-            .zip(&boxes)
-            .map(|(placement, world)| {
-                let exact = inverse_f64(&placement.transform);
-                let linear = glam::DMat3::from_mat4(exact);
-                let frobenius_sq = [linear.x_axis, linear.y_axis, linear.z_axis]
-                    .iter()
-                    .map(|c| c.length_squared())
-                    .sum::<f64>();
-                let mesh = meshes[placement.mesh as usize].bvh();
-                let pad = rounding_pad(&placement.transform, mesh, world) * frobenius_sq.sqrt();
-                Placed {
-                    object_from_world: inverse(&placement.transform),
-                    object_from_world_f64: DAffine3::from_mat4(exact),
-                    shrink_sq: (1.0 - 1e-6) / frobenius_sq,
-                    pad: (pad * 1.001) as f32,
-                    placement,
-                }
-            })
+        let reaches = (placements.iter())
+            .map(|p| reach(p, &meshes[p.mesh as usize]))
             .collect();
         WideLevels {
             own,
             own_alpha,
-            meshes,
-            placed,
-            top,
-            top_ids,
+            placed: Placed::new(meshes, placements, pool),
+            reaches,
         }
     }
 
@@ -164,19 +136,25 @@ impl WideLevels {
 
     /// True when there are placements.
     pub fn has_placements(&self) -> bool {
-        !self.placed.is_empty()
+        !self.placed.placements().is_empty()
     }
 
     /// Triangles of the own tree and of each mesh tree, each counted once.
     pub fn unique_triangles(&self) -> usize {
-        self.own.tris().len() + self.meshes.iter().map(|m| m.tris().len()).sum::<usize>()
+        let meshes = self.placed.meshes().iter();
+        self.own.tris().len() + meshes.map(|m| m.tris().len()).sum::<usize>()
     }
 
     /// Each tree's border, made on `pool` where it is not yet ([`WideBvh::border`]).
     pub fn borders(&self, pool: &rayon::ThreadPool) -> Borders<'_> {
         Borders {
             own: self.own.border(pool),
-            meshes: self.meshes.iter().map(|m| m.border(pool)).collect(),
+            meshes: self
+                .placed
+                .meshes()
+                .iter()
+                .map(|m| m.border(pool))
+                .collect(),
         }
     }
 
@@ -184,9 +162,7 @@ impl WideLevels {
     pub fn made_borders(&self) -> Option<Borders<'_>> {
         Some(Borders {
             own: self.own.made_border()?,
-            meshes: self
-                .meshes
-                .iter()
+            meshes: (self.placed.meshes().iter())
                 .map(|m| m.made_border())
                 .collect::<Option<_>>()?,
         })
@@ -202,7 +178,7 @@ impl WideLevels {
         best: Option<SlotHit>,
         stack: &mut Stack,
     ) -> Option<SlotHit> {
-        placed::closest::<_, I>(self, world_ray(ray), range, best, stack)
+        placed::closest::<_, I>(&self.placed, world_ray(ray), range, best, stack)
     }
 
     /// True when a triangle of the own tree meets `prepared` with `t` in `range`.
@@ -240,7 +216,7 @@ impl WideLevels {
         range: (f32, f32),
         stack: &mut Stack,
     ) -> bool {
-        placed::any::<_, I>(self, world_ray(ray), range, stack)
+        placed::any::<_, I>(&self.placed, world_ray(ray), range, stack)
     }
 
     /// Calls `f` with every crossing of `prepared` with `t` in `range` in the own tree, one per
@@ -292,18 +268,18 @@ impl WideLevels {
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
-        debug_assert_eq!(borders.meshes.len(), self.meshes.len());
-        placed::each::<_, I>(self, world_ray(ray), range, stack, f);
+        debug_assert_eq!(borders.meshes.len(), self.placed.meshes().len());
+        placed::each::<_, I>(&self.placed, world_ray(ray), range, stack, f);
     }
 
     /// The unit normal of the triangle of a hit or closest point: leaf slot `slot` of the own
     /// tree (`level` [`OWN`]) or of placement `level`'s mesh, mapped as a copy's corners are.
     pub fn normal(&self, level: u32, slot: u32) -> [f32; 3] {
-        let Some(p) = self.placed.get(level as usize) else {
+        let Some(p) = self.placed.placements().get(level as usize) else {
             return self.own.normal(slot);
         };
-        let mesh = &self.meshes[p.placement.mesh as usize];
-        let t = &p.placement.transform;
+        let mesh = &self.placed.meshes()[p.mesh as usize];
+        let t = &p.transform;
         let corners = mesh
             .slot(slot as usize)
             .corners()
@@ -319,25 +295,27 @@ impl WideLevels {
         let (mut best, mut best_d) = (None, bound);
         self.own
             .nearest_within::<I>(pa, None, (&mut best_d, &mut best), stack);
-        if self.top.is_empty() {
+        let (top, ids) = self.placed.top();
+        if top.is_empty() {
             return best;
         }
         let enter = |node: &BvhNode, bound: f64| {
             let d = super::nearest::box_distance_sq(node, pa);
             (d <= bound).then_some(d)
         };
-        walk_nearest(&self.top, &mut best_d, enter, |slots, best_d| {
-            for &index in &self.top_ids[slots] {
-                let p = &self.placed[index as usize];
+        walk_nearest(top, &mut best_d, enter, |slots, best_d| {
+            for &index in &ids[slots] {
+                let p = &self.placed.placements()[index as usize];
+                let r = &self.reaches[index as usize];
                 let frame = Frame {
                     level: index,
-                    geometry: p.placement.geometry,
-                    to_object: &p.object_from_world_f64,
-                    to_world: &p.placement.transform,
-                    shrink_sq: p.shrink_sq,
-                    pad: p.pad,
+                    geometry: p.id,
+                    to_object: &r.object_from_world,
+                    to_world: &p.transform,
+                    shrink_sq: r.shrink_sq,
+                    pad: r.pad,
                 };
-                let mesh = &self.meshes[p.placement.mesh as usize];
+                let mesh = &self.placed.meshes()[p.mesh as usize];
                 mesh.nearest_within::<I>(pa, Some(&frame), (best_d, &mut best), stack);
             }
         });
@@ -352,27 +330,4 @@ fn world_ray(ray: &[f32; 6]) -> (Vec3, Vec3) {
         Vec3::new(ray[0], ray[1], ray[2]),
         Vec3::new(ray[3], ray[4], ray[5]),
     )
-}
-
-impl Placements for WideLevels {
-    type Tree = WideBvh;
-
-    #[inline(always)]
-    fn top(&self) -> (&[BvhNode], &[u32]) {
-        (&self.top, &self.top_ids)
-    }
-
-    #[inline(always)]
-    fn entry(&self, index: u32) -> Entry<'_, WideBvh> {
-        let p = &self.placed[index as usize];
-        let mesh = &self.meshes[p.placement.mesh as usize];
-        Entry {
-            object_from_world: &p.object_from_world,
-            mesh,
-            id: p.placement.geometry,
-            filter: p.placement.alpha.as_deref(),
-            // Made by `borders` before any query that counts.
-            border: mesh.made_border(),
-        }
-    }
 }
