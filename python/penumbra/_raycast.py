@@ -249,6 +249,28 @@ class RaycastingScene:
         matrix = _matrix(transform, (4, 4), call, "transform")
         return self._core.add_instance(geometry_id, matrix)
 
+    def set_transform(self, geometry_id: Any, transform: Any) -> None:
+        """Moves placement ``geometry_id`` (an id :meth:`add_instance` returned) to
+        ``transform``, a (4, 4) row-major object-to-world matrix taken as
+        :meth:`add_instance` takes it. It replaces the placement's transform (it does not
+        compose with it); for a placement of a placement, ``transform`` places the placed
+        geometry as it did in :meth:`add_instance`. Nothing is built again but the top level
+        (on the next query), and the queries then answer as a fresh :meth:`add_instance`
+        with that transform would. An id that is no placement (a geometry of
+        ``add_triangles``, or an object of the scene ``raycasting_scene()`` made, which moves
+        with :meth:`penumbra.Scene.set_transform` and a new ``raycasting_scene()``) and a
+        matrix :meth:`add_instance` would refuse raise ``ValueError`` and change nothing."""
+        call = "set_transform"
+        geometry_id = _args.integer(call, "geometry_id", geometry_id, 0, _args.U32_MAX)
+        if geometry_id < self._objects:
+            raise ValueError(
+                f"{call}: geometry_id: geometry {geometry_id} is an object of the scene "
+                "raycasting_scene() made; move it with Scene.set_transform and make the "
+                "ray-casting scene again"
+            )
+        matrix = _matrix(transform, (4, 4), call, "transform")
+        self._core.set_transform(geometry_id, matrix)
+
     def cast_rays(
         self,
         rays: Any,

@@ -269,3 +269,71 @@ def test_a_scenes_raycasting_scene_holds_its_instances():
     ans = rc.cast_rays(rays)
     assert ans["geometry_ids"].tolist() == list(range(1, count + 1))
     assert (ans["primitive_ids"] < 5856).all()
+
+
+def test_a_moved_placement_answers_as_one_added_there():
+    v, t = icosphere(2)
+
+    def scene(first, lift):
+        s = penumbra.RaycastingScene()
+        s.add_triangles(v, t)
+        s.add_instance(0, first)
+        s.add_instance(0, EXACT[1])
+        up = np.eye(4)
+        up[2, 3] = lift
+        s.add_instance(1, up)  # a placement of placement 1
+        return s
+
+    rays = rays_at_everything()
+    moved = scene(EXACT[0], 2.0)
+    before = moved.cast_rays(rays)
+    moved.set_transform(1, general())
+    lift = np.eye(4)
+    lift[2, 3] = -1.5
+    moved.set_transform(3, lift.tolist())
+    after = moved.cast_rays(rays)
+    assert not np.array_equal(after["t_hit"], before["t_hit"])
+    same(after, scene(general(), -1.5).cast_rays(rays))
+
+
+@pytest.mark.parametrize(
+    "geometry_id, transform, error, words",
+    [
+        (0, np.eye(4), ValueError, "set_transform: geometry_id: geometry 0 is not a placement"),
+        (2, np.eye(4), ValueError, "set_transform: geometry_id: geometry 2 is not a placement"),
+        (-1, np.eye(4), ValueError, "set_transform: geometry_id must be from 0"),
+        (1.0, np.eye(4), TypeError, "set_transform: geometry_id must be an integer"),
+        (1, bad_rows(lambda m: m.__setitem__((1, 1), 0.0)), ValueError,
+         "set_transform: transform: the matrix cannot be inverted"),
+        (1, bad_rows(lambda m: m.__setitem__((0, 3), np.nan)), ValueError,
+         "set_transform: transform: the matrix entry [0][3] is not a finite"),
+        (1, np.eye(3), ValueError, "set_transform: transform must have shape (4, 4)"),
+    ],
+)
+def test_each_bad_move_is_one_line_naming_the_argument_and_moves_nothing(
+    geometry_id, transform, error, words
+):
+    v, t = icosphere(1)
+    s = penumbra.RaycastingScene()
+    s.add_triangles(v, t)
+    s.add_instance(0, EXACT[0])
+    rays = random_rays(np.random.default_rng(3), 50)
+    before = s.cast_rays(rays)
+    with pytest.raises(error) as e:
+        s.set_transform(geometry_id, transform)
+    message = str(e.value)
+    assert words in message and "\n" not in message, message
+    same(s.cast_rays(rays), before)
+
+
+def test_a_scenes_own_objects_move_with_the_scene_not_the_raycasting_scene():
+    scene = penumbra.load_dict(
+        {
+            "film": {"width": 8, "height": 8},
+            "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov": 40},
+            "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
+        }
+    )
+    rc = scene.raycasting_scene()
+    with pytest.raises(ValueError, match="set_transform: geometry_id: geometry 0 is an object"):
+        rc.set_transform(0, np.eye(4))

@@ -35,7 +35,7 @@ fn argument(e: &RaycastError) -> Option<&'static str> {
             "vertex_positions"
         }
         RaycastError::Beyond { what: "ray", .. } => "rays",
-        RaycastError::UnknownGeometry { .. } => "geometry_id",
+        RaycastError::UnknownGeometry { .. } | RaycastError::NotAPlacement { .. } => "geometry_id",
         RaycastError::TransformNotFinite { .. }
         | RaycastError::TransformNotAffine
         | RaycastError::SingularTransform
@@ -210,6 +210,19 @@ impl CoreRaycastingScene {
         scene
             .add_instance(geometry_id, &transform)
             .map_err(|e| call_error("add_instance", e))
+    }
+
+    /// Moves placement `geometry_id` to a row-major 4×4 object-to-world matrix.
+    fn set_transform(
+        &self,
+        py: Python<'_>,
+        geometry_id: u32,
+        transform: [[f32; 4]; 4],
+    ) -> PyResult<()> {
+        let mut scene = self.write(py)?;
+        scene
+            .set_transform(geometry_id, &transform)
+            .map_err(|e| call_error("set_transform", e))
     }
 
     /// Number of geometries added.

@@ -56,6 +56,7 @@ impl RaycastingScene {
             meshes: mesh_trees(world),
             mesh_of: HashMap::new(),
             placed: HashMap::new(),
+            placed_on: HashMap::new(),
             placements: Vec::new(),
             local_ids,
         };
@@ -78,7 +79,7 @@ impl RaycastingScene {
         let t = &all;
         let ids = |i: usize| [t.geometry.triangles[i].object, t.local_ids[i]];
         let flat = world.accel().own_tree(own).into_owned();
-        let tree = WideBvh::from_bvh(flat, |i| own.corners(i), ids);
+        let tree = Arc::new(WideBvh::from_bvh(flat, |i| own.corners(i), ids));
         let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
         let levels = WideLevels::new(tree, t.alpha.clone(), meshes, t.placements.clone(), None);
         let accel = LazyAccel::default();
@@ -157,6 +158,9 @@ impl RaycastingScene {
             scene.mesh_of.insert(geometry_id, (m, alpha.clone()));
             m
         });
+        if scene.placed.contains_key(&geometry_id) {
+            scene.placed_on.insert(id, geometry_id);
+        }
         scene.placed.insert(id, scene.placements.len() as u32);
         scene.placements.push(Placement {
             mesh,
@@ -166,6 +170,52 @@ impl RaycastingScene {
         });
         self.geometries += 1;
         Ok(id)
+    }
+}
+
+impl RaycastingScene {
+    /// Moves placement `geometry_id` (an id [`RaycastingScene::add_instance`] returned, or a
+    /// world's instance): its object-to-world transform becomes `transform` (row-major, as
+    /// `add_instance` takes it), replacing the old one, not composed with it. Nothing is
+    /// built again but the top level, on the next query; the queries then answer as a fresh
+    /// `add_instance` with that transform would. For a placement of a placement, `transform`
+    /// places the placed geometry as `add_instance` was given it, composed with where that
+    /// placement is now.
+    ///
+    /// Refused, with nothing changed, as `add_instance` refuses a transform, and with
+    /// [`RaycastError::NotAPlacement`] for an id that is no placement.
+    pub fn set_transform(
+        &mut self,
+        geometry_id: u32,
+        transform: &[[f32; 4]; 4],
+    ) -> Result<(), RaycastError> {
+        let Some(&index) = self.triangles.placed.get(&geometry_id) else {
+            return Err(RaycastError::NotAPlacement {
+                id: geometry_id,
+                geometries: self.geometries,
+            });
+        };
+        let given = checked_transform(transform)?;
+        let scene = &self.triangles;
+        let p = &scene.placements[index as usize];
+        let transform = match scene.placed_on.get(&geometry_id) {
+            Some(base) => {
+                let under = &scene.placements[scene.placed[base] as usize].transform;
+                Transform::from_matrix(given.world_from_object * under.world_from_object)
+            }
+            None => given,
+        };
+        let positions = &scene.meshes[p.mesh as usize].1;
+        if let Some(index) = positions
+            .iter()
+            .position(|&p| !within_range(transform.point(p)))
+        {
+            let what = "placed vertex";
+            return Err(RaycastError::Beyond { what, index });
+        }
+        self.accel.moved();
+        Arc::make_mut(&mut self.triangles).placements[index as usize].transform = transform;
+        Ok(())
     }
 }
 

@@ -47,6 +47,8 @@ pub(crate) struct Triangles {
     pub placed: HashMap<u32, u32>,
     /// Every placement, in the order added.
     pub placements: Vec<Placement>,
+    /// For each placement of a placement, the geometry id of the placement it places.
+    pub placed_on: HashMap<u32, u32>,
 }
 
 impl Triangles {
@@ -76,6 +78,8 @@ pub(crate) struct Span {
 enum State {
     Building,
     Built(Arc<WideLevels>),
+    /// Built, and placements moved since: the top level is built again on the next query.
+    Moved(Arc<WideLevels>),
     /// The build's thread ended without a result (it panicked).
     Lost,
 }
@@ -97,12 +101,23 @@ impl Build {
         self.done.notify_all();
     }
 
-    /// The built structure, waiting for it while `options` is not cancelled.
-    fn wait(&self, options: &QueryOptions) -> Result<Arc<WideLevels>, RaycastError> {
+    /// The built structure, waiting for it while `options` is not cancelled; moved
+    /// placements are placed as `triangles` has them now.
+    fn wait(
+        &self,
+        triangles: &Triangles,
+        options: &QueryOptions,
+    ) -> Result<Arc<WideLevels>, RaycastError> {
         let mut state = self.state();
         loop {
             match &*state {
                 State::Built(accel) => return Ok(accel.clone()),
+                State::Moved(accel) => {
+                    let placements = triangles.placements.clone();
+                    let moved = Arc::new(accel.replaced(placements, None));
+                    *state = State::Built(moved.clone());
+                    return Ok(moved);
+                }
                 State::Lost => {
                     return Err(RaycastError::Threads(
                         "the acceleration structure's build failed".into(),
@@ -149,6 +164,22 @@ impl LazyAccel {
         *self.build.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::new(build));
     }
 
+    /// Marks placements moved: the structure built keeps its trees and builds its top level
+    /// again on the next query. Without one built (none, or still building), forgets it.
+    pub fn moved(&mut self) {
+        let slot = self.build.get_mut().unwrap_or_else(|e| e.into_inner());
+        let built = slot.as_ref().and_then(|b| match &*b.state() {
+            State::Built(levels) | State::Moved(levels) => Some(levels.clone()),
+            _ => None,
+        });
+        *slot = built.map(|levels| {
+            Arc::new(Build {
+                state: Mutex::new(State::Moved(levels)),
+                done: Condvar::new(),
+            })
+        });
+    }
+
     /// Forgets the structure: the triangles changed. A build still running finishes for
     /// nobody.
     pub fn reset(&mut self) {
@@ -178,7 +209,7 @@ impl LazyAccel {
                 }
             }
         };
-        build.wait(options)
+        build.wait(triangles, options)
     }
 }
 
@@ -190,7 +221,7 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
         move || {
             let finish = Finish(build);
             let t = &triangles;
-            let own = WideBvh::build(&t.geometry, &t.local_ids, Some(&pool));
+            let own = Arc::new(WideBvh::build(&t.geometry, &t.local_ids, Some(&pool)));
             let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
             let placements = t.placements.clone();
             let levels = WideLevels::new(own, t.alpha.clone(), meshes, placements, Some(&pool));

@@ -159,6 +159,14 @@ pub enum RaycastError {
         /// How many geometries the scene has.
         geometries: u32,
     },
+    /// [`RaycastingScene::set_transform`] names a geometry that is not a placement.
+    #[error("geometry {id} is not a placement (only geometries add_instance returned, or a world's instances, move; the scene has {geometries} geometries)")]
+    NotAPlacement {
+        /// The id given.
+        id: u32,
+        /// How many geometries the scene has.
+        geometries: u32,
+    },
     /// An entry of an instance's transform is NaN or infinite.
     #[error("the matrix entry [{row}][{column}] is not a finite 32-bit float")]
     TransformNotFinite {

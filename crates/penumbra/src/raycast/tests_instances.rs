@@ -355,3 +355,48 @@ fn geometries_added_to_a_world_are_numbered_after_all_its_objects() {
     assert_eq!(cast.geometry_ids, [0, 2, 4, 5]);
     assert_eq!(cast.t_hit, [1.0; 4]);
 }
+
+#[test]
+fn a_moved_placement_answers_as_one_added_there() {
+    let (vertices, triangles) = arrays(&tetrahedron());
+    let t = placements();
+    let up = |z: f32| rows(&Transform::from_matrix(Mat4::from_translation(Vec3::Z * z)));
+    // Placements 1 and 2 of geometry 0, and 3 a placement of placement 1.
+    let scene = |first: &Transform, lift: f32| {
+        let mut s = RaycastingScene::new();
+        s.add_triangles(&vertices, &triangles).unwrap();
+        s.add_instance(0, &rows(first)).unwrap();
+        s.add_instance(0, &rows(&t[1])).unwrap();
+        s.add_instance(1, &up(lift)).unwrap();
+        s
+    };
+    let rays = rays();
+    let mut moved = scene(&t[0], 1.5);
+    let before = moved.cast_rays(&rays, &on(2)).unwrap();
+    moved.set_transform(1, &rows(&t[2])).unwrap();
+    moved.set_transform(3, &up(-1.0)).unwrap();
+    let fresh = scene(&t[2], -1.0);
+    let after = moved.cast_rays(&rays, &on(2)).unwrap();
+    assert_ne!(after, before, "the move shows");
+    assert_eq!(after, fresh.cast_rays(&rays, &on(2)).unwrap());
+    assert_eq!(
+        moved.count_intersections(&rays, &on(2)).unwrap(),
+        fresh.count_intersections(&rays, &on(2)).unwrap()
+    );
+    let points: Vec<[f32; 3]> = rays.iter().map(|r| [r[0], r[1], 0.5]).collect();
+    assert_eq!(
+        moved.compute_closest_points(&points, &on(2)).unwrap(),
+        fresh.compute_closest_points(&points, &on(2)).unwrap()
+    );
+    // Refused moves change nothing: an own geometry, an id past the last, a singular matrix.
+    let not = |id| RaycastError::NotAPlacement { id, geometries: 4 };
+    assert_eq!(moved.set_transform(0, &up(2.0)), Err(not(0)));
+    assert_eq!(moved.set_transform(4, &up(2.0)), Err(not(4)));
+    let mut flat = up(2.0);
+    flat[2][2] = 0.0;
+    assert_eq!(
+        moved.set_transform(1, &flat),
+        Err(RaycastError::SingularTransform)
+    );
+    assert_eq!(moved.cast_rays(&rays, &on(1)).unwrap(), after);
+}

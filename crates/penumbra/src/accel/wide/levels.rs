@@ -52,7 +52,7 @@ struct Reach {
 /// The two levels of a ray-casting scene.
 #[derive(Debug, Default)]
 pub(crate) struct WideLevels {
-    own: WideBvh,
+    own: Arc<WideBvh>,
     own_alpha: Option<Arc<AlphaTests>>,
     placed: Placed<WideBvh>,
     /// Each placement's [`Reach`].
@@ -107,7 +107,7 @@ impl WideLevels {
     /// The levels of `own` (its triangles' alpha tests `own_alpha`) and `placements` of
     /// `meshes`; the top-level tree is built on `pool` when given.
     pub fn new(
-        own: WideBvh,
+        own: Arc<WideBvh>,
         own_alpha: Option<Arc<AlphaTests>>,
         meshes: Vec<Arc<WideBvh>>,
         placements: Vec<Placement>,
@@ -122,6 +122,19 @@ impl WideLevels {
             placed: Placed::new(meshes, placements, pool),
             reaches,
         }
+    }
+
+    /// These levels with `placements` (of the same meshes) in place of theirs: the own tree
+    /// and the mesh trees shared, the top level built again on `pool` when given.
+    pub fn replaced(&self, placements: Vec<Placement>, pool: Option<&rayon::ThreadPool>) -> Self {
+        let meshes = self.placed.meshes().to_vec();
+        WideLevels::new(
+            self.own.clone(),
+            self.own_alpha.clone(),
+            meshes,
+            placements,
+            pool,
+        )
     }
 
     /// The tree of the scene's own triangles.

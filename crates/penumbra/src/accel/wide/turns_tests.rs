@@ -1,5 +1,7 @@
 //! Tests of `turns`: walks in turn answer every query as the walks of one ray at a time.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::tree::{SlotHit, Stack, WideBvh};
@@ -187,7 +189,7 @@ impl<const K: usize> Kernel for Lists<'_, K> {
 
 #[test]
 fn crossings_listed_in_turns_are_those_listed_one_ray_at_a_time() {
-    let levels = WideLevels::new(tree(), None, Vec::new(), Vec::new(), None);
+    let levels = WideLevels::new(Arc::new(tree()), None, Vec::new(), Vec::new(), None);
     let border = levels.borders(test_pool());
     let mut rays: Vec<[f32; 6]> = rays(1001).iter().map(as_array).collect();
     rays[6] = [f32::NAN; 6];
@@ -220,8 +222,14 @@ fn crossings_listed_in_turns_are_those_listed_one_ray_at_a_time() {
 #[test]
 fn the_kernels_answer_alike_in_turns_and_one_ray_at_a_time() {
     use crate::accel::wide::kernels::{closest_hits, counts, occlusions};
-    let one = WideLevels::new(tree(), None, Vec::new(), Vec::new(), None);
-    let turns = WideLevels::new(tree().interleaved(), None, Vec::new(), Vec::new(), None);
+    let one = WideLevels::new(Arc::new(tree()), None, Vec::new(), Vec::new(), None);
+    let turns = WideLevels::new(
+        Arc::new(tree().interleaved()),
+        None,
+        Vec::new(),
+        Vec::new(),
+        None,
+    );
     assert!(turns.own().interleaves() && !one.own().interleaves());
     let mut rays: Vec<[f32; 6]> = rays(3001).iter().map(as_array).collect();
     rays[7] = [0.0; 6];
@@ -313,7 +321,13 @@ impl crate::accel::wide::kernels::Control for Flag {
 #[test]
 fn a_stream_stops_when_its_query_is_cancelled() {
     use crate::accel::wide::kernels::Counts;
-    let levels = WideLevels::new(tree().interleaved(), None, Vec::new(), Vec::new(), None);
+    let levels = WideLevels::new(
+        Arc::new(tree().interleaved()),
+        None,
+        Vec::new(),
+        Vec::new(),
+        None,
+    );
     let border = levels.borders(test_pool());
     let rays: Vec<[f32; 6]> = rays(2001).iter().map(as_array).collect();
     for path in supported_paths() {
