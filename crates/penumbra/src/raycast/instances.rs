@@ -138,17 +138,11 @@ impl RaycastingScene {
                 }
             },
         };
-        let positions = match &mesh {
-            Ok(m) => &scene.meshes[*m as usize].1,
-            Err((_, positions)) => positions,
+        let tree = match &mesh {
+            Ok(m) => &scene.meshes[*m as usize],
+            Err(tree) => tree,
         };
-        if let Some(index) = positions
-            .iter()
-            .position(|&p| !within_range(transform.point(p)))
-        {
-            let what = "placed vertex";
-            return Err(RaycastError::Beyond { what, index });
-        }
+        check_placed(tree, &transform)?;
         // As in `add_triangles`: forget the structure before the triangles are changed.
         self.accel.reset();
         let scene = Arc::make_mut(&mut self.triangles);
@@ -205,14 +199,7 @@ impl RaycastingScene {
             }
             None => given,
         };
-        let positions = &scene.meshes[p.mesh as usize].1;
-        if let Some(index) = positions
-            .iter()
-            .position(|&p| !within_range(transform.point(p)))
-        {
-            let what = "placed vertex";
-            return Err(RaycastError::Beyond { what, index });
-        }
+        check_placed(&scene.meshes[p.mesh as usize], &transform)?;
         self.accel.moved();
         Arc::make_mut(&mut self.triangles).placements[index as usize].transform = transform;
         Ok(())
@@ -314,6 +301,33 @@ pub(super) fn checked_transform(rows: &[[f32; 4]; 4]) -> Result<Transform, Rayca
         return Err(RaycastError::SingularTransform);
     }
     Ok(transform)
+}
+
+/// `Err(Beyond)` naming the first vertex of `mesh` that `transform` places beyond
+/// ±[`MAX_COORDINATE`] (or not finite). A bound is looked at first: when the farthest a
+/// point of the tree's root box can be placed, `Σⱼ|mᵢⱼ|·r + |tᵢ|` for the box's reach `r`,
+/// stays within the limit with room for the rounding, so does every vertex.
+fn check_placed((tree, positions): &MeshTree, transform: &Transform) -> Result<(), RaycastError> {
+    let reach = tree.bvh().nodes().first().map(|root| {
+        let (lo, hi) = (Vec3::from(root.min_corner()), Vec3::from(root.max_corner()));
+        lo.abs().max(hi.abs()).max_element()
+    });
+    let m = transform.world_from_object;
+    let linear = m.x_axis.truncate().abs() + m.y_axis.truncate().abs() + m.z_axis.truncate().abs();
+    let placed = reach.map(|r| (linear * r + m.w_axis.truncate().abs()).max_element());
+    if placed.is_some_and(|p| p <= MAX_COORDINATE * (1.0 - 1.0 / 1_048_576.0)) {
+        return Ok(());
+    }
+    match positions
+        .iter()
+        .position(|&p| !within_range(transform.point(p)))
+    {
+        Some(index) => Err(RaycastError::Beyond {
+            what: "placed vertex",
+            index,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// True when every coordinate of `p` is finite and within ±[`MAX_COORDINATE`].
