@@ -2,9 +2,9 @@
 //! space) and placed any number of times by instances, under a top-level BVH over the
 //! instances' world boxes.
 //!
-//! The top-level tree is a [`Bvh`] like any other: the same nodes and build, with instance
+//! The top-level tree is made of the same nodes by the same build as a [`Bvh`], with instance
 //! indices where a mesh's tree has triangle indices, and no triangles. A ray walks it with the
-//! same walks (`traverse::walk_closest`, `traverse::walk_any`); at an instance it enters the
+//! same walks (`traverse::walk_nearest`, `traverse::walk_any`); at an instance it enters the
 //! mesh's tree in object space through the instance's precomputed inverse. The direction is
 //! mapped but not renormalized, so `t` means the same in both spaces and a hit needs no
 //! conversion: the world point is `origin + t·direction` of the world ray.

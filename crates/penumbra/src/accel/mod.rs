@@ -55,9 +55,10 @@
 //! - `tree`: [`Tree`], the one interface of both trees (closest, any and every hit of a
 //!   ray, a hit filter after the primitive test, and the rule: interval and tie order),
 //!   implemented by [`Bvh`] and `wide::WideBvh`;
-//! - `placed`: the second level written once over any [`Tree`]: the top-level walk into
-//!   placed meshes and the closest rule across placements (ray casting's placements walk
-//!   through it; the renderer's `instances` are to follow);
+//! - `placed`: the second level written once over any [`Tree`]: `Placed<T>` (mesh trees,
+//!   the one `Placement` type, the top-level tree, moves in place), the top-level walk into
+//!   placed meshes and the closest rule across placements; the renderer's `instances` and
+//!   ray casting's `wide::levels` are both a `Placed` of their tree;
 //! - `closest_fans`: closest-hit SIMD packets of rays sharing an origin (camera rays);
 //! - `shadow_fans`: any-hit SIMD packets of segments sharing an origin (a point and its light
 //!   samples), and the any-hit packet walk every packet kind uses;
@@ -67,9 +68,10 @@
 //!   from neighbouring points to one light sample);
 //! - `shaft`: shaft culling for those bundles when every point has the same light samples:
 //!   the few triangles in the hull of a batch's points and samples, tested without the tree;
-//! - `instances` and `levels`: the second level (meshes built once and placed by instances
-//!   under a top-level tree) and the pair of levels a world queries; `instance_batches`: the
-//!   batched shadow queries inside each instance a batch meets;
+//! - `instances` and `levels`: the renderer's queries of its second level (`Placed<Bvh>`)
+//!   and the pair of levels a world queries (with `build::join`, the one tree over all its
+//!   own triangles that ray casting views); `instance_batches`: the batched shadow queries
+//!   inside each instance a batch meets;
 //! - `cutouts`: the cut-out levels, the split of a world's parts between opaque and cut-out
 //!   levels, and (`cutouts::alpha`) the alpha tests of cut-out hits;
 //! - `validate`: the structural check and the brute-force references the BVH must agree with;

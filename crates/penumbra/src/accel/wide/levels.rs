@@ -1,7 +1,9 @@
 //! Ray casting's two levels, as the renderer's `accel::levels` has them: a scene's own
 //! triangles in one [`WideBvh`], and meshes built once into a [`WideBvh`] each (in object
-//! space) and placed any number of times, under a top-level tree over the placements' world
-//! boxes, the same binary [`BvhNode`]s the renderer's instances use (`accel::instances`).
+//! space) and placed any number of times: the engine's one second level,
+//! [`Placed`]`<WideBvh>` (`accel::placed`), as the renderer's instances are `Placed<Bvh>`.
+//! Beside it, each placement's reach for closest points (its map in `f64`). Moving
+//! placements ([`WideLevels::replaced`]) keeps every tree but the top one.
 //!
 //! A ray enters a placement through its inverse, as in the renderer: the direction is mapped
 //! but not renormalized, so `t` means the same in both spaces. The top-level boxes are tested
