@@ -6,6 +6,7 @@
 
 use pyo3::prelude::*;
 
+mod built;
 mod camera;
 mod errors;
 mod image;

@@ -11,7 +11,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use crate::scene::{build, CoreScene};
+use crate::built::{build, CoreScene};
 
 /// The pack as a dict: `name`, `text`, `format` ("toml" or "json"), `base_dir`,
 /// `overrides` (list of str), `allow_paths` (list of str: the folders its files may read in

@@ -12,9 +12,9 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::built::CoreScene;
 use crate::errors::{product_error, render_error};
 use crate::render::Request;
-use crate::scene::CoreScene;
 use crate::staged::Staged;
 
 /// The largest record read back.

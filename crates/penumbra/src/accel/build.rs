@@ -6,20 +6,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::split::{bounds_of, split, Bins};
+use super::split::{bounds_of, split, Bins, BuildPrim};
 use super::{accel, Bvh, BvhNode, MAX_DEPTH, PARALLEL_MIN};
 use crate::math::Aabb;
 
 /// Nodes with at least this many primitives bin them in parallel (when building on a pool).
 const PARALLEL_BINNING_MIN: usize = 128 * 1024;
-
-/// A primitive as the build sees it: its box, the box's center and its triangle index.
-#[derive(Clone, Copy)]
-pub(super) struct BuildPrim {
-    pub bounds: Aabb,
-    pub centroid: Vec3,
-    pub index: u32,
-}
 
 /// Builds the hierarchy over the `n` triangles whose corners `corners(i)` gives, on the
 /// threads of `pool` when there is one and the mesh is large enough to gain from it.

@@ -14,9 +14,16 @@
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::build::BuildPrim;
 use super::{BINS, MAX_DEPTH, MAX_LEAF};
 use crate::math::Aabb;
+
+/// A primitive as the build sees it: its box, the box's center and its triangle index.
+#[derive(Clone, Copy)]
+pub(super) struct BuildPrim {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub index: u32,
+}
 
 /// Primitives binned per task when binning in parallel.
 const BIN_CHUNK: usize = 16 * 1024;

@@ -17,10 +17,9 @@
 
 use glam::Vec3;
 
-use super::batch::BUNDLE_POINTS;
 use super::model::{Lobe, Model, Physical, Seed};
 use super::plan::{toward, Source};
-use super::{Integrator, LightModel, Point, Seen, Shading};
+use super::{Integrator, LightModel, Point, Seen, Shading, BUNDLE_POINTS};
 use crate::geometry::Hit;
 use crate::math::Rgb;
 

@@ -78,10 +78,6 @@ pub(super) fn bundles(samples: u64, fixed: bool, nodes: usize) -> bool {
 /// traces its own fans: a batch is then a few thousand shadow rays at most.
 pub(super) const FEW_SAMPLES: u64 = 256;
 
-/// Points shaded together when they bundle: the 4 samples of 4 pixels, a vector of 16 lanes
-/// per light sample (two of 8 on AVX2).
-pub(super) const BUNDLE_POINTS: usize = 16;
-
 /// Buffers one worker reuses from one batch to the next.
 #[derive(Default)]
 pub(crate) struct BatchScratch {
@@ -341,6 +337,7 @@ impl Integrator<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::BUNDLE_POINTS;
     use super::*;
     use crate::geometry::{sphere, Mesh};
     use crate::integrator::{LightModel, Shading, ShadingSettings};

@@ -72,6 +72,10 @@ pub const SHADOW_OFFSET: f32 = 1.0;
 /// Shadow rays stop this fraction short of the light sample.
 pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 
+/// Points shaded together when they bundle: the 4 samples of 4 pixels, a vector of 16 lanes
+/// per light sample (two of 8 on AVX2).
+const BUNDLE_POINTS: usize = 16;
+
 /// Buffers one worker reuses from one shading point to the next.
 #[derive(Default)]
 pub(crate) struct Scratch {
@@ -212,7 +216,7 @@ impl<'w> Integrator<'w> {
     /// thousands, and a cancelled render stops between calls).
     pub(crate) fn batch_points(&self) -> usize {
         if self.bundles || self.samples <= batch::FEW_SAMPLES {
-            batch::BUNDLE_POINTS
+            BUNDLE_POINTS
         } else {
             1
         }

@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::lazy::{LazyAccel, Span, Triangles};
+use super::lazy::{LazyAccel, MeshTree, Span, Triangles};
 use super::{RaycastError, RaycastingScene, INVALID_ID};
 use crate::accel::placed::Placement;
 use crate::accel::wide::levels::WideLevels;
@@ -205,9 +205,6 @@ impl RaycastingScene {
         Ok(())
     }
 }
-
-/// A mesh's tree and its vertices (to check where a placement puts them).
-pub(super) type MeshTree = (Arc<WideBvh>, Arc<[Vec3]>);
 
 impl Triangles {
     /// Appends geometry `id`: `positions`, and `triangles` indexing them (the primitive ids

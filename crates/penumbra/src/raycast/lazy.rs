@@ -11,7 +11,8 @@ use std::time::Duration;
 
 use std::collections::HashMap;
 
-use super::instances::MeshTree;
+use glam::Vec3;
+
 use super::run::QueryOptions;
 use super::RaycastError;
 use crate::accel::placed::Placement;
@@ -25,6 +26,9 @@ const ON_THREAD: usize = 1 << 15;
 
 /// How often a waiting query looks at its cancel flag.
 const POLL: Duration = Duration::from_millis(5);
+
+/// A mesh's tree and its vertices (to check where a placement puts them).
+pub(super) type MeshTree = (Arc<WideBvh>, Arc<[Vec3]>);
 
 /// The triangles of a scene and each one's index within its own geometry, and the meshes
 /// placed, shared with a build that outlives a cancelled query.

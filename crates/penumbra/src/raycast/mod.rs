@@ -310,7 +310,7 @@ impl RaycastingScene {
 
     /// Corners of scene triangle `triangle`.
     #[cfg(test)]
-    fn corners(&self, triangle: u32) -> crate::accel::prim::watertight::Corners {
+    fn corners(&self, triangle: u32) -> crate::accel::prim::Corners {
         self.triangles
             .geometry
             .corners(triangle as usize)

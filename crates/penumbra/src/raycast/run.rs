@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use rayon::prelude::*;
 
 use super::RaycastError;
-use crate::accel::wide::kernels::Control;
+use crate::accel::wide::control::Control;
 use crate::pool::thread_pool;
 use crate::scale::MAX_COORDINATE;
 

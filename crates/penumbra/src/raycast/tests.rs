@@ -32,7 +32,7 @@ fn scene_of(meshes: &[MeshData]) -> RaycastingScene {
 }
 
 /// Every triangle of the scene as (geometry, primitive, corners).
-fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, crate::accel::prim::watertight::Corners)> {
+fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, crate::accel::prim::Corners)> {
     (0..s.triangle_count() as u32)
         .map(|i| {
             let (g, p) = s.ids(i);
@@ -42,7 +42,7 @@ fn all_triangles(s: &RaycastingScene) -> Vec<(u32, u32, crate::accel::prim::wate
 }
 
 /// The `f64` Möller–Trumbore distance of a ray to a triangle, edges inclusive.
-fn hit_f64(ray: &[f32; 6], tri: &crate::accel::prim::watertight::Corners) -> Option<f64> {
+fn hit_f64(ray: &[f32; 6], tri: &crate::accel::prim::Corners) -> Option<f64> {
     let o = DVec3::new(ray[0] as f64, ray[1] as f64, ray[2] as f64);
     let d = DVec3::new(ray[3] as f64, ray[4] as f64, ray[5] as f64);
     let [a, b, c] = tri.map(|p| Vec3::from(p).as_dvec3());

@@ -252,7 +252,7 @@ fn packets_of_parallel_rays_count_as_single_rays() {
 #[derive(Default)]
 struct CancelledOnSecondLook(std::cell::Cell<usize>);
 
-impl crate::accel::wide::kernels::Control for CancelledOnSecondLook {
+impl crate::accel::wide::control::Control for CancelledOnSecondLook {
     type Error = RaycastError;
 
     fn cancelled(&self) -> bool {

@@ -19,7 +19,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::watertight::Corners;
+use super::Corners;
 
 /// A triangle's part of the surface's boundary: bit `k` (0–2) when its edge `k` (the edge
 /// opposite corner `k`: B→C, C→A, A→B) is a boundary edge, bit `3 + c` when its corner `c` is

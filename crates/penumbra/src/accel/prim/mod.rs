@@ -4,6 +4,11 @@
 //! share an edge), with `boundary`, the part of the surface's border each triangle owns for
 //! its counting rule.
 
+use glam::Vec3A;
+
 pub(crate) mod boundary;
 pub(crate) mod moller_trumbore;
 pub(crate) mod watertight;
+
+/// The three corners of a triangle.
+pub(crate) type Corners = [Vec3A; 3];

@@ -26,6 +26,7 @@
 use glam::{Vec3, Vec3A};
 
 use super::boundary::Boundary;
+use super::Corners;
 use crate::math::unit_cross;
 
 /// The largest `t` of a hit: a `t` that overflows to infinity is beyond any distance `f32`
@@ -57,9 +58,6 @@ pub(crate) struct PreparedRay {
     /// `1/d_z`: scales the frame's z into ray parameters.
     inv_dz: f32,
 }
-
-/// The three corners of a triangle.
-pub(crate) type Corners = [Vec3A; 3];
 
 /// A triangle's corners by coordinate, as the traversal stores them:
 /// `x = (v0.x, v1.x, v2.x)`, and so on, so that the test runs on all three at once.

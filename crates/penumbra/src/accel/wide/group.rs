@@ -17,8 +17,9 @@ use glam::Vec3A;
 use super::node::{box_distances, SHRINK};
 use crate::accel::prim::boundary::Boundary;
 use crate::accel::prim::watertight::{
-    hit_lane, Corners, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
+    hit_lane, Crossing, EdgeRule, PreparedRay, SoaTriangle, T_LIMIT,
 };
+use crate::accel::prim::Corners;
 use crate::simd::{max, min, Isa};
 
 /// Triangles per group.

@@ -16,6 +16,7 @@ use super::nearest::Nearest;
 use super::tree::{SlotHit, Stack};
 use super::turns::{prepare, stream, Turns, INTERLEAVED};
 
+use super::control::Control;
 use super::packets::{count_parallel, CastPackets};
 use crate::simd::{dispatch, Isa, Kernel, SimdPath};
 
@@ -26,24 +27,6 @@ const CHECK: usize = 8;
 
 /// Lanes of a packet of parallel rays (four vectors with AVX2, two with AVX-512).
 const PARALLEL: usize = 32;
-
-/// What a batch kernel asks of the query that runs it.
-pub(crate) trait Control {
-    /// The query's error.
-    type Error;
-    /// True when the caller asked the query to stop.
-    fn cancelled(&self) -> bool;
-    /// The error of a query stopped because it was cancelled.
-    fn cancel_error(&self) -> Self::Error;
-    /// Makes room in `v` for `additional` more values of `what`, fallibly: results that grow
-    /// as they are found must not abort the process when memory runs out.
-    fn grow<T>(
-        &self,
-        v: &mut Vec<T>,
-        additional: usize,
-        what: &'static str,
-    ) -> Result<(), Self::Error>;
-}
 
 /// Whether a triangle meets each ray of `rays` with `t` in `range`, written to `out`: the
 /// own tree's ([`WideLevels::occluded_own`]), or with `PLACED` the placements' for each ray

@@ -36,9 +36,6 @@ use crate::accel::{AlphaTests, BvhNode};
 use crate::math::Transform;
 use crate::simd::Isa;
 
-/// The `level` of a hit on the scene's own triangles.
-pub(crate) const OWN: u32 = u32::MAX;
-
 /// What the closest-point walk needs of a placement beyond its map.
 #[derive(Debug)]
 struct Reach {
@@ -288,7 +285,7 @@ impl WideLevels {
     }
 
     /// The unit normal of the triangle of a hit or closest point: leaf slot `slot` of the own
-    /// tree (`level` [`OWN`]) or of placement `level`'s mesh, mapped as a copy's corners are.
+    /// tree (`level` `OWN`) or of placement `level`'s mesh, mapped as a copy's corners are.
     pub fn normal(&self, level: u32, slot: u32) -> [f32; 3] {
         let Some(p) = self.placed.placements().get(level as usize) else {
             return self.own.normal(slot);

@@ -12,10 +12,12 @@
 //! - `turns`: a few rays' single-ray walks side by side, one step each in turn, so that
 //!   their cache misses overlap on trees larger than the caches;
 //! - `kernels`: the single-ray queries of a batch, compiled per instruction set;
+//! - `control`: what a batch kernel asks of the query that runs it (stop, room for results);
 //! - `nearest`: the closest point of the surface, by the binary tree's nearest-first walk;
 //! - `levels`: the scene's own tree and placed meshes' trees under a top-level tree, which
 //!   every query of the ray-casting API asks.
 
+pub(crate) mod control;
 mod cull;
 mod group;
 pub(crate) mod kernels;

@@ -9,8 +9,7 @@
 
 use glam::{DAffine3, DVec3, Vec3};
 
-use super::levels::OWN;
-use super::tree::{Order, Stack, WideBvh};
+use super::tree::{Order, Stack, WideBvh, OWN};
 use crate::accel::BvhNode;
 use crate::math::Transform;
 use crate::simd::Isa;
@@ -80,7 +79,7 @@ pub(crate) struct Nearest {
     pub geometry: u32,
     pub primitive: u32,
     pub slot: u32,
-    /// The placement of its triangle, `levels::OWN` for the scene's own triangles.
+    /// The placement of its triangle, `tree::OWN` for the scene's own triangles.
     pub level: u32,
 }
 
@@ -140,7 +139,13 @@ impl WideBvh {
             if count == 0 {
                 let node = &self.wide()[first as usize];
                 let (mask, near) = node.nearer::<I>(&q32, pad, bound);
-                stack.push_children(self, node, mask, &near, Order::Nearest);
+                stack.push_children(
+                    |i, c| self.prefetch_child(i, c),
+                    node,
+                    mask,
+                    &near,
+                    Order::Nearest,
+                );
                 continue;
             }
             for (group, valid) in self.leaf(first, count) {

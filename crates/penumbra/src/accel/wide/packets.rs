@@ -27,8 +27,8 @@
 //! every ray alone: the single-ray walk applies the alpha test. Placed meshes are asked after
 //! the own tree, one ray at a time (`kernels::ClosestPlaced`, `kernels::Counts`).
 
+use super::control::Control;
 use super::cull::{bounds, furthest, misses, Bounds};
-use super::kernels::Control;
 use super::levels::WideLevels;
 use super::margins::EXIT_SCALE;
 use super::node::WIDTH;
@@ -37,7 +37,8 @@ use super::tree::{SlotHit, Stack, WideBvh};
 use super::turns::{prepare, stream, Turns, INTERLEAVED};
 use crate::accel::lanes::lane;
 use crate::accel::prim::boundary::Boundary;
-use crate::accel::prim::watertight::{hit_lane, Corners, Crossing, EdgeRule, T_LIMIT};
+use crate::accel::prim::watertight::{hit_lane, Crossing, EdgeRule, T_LIMIT};
+use crate::accel::prim::Corners;
 use crate::simd::{Isa, Kernel};
 
 /// The closest hit of a ray.

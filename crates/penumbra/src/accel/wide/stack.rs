@@ -1,7 +1,6 @@
 //! The stack of the wide tree's walks ([`WideBvh`]'s single-ray queries).
 
 use super::node::{WideNode, WIDTH};
-use super::tree::WideBvh;
 use crate::accel::STACK_SIZE;
 
 /// Entries of a depth-first walk's stack: a wide node pops one entry and pushes at most
@@ -66,11 +65,12 @@ impl Stack {
     }
 
     /// Pushes the children of `node` in `mask` with their entry distances `near`, to come off
-    /// the stack in `order`.
+    /// the stack in `order`, asking `prefetch(index, count)` to load each child
+    /// (`WideBvh::prefetch_child`).
     #[inline(always)]
     pub(super) fn push_children(
         &mut self,
-        tree: &WideBvh,
+        prefetch: impl Fn(u32, u32),
         node: &WideNode,
         mask: u32,
         near: &[f32; WIDTH],
@@ -82,7 +82,7 @@ impl Stack {
             let lane = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let (index, count) = node.child(lane);
-            tree.prefetch_child(index, count);
+            prefetch(index, count);
             let entry = (index, count, near[lane]);
             let mut k = self.len;
             if order == Order::Nearest {

@@ -17,16 +17,26 @@ use glam::{Vec3, Vec3A};
 use std::sync::OnceLock;
 
 use super::group::{TriangleGroup, GROUP};
-use super::levels::OWN;
 use super::margins::{tie_bound, EXIT_SCALE};
 use super::node::{collapse, WideNode};
 pub(crate) use super::stack::{Order, Stack};
-use super::turns::INTERLEAVE_BYTES;
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
 use crate::accel::{AlphaTests, Bvh};
 use crate::geometry::Geometry;
 use crate::simd::{prefetch, Isa};
+
+/// The `level` of a hit on the scene's own triangles.
+pub(crate) const OWN: u32 = u32::MAX;
+
+/// The size of a tree past which its single-ray walks go [`INTERLEAVED`] rays at a time
+/// ([`WideBvh::interleaves`]). On an AMD EPYC with 2 MiB of L2 per core and a
+/// 32 MiB L3, four rays in turn lost to one on the Stanford bunny (4.9 MiB of nodes and
+/// triangles) and a 100k-triangle skull (7.5 MiB): the caches serve them, and the turns'
+/// bookkeeping has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even;
+/// blobs of 250k, 450k and 1M triangles (18, 32 and 72 MiB) were faster in turns (measured:
+/// docs/benchmarks.md, «Design measurements», `INTERLEAVE_BYTES`).
+pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
 
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
 /// With four, half of the bunny's four-wide nodes had only two children, both leaves: a
@@ -71,7 +81,7 @@ pub(crate) struct SlotHit {
     pub primitive: u32,
     /// Leaf slot, for [`WideBvh::normal`].
     pub slot: u32,
-    /// The placement of the triangle hit (`levels::OWN`: the scene's own).
+    /// The placement of the triangle hit ([`OWN`]: the scene's own).
     pub level: u32,
 }
 
@@ -357,7 +367,7 @@ impl WideBvh {
         if count == 0 {
             let node = &self.wide[first as usize];
             let (mask, near) = node.enter::<I>(o, inv, t_min, limit, EXIT_SCALE);
-            stack.push_children(self, node, mask, &near, order);
+            stack.push_children(|i, c| self.prefetch_child(i, c), node, mask, &near, order);
             return true;
         }
         for (group, valid) in self.leaf(first, count) {

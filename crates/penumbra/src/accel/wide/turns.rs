@@ -20,15 +20,6 @@ use crate::accel::prim::watertight::{Crossing, EdgeRule, PreparedRay};
 use crate::accel::AlphaTests;
 use crate::simd::Isa;
 
-/// The size of a tree past which its single-ray walks go [`INTERLEAVED`] rays at a time
-/// ([`super::tree::WideBvh::interleaves`]). On an AMD EPYC with 2 MiB of L2 per core and a
-/// 32 MiB L3, four rays in turn lost to one on the Stanford bunny (4.9 MiB of nodes and
-/// triangles) and a 100k-triangle skull (7.5 MiB): the caches serve them, and the turns'
-/// bookkeeping has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even;
-/// blobs of 250k, 450k and 1M triangles (18, 32 and 72 MiB) were faster in turns (measured:
-/// docs/benchmarks.md, «Design measurements», `INTERLEAVE_BYTES`).
-pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
-
 /// Rays whose walks go in turn through a tree larger than [`INTERLEAVE_BYTES`]. Eight
 /// against four, in batches that waited for their longest walk: faster on the 1M-triangle
 /// blob's occlusion and closest hits, about even on counting. In a stream (a walk that ends

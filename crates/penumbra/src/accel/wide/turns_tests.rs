@@ -297,7 +297,7 @@ impl Flag {
     }
 }
 
-impl crate::accel::wide::kernels::Control for Flag {
+impl crate::accel::wide::control::Control for Flag {
     type Error = Cancelled;
 
     fn cancelled(&self) -> bool {
