@@ -256,17 +256,18 @@ class RaycastingScene:
         compose with it); for a placement of a placement, ``transform`` places the placed
         geometry as it did in :meth:`add_instance`. Nothing is built again but the top level
         (on the next query), and the queries then answer as a fresh :meth:`add_instance`
-        with that transform would. An id that is no placement (a geometry of
-        ``add_triangles``, or an object of the scene ``raycasting_scene()`` made, which moves
-        with :meth:`penumbra.Scene.set_transform` and a new ``raycasting_scene()``) and a
-        matrix :meth:`add_instance` would refuse raise ``ValueError`` and change nothing."""
+        with that transform would. Placements made on this one keep their place until they
+        are moved themselves. An id that is no placement (a geometry of ``add_triangles``, or
+        an object of the scene ``raycasting_scene()`` made, whose surface attributes come from
+        that scene) and a matrix :meth:`add_instance` would refuse raise ``ValueError`` and
+        change nothing."""
         call = "set_transform"
         geometry_id = _args.integer(call, "geometry_id", geometry_id, 0, _args.U32_MAX)
         if geometry_id < self._objects:
             raise ValueError(
                 f"{call}: geometry_id: geometry {geometry_id} is an object of the scene "
-                "raycasting_scene() made; move it with Scene.set_transform and make the "
-                "ray-casting scene again"
+                "raycasting_scene() made (its surface attributes come from that scene): only "
+                "placements add_instance returned move"
             )
         matrix = _matrix(transform, (4, 4), call, "transform")
         self._core.set_transform(geometry_id, matrix)

@@ -1,7 +1,10 @@
 //! The second level, written once over any [`Tree`]: meshes built once (in object space) and
 //! placed any number of times ([`Placement`]), under a top-level binary tree over the
-//! placements' world boxes ([`Placed`]). A placement moves in place ([`Placed::set_transform`]):
-//! its map is replaced and the top-level tree built again; the mesh trees are untouched. A closest- or every-hit query walks the top tree nearest first, an any-hit query as
+//! placements' world boxes ([`Placed`]). Placements move in place
+//! ([`Placed::set_transforms`]): their maps are replaced and the top-level tree is built
+//! again; the mesh trees are untouched.
+//!
+//! A closest- or every-hit query walks the top tree nearest first, an any-hit query as
 //! [`Tree::ANY_NEAREST_FIRST`] says; at a placement the ray enters the mesh's tree
 //! through the placement's world-to-object map. The direction is mapped but not renormalized,
 //! so `t` means the same in both spaces and a hit needs no conversion.

@@ -36,8 +36,9 @@ impl RaycastingScene {
     /// (geometry id = object id; primitive ids count the object's triangles in the order it
     /// added them, or an instance's mesh's). An instance places its mesh's tree, as in the
     /// renderer; the world's trees are used as they are, not built again (with cut-out
-    /// materials, its opaque and cut-out trees are joined under one new root). Cut-out materials come along: a ray passes
-    /// through a triangle where its material's alpha test cuts it away, in every ray query
+    /// materials, its opaque and cut-out trees are joined under one new root, or built again
+    /// as one where that root would make a tree deeper than a build makes one). Cut-out
+    /// materials come along: a ray passes through a triangle where its material's alpha test cuts it away, in every ray query
     /// (the closest-point queries ignore alpha; see the module doc).
     pub fn from_world(world: &World) -> Result<RaycastingScene, RaycastError> {
         let own = world.geometry();
@@ -75,12 +76,12 @@ impl RaycastingScene {
                 alpha,
             });
         }
-        // The world's trees, viewed eight children at a time: nothing is built.
+        // The world's trees, viewed eight children at a time (see `Levels::own_tree`).
         let t = &all;
         let ids = |i: usize| [t.geometry.triangles[i].object, t.local_ids[i]];
         let flat = world.accel().own_tree(own).into_owned();
         let tree = Arc::new(WideBvh::from_bvh(flat, |i| own.corners(i), ids));
-        let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
+        let meshes = t.meshes.iter().map(|m| m.tree.clone()).collect();
         let levels = WideLevels::new(tree, t.alpha.clone(), meshes, t.placements.clone(), None);
         let accel = LazyAccel::default();
         accel.set(Arc::new(levels));
@@ -277,7 +278,7 @@ impl Triangles {
         let mut geometry = Geometry::default();
         geometry.append(&mesh, &Transform::IDENTITY, &[], 0);
         let ids: Vec<u32> = (0..mesh.len() as u32).collect();
-        (Arc::new(WideBvh::build(&geometry, &ids, None)), positions)
+        MeshTree::new(Arc::new(WideBvh::build(&geometry, &ids, None)), positions)
     }
 }
 
@@ -300,22 +301,24 @@ pub(super) fn checked_transform(rows: &[[f32; 4]; 4]) -> Result<Transform, Rayca
     Ok(transform)
 }
 
-/// `Err(Beyond)` naming the first vertex of `mesh` that `transform` places beyond
-/// ±[`MAX_COORDINATE`] (or not finite). A bound is looked at first: when the farthest a
-/// point of the tree's root box can be placed, `Σⱼ|mᵢⱼ|·r + |tᵢ|` for the box's reach `r`,
-/// stays within the limit with room for the rounding, so does every vertex.
-fn check_placed((tree, positions): &MeshTree, transform: &Transform) -> Result<(), RaycastError> {
-    let reach = tree.bvh().nodes().first().map(|root| {
-        let (lo, hi) = (Vec3::from(root.min_corner()), Vec3::from(root.max_corner()));
-        lo.abs().max(hi.abs()).max_element()
-    });
+/// `Err` when `transform` is singular, or `Err(Beyond)` naming the first vertex of `mesh`
+/// (used by a triangle or not) that it places beyond ±[`MAX_COORDINATE`] (or not finite). A
+/// bound is looked at first: when the farthest any vertex can be placed, `Σⱼ|mᵢⱼ|·r + |tᵢ|`
+/// for the vertices' reach `r`, stays within the limit with room for the rounding, so does
+/// every vertex.
+fn check_placed(mesh: &MeshTree, transform: &Transform) -> Result<(), RaycastError> {
+    // A product of two placements' maps may be singular where neither is.
+    if transform.is_singular() {
+        return Err(RaycastError::SingularTransform);
+    }
     let m = transform.world_from_object;
     let linear = m.x_axis.truncate().abs() + m.y_axis.truncate().abs() + m.z_axis.truncate().abs();
-    let placed = reach.map(|r| (linear * r + m.w_axis.truncate().abs()).max_element());
-    if placed.is_some_and(|p| p <= MAX_COORDINATE * (1.0 - 1.0 / 1_048_576.0)) {
+    let placed = (linear * mesh.reach + m.w_axis.truncate().abs()).max_element();
+    if placed <= MAX_COORDINATE * (1.0 - 1.0 / 1_048_576.0) {
         return Ok(());
     }
-    match positions
+    match mesh
+        .positions
         .iter()
         .position(|&p| !within_range(transform.point(p)))
     {
@@ -367,7 +370,7 @@ fn mesh_trees(world: &World) -> Vec<MeshTree> {
                     WideBvh::build(&geometry, &ids, None)
                 }
             };
-            (Arc::new(tree), mesh.positions.as_slice().into())
+            MeshTree::new(Arc::new(tree), mesh.positions.as_slice().into())
         })
         .collect()
 }

@@ -27,8 +27,27 @@ const ON_THREAD: usize = 1 << 15;
 /// How often a waiting query looks at its cancel flag.
 const POLL: Duration = Duration::from_millis(5);
 
-/// A mesh's tree and its vertices (to check where a placement puts them).
-pub(super) type MeshTree = (Arc<WideBvh>, Arc<[Vec3]>);
+/// A mesh's tree, and its vertices with the largest magnitude of their coordinates (to check
+/// where a placement puts them).
+#[derive(Clone, Debug)]
+pub(crate) struct MeshTree {
+    pub tree: Arc<WideBvh>,
+    pub positions: Arc<[Vec3]>,
+    /// The largest `|coordinate|` of any of `positions`, used by a triangle or not.
+    pub reach: f32,
+}
+
+impl MeshTree {
+    /// The mesh tree `tree` over `positions`.
+    pub fn new(tree: Arc<WideBvh>, positions: Arc<[Vec3]>) -> MeshTree {
+        let reach = (positions.iter()).fold(0.0f32, |r, p| r.max(p.abs().max_element()));
+        MeshTree {
+            tree,
+            positions,
+            reach,
+        }
+    }
+}
 
 /// The triangles of a scene and each one's index within its own geometry, and the meshes
 /// placed, shared with a build that outlives a cancelled query.
@@ -61,7 +80,7 @@ impl Triangles {
         let placed = self.placements.iter();
         self.geometry.len()
             + placed
-                .map(|p| self.meshes[p.mesh as usize].0.tris().len())
+                .map(|p| self.meshes[p.mesh as usize].tree.tris().len())
                 .sum::<usize>()
     }
 }
@@ -226,7 +245,7 @@ fn start(build: &Arc<Build>, triangles: &Arc<Triangles>, pool: &Arc<rayon::Threa
             let finish = Finish(build);
             let t = &triangles;
             let own = Arc::new(WideBvh::build(&t.geometry, &t.local_ids, Some(&pool)));
-            let meshes = t.meshes.iter().map(|(m, _)| m.clone()).collect();
+            let meshes = t.meshes.iter().map(|m| m.tree.clone()).collect();
             let placements = t.placements.clone();
             let levels = WideLevels::new(own, t.alpha.clone(), meshes, placements, Some(&pool));
             finish.0.finish(State::Built(Arc::new(levels)));

@@ -400,3 +400,37 @@ fn a_moved_placement_answers_as_one_added_there() {
     );
     assert_eq!(moved.cast_rays(&rays, &on(1)).unwrap(), after);
 }
+
+#[test]
+fn a_placement_is_checked_on_every_vertex_and_as_composed() {
+    // Vertex 3 is used by no triangle, and still placed beyond the limit by a shift of 2e11.
+    let mut s = RaycastingScene::new();
+    let vertices = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [9e11, 0.0, 0.0],
+    ];
+    s.add_triangles(&vertices, &[[0, 1, 2]]).unwrap();
+    let shift = |x: f32| rows(&Transform::from_matrix(Mat4::from_translation(Vec3::X * x)));
+    let beyond = || RaycastError::Beyond {
+        what: "placed vertex",
+        index: 3,
+    };
+    assert_eq!(s.add_instance(0, &shift(2e11)), Err(beyond()));
+    assert_eq!(s.add_instance(0, &shift(1e11)), Ok(1));
+    assert_eq!(s.set_transform(1, &shift(2e11)), Err(beyond()));
+    // Two small scales, each invertible, whose product is not.
+    let small = rows(&Transform::from_matrix(Mat4::from_scale(Vec3::splat(
+        1e-12,
+    ))));
+    assert_eq!(s.add_instance(0, &small), Ok(2));
+    let singular = RaycastError::SingularTransform;
+    assert_eq!(
+        s.add_instance(2, &small),
+        Err(RaycastError::SingularTransform)
+    );
+    assert_eq!(s.add_instance(2, &rows(&Transform::IDENTITY)), Ok(3));
+    assert_eq!(s.set_transform(3, &small), Err(singular));
+    assert_eq!(s.geometry_count(), 4);
+}
