@@ -1,7 +1,17 @@
-//! The stack of the wide tree's walks ([`WideBvh`]'s single-ray queries).
+//! The stack of the wide tree's walks (`WideBvh`'s single-ray queries), and the tree size
+//! past which a few walks go in turn, each with a stack of its own (`turns`).
 
 use super::node::{WideNode, WIDTH};
 use crate::accel::STACK_SIZE;
+
+/// The size of a tree past which its single-ray walks go `INTERLEAVED` (`turns`) rays at a time
+/// (`WideBvh::interleaves`). On an AMD EPYC with 2 MiB of L2 per core and a
+/// 32 MiB L3, four rays in turn lost to one on the Stanford bunny (4.9 MiB of nodes and
+/// triangles) and a 100k-triangle skull (7.5 MiB): the caches serve them, and the turns'
+/// bookkeeping has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even;
+/// blobs of 250k, 450k and 1M triangles (18, 32 and 72 MiB) were faster in turns (measured:
+/// docs/benchmarks.md, «Design measurements», `INTERLEAVE_BYTES`).
+pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
 
 /// Entries of a depth-first walk's stack: a wide node pops one entry and pushes at most
 /// [`WIDTH`] children, once per level of the binary tree at most (its depth limit keeps it

@@ -19,6 +19,7 @@ use std::sync::OnceLock;
 use super::group::{TriangleGroup, GROUP};
 use super::margins::{tie_bound, EXIT_SCALE};
 use super::node::{collapse, WideNode};
+use super::stack::INTERLEAVE_BYTES;
 pub(crate) use super::stack::{Order, Stack};
 use crate::accel::prim::boundary::{boundaries, Boundary};
 use crate::accel::prim::watertight::{unit_normal, Crossing, EdgeRule, PreparedRay, SoaTriangle};
@@ -28,15 +29,6 @@ use crate::simd::{prefetch, Isa};
 
 /// The `level` of a hit on the scene's own triangles.
 pub(crate) const OWN: u32 = u32::MAX;
-
-/// The size of a tree past which its single-ray walks go [`INTERLEAVED`] rays at a time
-/// ([`WideBvh::interleaves`]). On an AMD EPYC with 2 MiB of L2 per core and a
-/// 32 MiB L3, four rays in turn lost to one on the Stanford bunny (4.9 MiB of nodes and
-/// triangles) and a 100k-triangle skull (7.5 MiB): the caches serve them, and the turns'
-/// bookkeeping has no misses to overlap. A 150k-triangle blob (10.7 MiB) was about even;
-/// blobs of 250k, 450k and 1M triangles (18, 32 and 72 MiB) were faster in turns (measured:
-/// docs/benchmarks.md, «Design measurements», `INTERLEAVE_BYTES`).
-pub(crate) const INTERLEAVE_BYTES: usize = 16 << 20;
 
 /// Triangles of the largest binary subtree that the wide tree holds as one leaf (one group).
 /// With four, half of the bunny's four-wide nodes had only two children, both leaves: a

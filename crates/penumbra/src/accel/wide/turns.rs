@@ -20,7 +20,7 @@ use crate::accel::prim::watertight::{Crossing, EdgeRule, PreparedRay};
 use crate::accel::AlphaTests;
 use crate::simd::Isa;
 
-/// Rays whose walks go in turn through a tree larger than [`INTERLEAVE_BYTES`]. Eight
+/// Rays whose walks go in turn through a tree larger than `INTERLEAVE_BYTES` (`stack`). Eight
 /// against four, in batches that waited for their longest walk: faster on the 1M-triangle
 /// blob's occlusion and closest hits, about even on counting. In a stream (a walk that ends
 /// gives its place to the next ray), six, ten, twelve and sixteen gained nothing over eight
