@@ -337,3 +337,14 @@ def test_a_scenes_own_objects_move_with_the_scene_not_the_raycasting_scene():
     rc = scene.raycasting_scene()
     with pytest.raises(ValueError, match="set_transform: geometry_id: geometry 0 is an object"):
         rc.set_transform(0, np.eye(4))
+    # A placement added to it moves: a copy of the sphere, from 3 to 6 along x.
+    shift = np.eye(4)
+    shift[0, 3] = 3
+    copy = rc.add_instance(0, shift)
+    ray = [[9, 0, 0, -1, 0, 0]]
+    assert rc.cast_rays(ray)["t_hit"].numpy()[0] == pytest.approx(5, abs=0.05)
+    shift[0, 3] = 6
+    rc.set_transform(copy, shift)
+    hit = rc.cast_rays(ray)
+    assert hit["geometry_ids"].numpy()[0] == copy
+    assert hit["t_hit"].numpy()[0] == pytest.approx(2, abs=0.05)
