@@ -71,6 +71,9 @@ mkdir -p "$scratch"
 echo "tools/fuzz.sh: fuzzing $target for $seconds s" >&2
 # Release code with debug assertions, overflow checks and AddressSanitizer; one process. The
 # dictionary holds the words of the format (keys, statements, chunk names) for mutations to use.
+# LeakSanitizer skips glibc's thread-local destructor records of exiting pool threads
+# (fuzz/lsan.supp says why).
+export LSAN_OPTIONS="suppressions=$root/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 cargo +nightly fuzz run -O --debug-assertions "$target" "$scratch" "$root/fuzz/corpus/$target" -- \
     -dict="$root/fuzz/dicts/$target.dict" -max_total_time="$seconds" -timeout=10 \
     -rss_limit_mb=2048 -print_final_stats=1 "$@"
