@@ -38,8 +38,9 @@ impl RaycastingScene {
     /// renderer; the world's trees are used as they are, not built again (with cut-out
     /// materials, its opaque and cut-out trees are joined under one new root, or built again
     /// as one where that root would make a tree deeper than a build makes one). Cut-out
-    /// materials come along: a ray passes through a triangle where its material's alpha test cuts it away, in every ray query
-    /// (the closest-point queries ignore alpha; see the module doc).
+    /// materials come along: a ray passes through a triangle where its material's alpha test
+    /// cuts it away, in every ray query (the closest-point queries ignore alpha; see the
+    /// module doc).
     pub fn from_world(world: &World) -> Result<RaycastingScene, RaycastError> {
         let own = world.geometry();
         // Every object is a geometry, those without triangles too (an empty mesh), so that
@@ -128,8 +129,7 @@ impl RaycastingScene {
         let (mesh, transform, alpha) = match scene.placed.get(&geometry_id) {
             Some(&p) => {
                 let p = &scene.placements[p as usize];
-                let both = transform.world_from_object * p.transform.world_from_object;
-                (Ok(p.mesh), Transform::from_matrix(both), p.alpha.clone())
+                (Ok(p.mesh), on(&transform, p), p.alpha.clone())
             }
             None => match scene.mesh_of.get(&geometry_id) {
                 Some((m, alpha)) => (Ok(*m), transform, alpha.clone()),
@@ -194,10 +194,7 @@ impl RaycastingScene {
         let scene = &self.triangles;
         let p = &scene.placements[index as usize];
         let transform = match scene.placed_on.get(&geometry_id) {
-            Some(base) => {
-                let under = &scene.placements[scene.placed[base] as usize].transform;
-                Transform::from_matrix(given.world_from_object * under.world_from_object)
-            }
+            Some(base) => on(&given, &scene.placements[scene.placed[base] as usize]),
             None => given,
         };
         check_placed(&scene.meshes[p.mesh as usize], &transform)?;
@@ -299,6 +296,11 @@ pub(super) fn checked_transform(rows: &[[f32; 4]; 4]) -> Result<Transform, Rayca
         return Err(RaycastError::SingularTransform);
     }
     Ok(transform)
+}
+
+/// `transform` applied after placement `base`'s: a placement of a placement.
+fn on(transform: &Transform, base: &Placement) -> Transform {
+    Transform::from_matrix(transform.world_from_object * base.transform.world_from_object)
 }
 
 /// `Err` when `transform` is singular, or `Err(Beyond)` naming the first vertex of `mesh`
