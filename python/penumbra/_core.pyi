@@ -55,6 +55,13 @@ class CoreScene:
         scene_digest: Optional[str] = None,
         **kwargs: Any,
     ) -> str: ...
+    def moved(
+        self,
+        object: int,
+        matrix: List[List[float]],
+        placement: Optional[int] = None,
+        threads: int = 0,
+    ) -> "CoreScene": ...
     def pack(self) -> Dict[str, Any]: ...
     def camera_path(
         self, name: str

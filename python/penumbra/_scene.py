@@ -24,7 +24,7 @@ import numpy as np
 from . import _args, _core, _display
 from ._camera import Camera
 from ._pack import PackedScene
-from ._raycast import RaycastingScene
+from ._raycast import RaycastingScene, _matrix
 
 SceneError = _core.SceneError
 
@@ -82,7 +82,8 @@ class Scene:
     """A built scene: its world (geometry with its BVH, materials, textures, lights and every
     camera) and the scene file's default render settings. Make one with :func:`load`,
     :func:`loads` or :func:`load_dict`. The world is built once; every :meth:`render` call
-    reuses it, whatever camera, size, sampler or seed it asks for.
+    reuses it, whatever camera, size, sampler or seed it asks for. :meth:`set_transform`
+    moves an object.
     """
 
     __slots__ = ("_core",)
@@ -204,6 +205,37 @@ class Scene:
     def __repr__(self) -> str:
         s = self.stats
         return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
+
+    def set_transform(
+        self, obj: int, matrix: Any, index: Optional[int] = None, threads: int = 0
+    ) -> None:
+        """Moves object ``obj`` (its position in the file's ``objects``, as :attr:`objects`
+        lists them) to ``matrix``, a (4, 4) row-major object-to-world matrix whose last row is
+        ``[0, 0, 0, 1]`` (an array, nested lists or an Open3D tensor). It replaces the
+        object's ``translate``, ``rotate`` and ``scale`` (it does not compose with them), as
+        the object's ``matrix`` key would in the file. For an ``instances`` object, ``index``
+        picks one of its inline placements: ``matrix`` replaces that copy's placement, which
+        stays under the object's own transform, as in the file; without ``index`` the whole
+        object moves, every copy with it.
+
+        The next :meth:`render` renders the moved scene byte for byte as a fresh load of the
+        file with that transform does, and :meth:`pack`, :attr:`scene_digest` and the
+        records of :meth:`record` carry the move (a move of the same object or copy replaces
+        the last one). The scene is built again, with ``threads`` workers (0: all cores),
+        from the bytes its first build read: nothing is read from disk, and a move costs
+        about what the load cost without the reading (see docs/python.md). Renders and
+        ray-casting scenes made before keep the scene as it was.
+
+        Raises :class:`SceneError` at the object's key for an ``obj`` or ``index`` the scene
+        lacks, a matrix that is not finite, not affine or cannot be inverted, or an
+        ``index`` into placements kept in a ``.npy`` file; the scene is then unchanged.
+        """
+        call = "set_transform"
+        obj = _args.integer(call, "obj", obj, 0, _args.U32_MAX)
+        index = _args.optional_integer(call, "index", index, 0, _args.U32_MAX)
+        rows = _matrix(matrix, (4, 4), f"Scene.{call}", "matrix")
+        threads = _args.threads(call, threads)
+        self._core = self._core.moved(obj, rows, index, threads)
 
     def raycasting_scene(self) -> RaycastingScene:
         """A :class:`RaycastingScene` of the scene's triangles (spheres tessellated as they

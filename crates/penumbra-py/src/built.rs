@@ -1,6 +1,7 @@
 //! A built scene as the Python package holds it ([`CoreScene`]: the world, shared and never
-//! rebuilt, the file's settings and what a pack and a record need), and its build with the
-//! GIL released. Its methods as Python sees them are in `scene`.
+//! changed, the file's settings and what a pack and a record need), its build with the GIL
+//! released, and the scene with an object moved ([`CoreScene::with_move`]). Its methods as Python
+//! sees them are in `scene`.
 
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
@@ -37,6 +38,50 @@ impl CoreScene {
     /// The digest of the scene's text and every file its build read.
     pub(crate) fn digest(&self, py: Python<'_>) -> String {
         py.detach(|| self.file.digest(&self.files))
+    }
+}
+
+impl CoreScene {
+    /// This scene with object `object` (or its copy `placement`) placed by `matrix`: the file
+    /// with the move (`SceneFile::with_transform`), reading from a pack of the bytes this
+    /// scene's build read (nothing from disk), and its world: this one with instances moved
+    /// when the object's copies are instances (`SceneFile::moved_world`), else built again
+    /// with `threads` workers.
+    pub(crate) fn with_move(
+        &self,
+        py: Python<'_>,
+        object: usize,
+        placement: Option<usize>,
+        matrix: [[f64; 4]; 4],
+        threads: usize,
+    ) -> PyResult<CoreScene> {
+        let moved = py.detach(|| {
+            // The first move packs what the build read; later ones read from that pack.
+            let packed = match self.file.files().is_packed() {
+                true => self.file.clone(),
+                false => self.file.pack(&self.files)?.load()?,
+            };
+            let file = packed.with_transform(object, placement, matrix)?;
+            let ids = self.objects[object].clone();
+            let world = file.moved_world(object, &self.world, ids)?;
+            Ok::<_, penumbra::SceneError>((file, world))
+        });
+        let (file, world) = moved.map_err(|e| scene_error(py, e))?;
+        let Some(world) = world else {
+            return build(py, threads, move || Ok(file));
+        };
+        Ok(CoreScene {
+            world: Arc::new(world),
+            settings: self.settings.clone(),
+            file_samples: self.file_samples,
+            gamma: self.gamma,
+            load_seconds: self.load_seconds,
+            file,
+            files: self.files.clone(),
+            objects: self.objects.clone(),
+            object_index: OnceLock::new(),
+            paths: self.paths.clone(),
+        })
     }
 }
 

@@ -73,6 +73,22 @@ impl CoreScene {
         render_scene(py, &self.world, &self.settings, self.file_samples, request)
     }
 
+    /// This scene with object `object` placed by `matrix` (by rows) instead of its own
+    /// transform, or for an `instances` object with `placement`, that copy's placement (see
+    /// `penumbra::SceneFile::with_transform`), as a fresh load of the file with that
+    /// transform builds it (see `CoreScene::with_move` in `built`).
+    #[pyo3(signature = (object, matrix, placement = None, threads = 0))]
+    fn moved(
+        &self,
+        py: Python<'_>,
+        object: usize,
+        matrix: [[f64; 4]; 4],
+        placement: Option<usize>,
+        threads: usize,
+    ) -> PyResult<CoreScene> {
+        self.with_move(py, object, placement, matrix, threads)
+    }
+
     /// A ray-casting scene of the world's triangles, instances placed (their meshes' trees
     /// shared, not copied), geometry id = object index.
     fn raycasting_scene(&self, py: Python<'_>) -> PyResult<CoreRaycastingScene> {

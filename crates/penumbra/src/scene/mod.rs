@@ -9,6 +9,7 @@ mod error;
 mod gltf;
 mod locate;
 mod model;
+mod moves;
 mod npy;
 mod obj;
 mod overrides;

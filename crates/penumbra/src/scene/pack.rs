@@ -43,6 +43,16 @@ pub struct PackError {
     pub source: io::Error,
 }
 
+impl From<PackError> for SceneError {
+    /// A file that could not be packed is a file that could not be read.
+    fn from(e: PackError) -> SceneError {
+        SceneError::Read {
+            path: e.path,
+            source: e.source,
+        }
+    }
+}
+
 impl SceneFile {
     /// This file, keeping a copy of every file its builds read (see [`Files::keeping`]), so
     /// that [`SceneFile::pack`] holds the bytes the build read: a snapshot, which a change to

@@ -94,6 +94,31 @@ impl Source {
         })
     }
 
+    /// The same text, with no override applied yet.
+    pub(super) fn unset(&self) -> Source {
+        Source {
+            set: Vec::new(),
+            ..self.clone()
+        }
+    }
+
+    /// The overrides applied, each with the path of what it set.
+    pub(super) fn set(&self) -> &[(KeyPath, String)] {
+        &self.set
+    }
+
+    /// The value tree with the overrides applied (each parsed again from its text).
+    pub(super) fn tree_now(&self) -> Result<Table, SceneError> {
+        let mut table = self.tree()?;
+        for (path, text) in &self.set {
+            let applied = Override::parse(text)
+                .map_err(|e| e.to_string())
+                .and_then(|o| overrides::apply(&mut table, &o).map_err(|(_, m)| m));
+            applied.map_err(|m| self.override_error(ErrorKind::BadValue, path, text, &m))?;
+        }
+        Ok(table)
+    }
+
     /// The file as a value tree (tables keep the file's order) for overrides to change.
     fn tree(&self) -> Result<Table, SceneError> {
         match self.format {

@@ -145,7 +145,7 @@ pub struct WorldStats {
 
 /// Everything a render sees: shareable between threads, and changed after the build only by
 /// moving instances ([`World::set_transform`]).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct World {
     geometry: Geometry,
     meshes: Vec<Mesh>,

@@ -138,7 +138,7 @@ impl Builder<'_> {
             }
             let path = KeyPath::root("objects").index(i);
             let model = self.gltf_for_key(&path, &m.file, "cameras")?;
-            let world = object_matrix(o);
+            let world = self.object_matrix(&path, o)?;
             for c in &model.cameras {
                 let (position, look_at, up) = c.view(world);
                 let name = unique(&c.name, |n| taken.iter().any(|t| t == n));
@@ -167,7 +167,7 @@ impl Builder<'_> {
             }
             let path = KeyPath::root("objects").index(i);
             let model = self.gltf_for_key(&path, &m.file, "lights")?;
-            let world = object_matrix(o);
+            let world = self.object_matrix(&path, o)?;
             for l in &model.lights {
                 lights.push((path.clone(), gltf_light(l, world)));
             }
@@ -377,15 +377,6 @@ impl Builder<'_> {
         }
         Ok(image)
     }
-}
-
-/// The object's own transform (`T·Rz·Ry·Rx·S`) as a matrix.
-fn object_matrix(o: &ObjectDesc) -> Mat4 {
-    crate::math::srt_matrix(
-        o.scale.map_or(Vec3::ONE, |s| s.rgb()),
-        o.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
-        o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
-    )
 }
 
 /// The penumbra light of glTF light `l` placed by `world`: candela (point, spot) and lux

@@ -11,6 +11,7 @@ mod materials;
 mod objects;
 mod paths;
 mod placements;
+pub(crate) use placements::copy_transforms;
 mod settings;
 
 use std::collections::{BTreeSet, HashMap};
@@ -70,25 +71,7 @@ struct Lighting {
 pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     let start = Instant::now();
     let desc = &file.desc;
-    let mut b = Builder {
-        file,
-        pool: thread_pool(threads).ok().map(|(pool, _)| pool),
-        images: HashMap::new(),
-        meshes: HashMap::new(),
-        gltfs: HashMap::new(),
-        warnings: Vec::new(),
-        uses: HashMap::new(),
-        transforms: HashMap::new(),
-        read: BTreeSet::new(),
-        world: WorldBuilder::new(),
-        lighting: Lighting {
-            emission: 0.0,
-            ambient: 0.0,
-            model: LightModel::Phong,
-        },
-        budget: budget::Budget::new(crate::memory::available()),
-        paths: Vec::new(),
-    };
+    let mut b = Builder::new(file, thread_pool(threads).ok().map(|(pool, _)| pool));
     let film = b.film()?;
     let file_cameras = b.cameras()?;
     let gltf_cameras = b.gltf_cameras()?;
@@ -194,6 +177,32 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         warnings: b.warnings,
         paths: b.paths,
     })
+}
+
+impl<'a> Builder<'a> {
+    /// A builder of `file` with nothing built yet, on `pool`'s threads (`None`: the calling
+    /// thread's).
+    fn new(file: &'a SceneFile, pool: Option<rayon::ThreadPool>) -> Builder<'a> {
+        Builder {
+            file,
+            pool,
+            images: HashMap::new(),
+            meshes: HashMap::new(),
+            gltfs: HashMap::new(),
+            warnings: Vec::new(),
+            uses: HashMap::new(),
+            transforms: HashMap::new(),
+            read: BTreeSet::new(),
+            world: WorldBuilder::new(),
+            lighting: Lighting {
+                emission: 0.0,
+                ambient: 0.0,
+                model: LightModel::Phong,
+            },
+            budget: budget::Budget::new(crate::memory::available()),
+            paths: Vec::new(),
+        }
+    }
 }
 
 impl Builder<'_> {

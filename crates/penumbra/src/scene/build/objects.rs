@@ -34,12 +34,7 @@ pub(super) struct LoadedObj {
 
 impl Builder<'_> {
     pub(super) fn object(&mut self, path: &KeyPath, o: &ObjectDesc) -> Result<()> {
-        let mut world = Transform::from_srt(
-            o.scale.map_or(Vec3::ONE, |s| s.rgb()),
-            o.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
-            o.translate.map_or(Vec3::ZERO, |t| t.vec3()),
-        );
-        self.check_invertible(&path.key("scale"), &world, o.scale)?;
+        let mut world = self.object_transform(path, o)?;
         if let Some(file) = super::gltf::gltf_file(o) {
             let placements = match &o.shape {
                 ShapeDesc::Instances(d) => self.placements(path, &d.transforms)?,
@@ -117,8 +112,7 @@ impl Builder<'_> {
         // Each copy: its placement, then the object's transform; its material, or the
         // object's materials.
         for (i, p) in placements.iter().enumerate() {
-            let transform = Transform::from_matrix(world.world_from_object * p.matrix);
-            self.check_invertible(&at(i), &transform, None)?;
+            let transform = self.copy_transform(&at(i), &world, p)?;
             let own;
             let materials = match &p.material {
                 Some(name) => {
@@ -146,6 +140,35 @@ impl Builder<'_> {
             })?;
         }
         Ok(())
+    }
+
+    /// The object-to-world transform of object `o` at `path`, checked.
+    pub(super) fn object_transform(&self, path: &KeyPath, o: &ObjectDesc) -> Result<Transform> {
+        let world = Transform::from_matrix(self.object_matrix(path, o)?);
+        let key = if o.matrix.is_some() {
+            "matrix"
+        } else {
+            "scale"
+        };
+        self.check_invertible(&path.key(key), &world, o.scale)?;
+        Ok(world)
+    }
+
+    /// The transform of the copy at `at` placed by `p` under its object's `world`, checked.
+    pub(super) fn copy_transform(
+        &self,
+        at: &KeyPath,
+        world: &Transform,
+        p: &Placement,
+    ) -> Result<Transform> {
+        let transform = Transform::from_matrix(world.world_from_object * p.matrix);
+        self.check_invertible(at, &transform, None)?;
+        Ok(transform)
+    }
+
+    /// The object-to-world matrix of object `o` at `path` (see [`Builder::own_matrix`]).
+    pub(super) fn object_matrix(&self, path: &KeyPath, o: &ObjectDesc) -> Result<glam::Mat4> {
+        self.own_matrix(path, (o.scale, o.rotate, o.translate), o.matrix.as_ref())
     }
 
     /// `Err` at `path` when `transform` cannot be inverted (which the normals need).

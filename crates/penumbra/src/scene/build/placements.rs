@@ -12,9 +12,13 @@ use glam::{Mat4, Vec3};
 use super::budget::BYTES_PER_INSTANCE;
 use super::{Builder, Result};
 use crate::math::srt_matrix;
-use crate::scene::desc::{ObjectDesc, PlacementDesc, ShapeDesc, TransformsDesc};
+use crate::math::Transform;
+use crate::scene::desc::{
+    ColorDesc, Matrix, ObjectDesc, PlacementDesc, ShapeDesc, TransformsDesc, Vec3Desc,
+};
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::npy;
+use crate::scene::SceneFile;
 
 /// Bytes a `.npy` file may have: 2^24 instances of float64 matrices and a header.
 const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
@@ -24,6 +28,30 @@ const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
 pub(super) struct Placement {
     pub matrix: Mat4,
     pub material: Option<String>,
+}
+
+/// The object-to-world transform of each copy of `instances` object `object` of `file`,
+/// composed and checked as its build does them ([`Builder::object`]), reading its `.npy` file
+/// if it has one; `None` for another type of object, and for copies of a glTF file (made of
+/// its nodes).
+pub(crate) fn copy_transforms(file: &SceneFile, object: usize) -> Result<Option<Vec<Transform>>> {
+    let Some(o) = file.desc.objects.get(object) else {
+        return Ok(None);
+    };
+    let ShapeDesc::Instances(d) = &o.shape else {
+        return Ok(None);
+    };
+    if super::gltf::gltf_file(o).is_some() {
+        return Ok(None);
+    }
+    let mut b = Builder::new(file, None);
+    let path = KeyPath::root("objects").index(object);
+    let world = b.object_transform(&path, o)?;
+    let at = path.key("transforms");
+    let placements = b.placements(&path, &d.transforms)?;
+    let copies = placements.iter().enumerate();
+    let transforms = copies.map(|(i, p)| b.copy_transform(&at.index(i), &world, p));
+    Ok(Some(transforms.collect::<Result<_>>()?))
 }
 
 impl Builder<'_> {
@@ -80,33 +108,42 @@ impl Builder<'_> {
 
     /// One inline placement, checked.
     fn placement(&self, at: &KeyPath, p: &PlacementDesc) -> Result<Placement> {
-        let matrix = match p.matrix {
-            None => srt_matrix(
-                p.scale.map_or(Vec3::ONE, |s| s.rgb()),
-                p.rotate.map_or(Vec3::ZERO, |r| r.vec3()),
-                p.translate.map_or(Vec3::ZERO, |t| t.vec3()),
-            ),
-            Some(_) if p.scale.is_some() || p.rotate.is_some() || p.translate.is_some() => {
-                return Err(self.bad(
-                    &at.key("matrix"),
-                    "a matrix replaces scale, rotate and translate: give one or the other",
-                ));
-            }
-            Some(rows) => {
-                if rows[3].map(|v| v.0) != [0.0, 0.0, 0.0, 1.0] {
-                    return Err(self.bad(
-                        &at.key("matrix"),
-                        "the matrix is not affine: its last row must be [0, 0, 0, 1]",
-                    ));
-                }
-                let by_rows: Vec<f32> = rows.iter().flatten().map(|v| v.f32()).collect();
-                Mat4::from_cols_slice(&by_rows).transpose()
-            }
-        };
         Ok(Placement {
-            matrix,
+            matrix: self.own_matrix(at, (p.scale, p.rotate, p.translate), p.matrix.as_ref())?,
             material: p.material.clone(),
         })
+    }
+
+    /// The transform an object or placement at `at` gives itself: its `scale`, `rotate` and
+    /// `translate` (`T·Rz·Ry·Rx·S`), or its `matrix` (by rows), checked: given alone, and
+    /// affine.
+    pub(super) fn own_matrix(
+        &self,
+        at: &KeyPath,
+        (scale, rotate, translate): (Option<ColorDesc>, Option<Vec3Desc>, Option<Vec3Desc>),
+        matrix: Option<&Matrix>,
+    ) -> Result<Mat4> {
+        let Some(rows) = matrix else {
+            return Ok(srt_matrix(
+                scale.map_or(Vec3::ONE, |s| s.rgb()),
+                rotate.map_or(Vec3::ZERO, |r| r.vec3()),
+                translate.map_or(Vec3::ZERO, |t| t.vec3()),
+            ));
+        };
+        if scale.is_some() || rotate.is_some() || translate.is_some() {
+            return Err(self.bad(
+                &at.key("matrix"),
+                "a matrix replaces scale, rotate and translate: give one or the other",
+            ));
+        }
+        if rows[3].map(|v| v.0) != [0.0, 0.0, 0.0, 1.0] {
+            return Err(self.bad(
+                &at.key("matrix"),
+                "the matrix is not affine: its last row must be [0, 0, 0, 1]",
+            ));
+        }
+        let by_rows: Vec<f32> = rows.iter().flatten().map(|v| v.f32()).collect();
+        Ok(Mat4::from_cols_slice(&by_rows).transpose())
     }
 
     /// The matrices of the `.npy` file `file` (named at `path`), read once per scene.

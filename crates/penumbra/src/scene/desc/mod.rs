@@ -46,8 +46,8 @@ pub use lights::{
     PointLightDesc, SpotLightDesc,
 };
 pub use objects::{
-    CubeDesc, InstancesDesc, MeshDesc, ObjectDesc, ObjectType, PlacementDesc, QuadDesc, ShapeDesc,
-    SphereDesc, TransformsDesc, TriangleDesc,
+    CubeDesc, InstancesDesc, Matrix, MeshDesc, ObjectDesc, ObjectType, PlacementDesc, QuadDesc,
+    ShapeDesc, SphereDesc, TransformsDesc, TriangleDesc,
 };
 pub use textures::{
     CheckerTextureDesc, ColorSpace, ImageTextureDesc, TextureDesc, TextureKindDesc, TextureType,

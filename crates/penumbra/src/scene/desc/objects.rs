@@ -30,7 +30,8 @@ use serde::Deserialize;
 use super::tagged::{self, Tagged};
 use super::values::{ColorDesc, Exact, Num, Vec2Desc, Vec3Desc};
 
-/// `[[objects]]`: a shape, its material and its placement (`T·Rz·Ry·Rx·S`).
+/// `[[objects]]`: a shape, its material and its placement (`T·Rz·Ry·Rx·S`, or a 4×4
+/// `matrix`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObjectDesc {
     /// What the object is.
@@ -43,7 +44,13 @@ pub struct ObjectDesc {
     pub rotate: Option<Vec3Desc>,
     /// Translation.
     pub translate: Option<Vec3Desc>,
+    /// An object-to-world matrix, by rows (the last must be 0, 0, 0, 1), instead of `scale`,
+    /// `rotate` and `translate`, as Mitsuba's `to_world` and pbrt's `Transform` take one.
+    pub matrix: Option<Matrix>,
 }
+
+/// A 4×4 matrix by rows, as scene files write one.
+pub type Matrix = [[Num; 4]; 4];
 
 impl ObjectDesc {
     /// Its `type`, and the file for a mesh or instances: `sphere`, `mesh models/bunny.obj`,
@@ -165,7 +172,7 @@ pub struct PlacementDesc {
     pub translate: Option<Vec3Desc>,
     /// An object-to-world matrix, by rows (the last must be 0, 0, 0, 1), instead of `scale`,
     /// `rotate` and `translate`.
-    pub matrix: Option<[[Num; 4]; 4]>,
+    pub matrix: Option<Matrix>,
 }
 
 impl<'de> Deserialize<'de> for TransformsDesc {
@@ -215,6 +222,7 @@ pub(super) struct ObjectFields {
     scale: Option<ColorDesc>,
     rotate: Option<Vec3Desc>,
     translate: Option<Vec3Desc>,
+    matrix: Option<Matrix>,
     vertices: Option<[Vec3Desc; 3]>,
     uvs: Option<[Vec2Desc; 3]>,
     normals: Option<[Vec3Desc; 3]>,
@@ -233,7 +241,7 @@ pub(super) struct ObjectFields {
 impl Tagged for ObjectDesc {
     type Kind = ObjectType;
     type Fields = ObjectFields;
-    const COMMON: &'static [&'static str] = &["material", "scale", "rotate", "translate"];
+    const COMMON: &'static [&'static str] = &["material", "scale", "rotate", "translate", "matrix"];
     const ALL: &'static [&'static str] = &[
         "vertices",
         "uvs",
@@ -291,6 +299,7 @@ impl Tagged for ObjectDesc {
             "scale" => f.scale = Some(map.next_value()?),
             "rotate" => f.rotate = Some(map.next_value()?),
             "translate" => f.translate = Some(map.next_value()?),
+            "matrix" => f.matrix = Some(map.next_value()?),
             "vertices" => f.vertices = Some(map.next_value::<Exact<_, 3>>()?.0),
             "uvs" => f.uvs = Some(map.next_value::<Exact<_, 3>>()?.0),
             "normals" => f.normals = Some(map.next_value::<Exact<_, 3>>()?.0),
@@ -344,6 +353,7 @@ impl Tagged for ObjectDesc {
             scale: f.scale,
             rotate: f.rotate,
             translate: f.translate,
+            matrix: f.matrix,
         })
     }
 }
