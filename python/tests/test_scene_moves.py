@@ -131,3 +131,13 @@ def test_bad_moves_are_refused_and_change_nothing(cube, tmp_path):
     with pytest.raises(ValueError, match="index must be from 0"):
         scene.set_transform(2, TURN, index=-1)
     assert scene.scene_digest == digest
+
+
+def test_a_model_file_moves_as_a_scene_and_its_errors_name_no_line_of_text(cube, tmp_path):
+    scene = penumbra.load(tmp_path / cube)
+    before = scene.render(width=32, height=24)
+    with pytest.raises(penumbra.SceneError) as e:
+        scene.set_transform(0, TURN, index=0)
+    assert e.value.key == "objects[0]" and e.value.line is None, str(e.value)
+    scene.set_transform(0, TURN)
+    assert not np.array_equal(scene.render(width=32, height=24), before)

@@ -43,8 +43,8 @@ impl CoreScene {
 
 impl CoreScene {
     /// This scene with object `object` (or its copy `placement`) placed by `matrix`: the file
-    /// with the move (`SceneFile::with_transform`), reading from a pack of the bytes this
-    /// scene's build read (nothing from disk), and its world: this one with instances moved
+    /// with the move (`SceneFile::with_transform`), reading the bytes this scene's build read
+    /// (`Files::snapshot`: nothing from disk), and its world: this one with instances moved
     /// when the object's copies are instances (`SceneFile::moved_world`), else built again
     /// with `threads` workers.
     pub(crate) fn with_move(
@@ -56,12 +56,10 @@ impl CoreScene {
         threads: usize,
     ) -> PyResult<CoreScene> {
         let moved = py.detach(|| {
-            // The first move packs what the build read; later ones read from that pack.
-            let packed = match self.file.files().is_packed() {
-                true => self.file.clone(),
-                false => self.file.pack(&self.files)?.load()?,
-            };
-            let file = packed.with_transform(object, placement, matrix)?;
+            // What the build read, as a pack: the moved scene reads nothing from disk.
+            let files = self.file.files().snapshot();
+            let file =
+                (self.file.clone().with_files(files)).with_transform(object, placement, matrix)?;
             let ids = self.objects[object].clone();
             let world = file.moved_world(object, &self.world, ids)?;
             Ok::<_, penumbra::SceneError>((file, world))

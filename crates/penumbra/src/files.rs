@@ -56,6 +56,22 @@ impl Files {
         }
     }
 
+    /// The files kept so far (see [`Files::keeping`]) as a pack, the same folders allowed:
+    /// a scene built again from them reads the bytes its first build read, and nothing from
+    /// disk. A pack is itself; files not kept are an empty pack.
+    pub fn snapshot(&self) -> Files {
+        match (&self.packed, &self.kept) {
+            (Some(_), _) => self.clone(),
+            (None, kept) => Files {
+                packed: Some(Arc::new(
+                    kept.as_ref().map(|k| lock(k).clone()).unwrap_or_default(),
+                )),
+                kept: None,
+                allowed: self.allowed.clone(),
+            },
+        }
+    }
+
     /// The same files, where every file of a scene may read in `folders` (and below) besides
     /// its own folder: `--allow-path DIR`. A file names another only within these (see the
     /// module `reach`); in a pack, the folders are compared by name with the pack's paths.

@@ -312,12 +312,80 @@ fn moved_instances_are_moved_in_the_world_as_a_fresh_build_places_them() {
     let moved = original.with_transform(2, Some(0), TURN).unwrap();
     let world = moved.moved_world(2, &scene.world, scene.objects[2].clone());
     assert!(world.unwrap().is_none());
-    // A move the build refuses is refused alike.
+    // A move the build refuses is refused alike, at the same key: a matrix that cannot be
+    // inverted, a copy put past the coordinates penumbra renders exactly.
     let mut singular = TURN;
     singular[2] = [0.0; 4];
-    let moved = original.with_transform(3, Some(3), singular).unwrap();
+    let far = [
+        [3e12, 0.0, 0.0, 0.0],
+        [0.0, 3e12, 0.0, 0.0],
+        [0.0, 0.0, 3e12, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    for m in [singular, far] {
+        let moved = original.with_transform(3, Some(3), m).unwrap();
+        let e = moved
+            .moved_world(3, &scene.world, scene.objects[3].clone())
+            .unwrap_err();
+        assert_eq!(e.to_string(), moved.build(1).unwrap_err().to_string());
+        assert!(e.to_string().contains("objects[3].transforms[3]"), "{e}");
+    }
+}
+
+#[test]
+fn moved_instances_are_checked_for_scale_as_a_build_checks_them() {
+    let dir = TempDir::new("moved_scale");
+    dir.write("grid.obj", grid_obj(128));
+    let text = format!(
+        "{}[[objects]]\ntype = \"instances\"\nfile = \"grid.obj\"\nrotate = [0, 20, 0]\n\
+         transforms = [{}]\n",
+        HEAD.replace("position = [0, 1, 12]", "position = [0, 1, 1e18]"),
+        vec!["{ scale = 0.8 }"; 40].join(", ")
+    );
+    let path = dir.write("scene.toml", &text);
+    let original = SceneFile::from_str(&text, SceneFormat::Toml, &path, dir.path())
+        .unwrap()
+        .keeping_files();
+    let scene = original.build(1).unwrap();
+    // Within the coordinates, but edges so long that a camera this far overflows.
+    let huge = [
+        [1e12, 0.0, 0.0, 0.0],
+        [0.0, 1e12, 0.0, 0.0],
+        [0.0, 0.0, 1e12, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    let moved = original.with_transform(0, Some(5), huge).unwrap();
     let e = moved
-        .moved_world(3, &scene.world, scene.objects[3].clone())
+        .moved_world(0, &scene.world, scene.objects[0].clone())
         .unwrap_err();
     assert_eq!(e.to_string(), moved.build(1).unwrap_err().to_string());
+    assert!(e.to_string().contains("camera.position"), "{e}");
+}
+
+#[test]
+fn any_scene_a_file_loads_moves_json_and_line_breaks_included() {
+    let dir = TempDir::new("moved_any");
+    // A material name with a line break, and a seed beyond TOML's integers (JSON).
+    let toml = format!(
+        "{HEAD}[materials.\"a\\nb\"]\ndiffuse = [0.2, 0.9, 0.2]\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"a\\nb\"\n"
+    );
+    let json = r#"{"film": {"width": 40, "height": 30},
+        "camera": {"position": [0, 1, 12], "look_at": [0, 0, 0], "fov": 40},
+        "render": {"seed": 18446744073709551615, "sampler": "jittered", "samples": 4},
+        "lights": [{"type": "point", "position": [3, 6, 8], "intensity": 60}],
+        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "translate": [1, 0, 0]}]}"#;
+    for (text, format) in [
+        (toml.as_str(), SceneFormat::Toml),
+        (json, SceneFormat::Json),
+    ] {
+        let original = SceneFile::from_str(text, format, "s", dir.path()).unwrap();
+        let moved = original.with_transform(0, None, TURN).unwrap();
+        assert_eq!(moved.desc.objects[0].matrix.map(|m| m[0][3].0), Some(0.5));
+        let image = pixels(&moved.build(1).unwrap());
+        assert_ne!(image, pixels(&original.build(1).unwrap()));
+        // The pack, read again, builds the same.
+        let pack = moved.pack(&[]).unwrap();
+        assert_eq!(pixels(&pack.load().unwrap().build(1).unwrap()), image);
+    }
 }

@@ -89,7 +89,7 @@ impl SceneFile {
         }
         let rows = matrix.map(|row| Value::Array(row.map(Value::Float).to_vec()));
         entry.insert("matrix".to_owned(), Value::Array(rows.to_vec()));
-        let text = format!("{path}={}", Value::Table(entry));
+        let text = format!("{path}={}", one_line(&Value::Table(entry)));
         let moved = Override::parse(&text).map_err(|e| bad(&path, e.to_string()))?;
         // Earlier overrides at or under the entry are part of it now.
         let kept = self
@@ -122,20 +122,33 @@ impl SceneFile {
         world: &World,
         ids: Range<u32>,
     ) -> Result<Option<World>, SceneError> {
-        let Some(transforms) = build::copy_transforms(self, object)? else {
+        let placed = world.placed().iter().enumerate();
+        let instances: Vec<usize> = (placed.filter(|(_, p)| ids.contains(&p.object)))
+            .map(|(i, _)| i)
+            .collect();
+        if instances.len() != ids.len() {
+            return Ok(None);
+        }
+        // Each copy checked as the build checks it, in order, so that the first refused is
+        // the build's, at its key.
+        let check = |i: usize, t: &_| match instances.get(i) {
+            Some(&instance) => world.check_move(instance, t),
+            None => Ok(()),
+        };
+        let Some(transforms) = build::copy_transforms(self, object, check)? else {
             return Ok(None);
         };
-        let placed = world.placed().iter().enumerate();
-        let instances = placed.filter(|(_, p)| ids.contains(&p.object));
-        let moves: Vec<_> = (instances.map(|(i, _)| i).zip(transforms.iter().copied())).collect();
-        if moves.len() != transforms.len() || moves.len() != ids.len() {
+        if transforms.len() != instances.len() {
             return Ok(None);
         }
         let mut moved = world.clone();
-        moved.set_transforms(&moves).map_err(|e| {
-            let at = KeyPath::root("objects").index(object);
-            self.error(ErrorKind::BadValue, &at, e.to_string())
-        })?;
+        let moves: Vec<_> = instances.into_iter().zip(transforms).collect();
+        moved
+            .set_transforms(&moves)
+            .expect("every move was checked");
+        if let Some(problem) = moved.scale_problem() {
+            return Err(build::scale_error(self, problem));
+        }
         Ok(Some(moved))
     }
 }
@@ -154,4 +167,33 @@ fn entry_at<'t>(tree: &'t Table, path: &KeyPath) -> Option<&'t Table> {
         value?;
     }
     value?.as_table()
+}
+
+/// `value` as TOML on one line, as an override's value is read (see `Override::parse`):
+/// inline tables and arrays, and strings with their line breaks escaped (a multi-line string
+/// would not be one line).
+fn one_line(value: &Value) -> String {
+    let string = |s: &str| serde_json::to_string(s).expect("a string serializes");
+    match value {
+        Value::String(s) => string(s),
+        Value::Array(items) => {
+            let items: Vec<String> = items.iter().map(one_line).collect();
+            format!("[{}]", items.join(", "))
+        }
+        Value::Table(table) => {
+            let bare = |k: &str| {
+                !k.is_empty()
+                    && k.bytes()
+                        .all(|b| b.is_ascii_alphanumeric() || b"_-".contains(&b))
+            };
+            let entries: Vec<String> = (table.iter())
+                .map(|(k, v)| match bare(k) {
+                    true => format!("{k} = {}", one_line(v)),
+                    false => format!("{} = {}", string(k), one_line(v)),
+                })
+                .collect();
+            format!("{{ {} }}", entries.join(", "))
+        }
+        other => other.to_string(),
+    }
 }

@@ -329,11 +329,13 @@ impl<'de> Visitor<'de> for JsonVisitor {
     fn visit_i64<E>(self, v: i64) -> Result<JsonValue, E> {
         Ok(JsonValue(Some(Value::Integer(v))))
     }
-    fn visit_u64<E: serde_de::Error>(self, v: u64) -> Result<JsonValue, E> {
-        // TOML's integers are 64-bit signed; no scene key takes a larger one with overrides.
-        i64::try_from(v)
-            .map(|v| JsonValue(Some(Value::Integer(v))))
-            .map_err(|_| E::custom(format!("{v} is out of range (at most {})", i64::MAX)))
+    fn visit_u64<E>(self, v: u64) -> Result<JsonValue, E> {
+        // TOML's integers are 64-bit signed: a larger one is kept as its digits, which the one
+        // key that takes one (`render.seed`) reads as it reads an override's.
+        Ok(JsonValue(Some(match i64::try_from(v) {
+            Ok(v) => Value::Integer(v),
+            Err(_) => Value::String(v.to_string()),
+        })))
     }
     fn visit_f64<E>(self, v: f64) -> Result<JsonValue, E> {
         Ok(JsonValue(Some(Value::Float(v))))

@@ -243,43 +243,8 @@ impl WorldBuilder {
     /// camera (by name) or light (by index) too far from the triangles for their size, or an
     /// extent too small. `None` when all is well, or without triangles.
     pub(crate) fn scale_problem(&self) -> Option<scale::Problem> {
-        if self.geometry.is_empty() && self.placed.is_empty() {
-            return None;
-        }
-        let mut reach = scale::Reach::of(&self.geometry);
-        let uses = self.mesh_uses();
-        for ((mesh, bounds), uses) in self.meshes.iter().zip(&self.mesh_boxes).zip(uses) {
-            let edge = scale::longest_edge(
-                mesh.indices
-                    .iter()
-                    .map(|t| t.map(|v| mesh.positions[v as usize])),
-            );
-            for p in uses {
-                reach = reach.with(
-                    bounds.transformed(&p.transform),
-                    edge * p.transform.largest_stretch(),
-                );
-            }
-        }
-        let camera = self.cameras.iter().find_map(|(name, c)| {
-            let product = reach.product(c.position());
-            (product > scale::MAX_REACH).then(|| scale::Problem::Camera(name.clone(), product))
-        });
-        let light = || {
-            self.lights.iter().enumerate().find_map(|(i, l)| {
-                let product = scale::light_points(l)
-                    .map(|p| reach.product(p))
-                    .fold(0.0, f32::max);
-                (product > scale::MAX_REACH).then_some(scale::Problem::Light(i, product))
-            })
-        };
-        let extent = || {
-            let cameras = self.cameras.iter().map(|(_, c)| c.position());
-            let bounds = cameras.fold(reach.bounds, Aabb::grow);
-            let extent = (bounds.max - bounds.min).max_element();
-            (extent < scale::MIN_EXTENT).then_some(scale::Problem::Tiny(extent))
-        };
-        camera.or_else(light).or_else(extent)
+        let meshes = (&self.meshes[..], &self.mesh_boxes[..], &self.placed[..]);
+        scale_problem(&self.geometry, meshes, &self.cameras, &self.lights)
     }
 
     /// Builds the acceleration structure with `threads` workers (0: all cores) and returns
@@ -327,15 +292,6 @@ impl WorldBuilder {
             bvh_build_time: start.elapsed(),
         }
     }
-
-    /// For each shared mesh, the instances that place it.
-    fn mesh_uses(&self) -> Vec<Vec<&Placed>> {
-        let mut uses = vec![Vec::new(); self.meshes.len()];
-        for p in &self.placed {
-            uses[p.mesh as usize].push(p);
-        }
-        uses
-    }
 }
 
 /// `Err` for the first triangle of `mesh` that names a vertex past its positions.
@@ -370,4 +326,54 @@ pub(super) fn check_placement(bounds: Aabb, transform: &Transform) -> Result<(),
         }
     }
     Ok(())
+}
+
+/// [`WorldBuilder::scale_problem`] of a world's parts: its own triangles, its meshes with
+/// their boxes and placements, its cameras and lights (a built world's as its builder's).
+pub(super) fn scale_problem(
+    geometry: &Geometry,
+    (meshes, mesh_boxes, placed): (&[Mesh], &[Aabb], &[Placed]),
+    cameras: &[(String, Camera)],
+    lights: &[Light],
+) -> Option<scale::Problem> {
+    if geometry.is_empty() && placed.is_empty() {
+        return None;
+    }
+    let mut reach = scale::Reach::of(geometry);
+    let mut uses = vec![Vec::new(); meshes.len()];
+    for p in placed {
+        uses[p.mesh as usize].push(p);
+    }
+    for ((mesh, bounds), uses) in meshes.iter().zip(mesh_boxes).zip(uses) {
+        let edge = scale::longest_edge(
+            mesh.indices
+                .iter()
+                .map(|t| t.map(|v| mesh.positions[v as usize])),
+        );
+        for p in uses {
+            reach = reach.with(
+                bounds.transformed(&p.transform),
+                edge * p.transform.largest_stretch(),
+            );
+        }
+    }
+    let camera = cameras.iter().find_map(|(name, c)| {
+        let product = reach.product(c.position());
+        (product > scale::MAX_REACH).then(|| scale::Problem::Camera(name.clone(), product))
+    });
+    let light = || {
+        lights.iter().enumerate().find_map(|(i, l)| {
+            let product = scale::light_points(l)
+                .map(|p| reach.product(p))
+                .fold(0.0, f32::max);
+            (product > scale::MAX_REACH).then_some(scale::Problem::Light(i, product))
+        })
+    };
+    let extent = || {
+        let cameras = cameras.iter().map(|(_, c)| c.position());
+        let bounds = cameras.fold(reach.bounds, Aabb::grow);
+        let extent = (bounds.max - bounds.min).max_element();
+        (extent < scale::MIN_EXTENT).then_some(scale::Problem::Tiny(extent))
+    };
+    camera.or_else(light).or_else(extent)
 }

@@ -11,7 +11,7 @@ mod materials;
 mod objects;
 mod paths;
 mod placements;
-pub(crate) use placements::copy_transforms;
+pub(crate) use placements::{copy_transforms, scale_error};
 mod settings;
 
 use std::collections::{BTreeSet, HashMap};
@@ -23,7 +23,6 @@ use super::error::{ErrorKind, KeyPath, SceneError};
 use super::{Scene, SceneFile};
 use crate::integrator::LightModel;
 use crate::pool::thread_pool;
-use crate::scale::Problem;
 use crate::texture::Image;
 use crate::world::WorldBuilder;
 
@@ -154,15 +153,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         objects.push(first..b.world.object_count());
     }
     if let Some(problem) = b.world.scale_problem() {
-        let path = match &problem {
-            Problem::Camera(_, _) if desc.camera.is_some() => {
-                KeyPath::root("camera").key("position")
-            }
-            Problem::Camera(name, _) => KeyPath::root("cameras").key(name).key("position"),
-            Problem::Light(i, _) => KeyPath::root("lights").index(*i),
-            Problem::Tiny(_) => KeyPath::root("objects"),
-        };
-        return Err(b.bad(&path, problem.to_string()));
+        return Err(scale_error(file, problem));
     }
     let load_time = start.elapsed();
     let world = b.world.build_on(b.pool.as_ref());

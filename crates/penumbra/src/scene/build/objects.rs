@@ -15,7 +15,7 @@ use crate::geometry::{self, Mesh};
 use crate::material::Cutout;
 use crate::math::Transform;
 use crate::scene::desc::{ColorDesc, ObjectDesc, ShapeDesc};
-use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
+use crate::scene::error::{AssetKind, ErrorKind, KeyPath, SceneError};
 use crate::scene::obj::{load_obj, ObjMaterial};
 use crate::scene::ply::{is_ply, load_model};
 use crate::texture::{Filter, ImageTexture, Texture, TextureKind, Wrap};
@@ -131,15 +131,18 @@ impl Builder<'_> {
                     self.world.add_mesh(&mesh, &transform, materials)
                 }
             };
-            added.map_err(|e| {
-                let kind = match e {
-                    WorldError::VertexOutOfRange { .. } => ErrorKind::Asset(AssetKind::Mesh),
-                    _ => ErrorKind::BadValue,
-                };
-                self.err(kind, &at(i), e.to_string())
-            })?;
+            added.map_err(|e| self.world_error(&at(i), e))?;
         }
         Ok(())
+    }
+
+    /// The error of the world's refusal `e` of the copy or object at `at`.
+    pub(super) fn world_error(&self, at: &KeyPath, e: WorldError) -> SceneError {
+        let kind = match e {
+            WorldError::VertexOutOfRange { .. } => ErrorKind::Asset(AssetKind::Mesh),
+            _ => ErrorKind::BadValue,
+        };
+        self.err(kind, at, e.to_string())
     }
 
     /// The object-to-world transform of object `o` at `path`, checked.

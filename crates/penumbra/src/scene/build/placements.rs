@@ -13,12 +13,14 @@ use super::budget::BYTES_PER_INSTANCE;
 use super::{Builder, Result};
 use crate::math::srt_matrix;
 use crate::math::Transform;
+use crate::scale::Problem;
 use crate::scene::desc::{
     ColorDesc, Matrix, ObjectDesc, PlacementDesc, ShapeDesc, TransformsDesc, Vec3Desc,
 };
 use crate::scene::error::{AssetKind, ErrorKind, KeyPath};
 use crate::scene::npy;
-use crate::scene::SceneFile;
+use crate::scene::{SceneError, SceneFile};
+use crate::world::WorldError;
 
 /// Bytes a `.npy` file may have: 2^24 instances of float64 matrices and a header.
 const MAX_NPY_BYTES: u64 = (crate::world::MAX_INSTANCES as u64) * 128 + 65536;
@@ -31,10 +33,15 @@ pub(super) struct Placement {
 }
 
 /// The object-to-world transform of each copy of `instances` object `object` of `file`,
-/// composed and checked as its build does them ([`Builder::object`]), reading its `.npy` file
-/// if it has one; `None` for another type of object, and for copies of a glTF file (made of
-/// its nodes).
-pub(crate) fn copy_transforms(file: &SceneFile, object: usize) -> Result<Option<Vec<Transform>>> {
+/// composed and checked as its build does them ([`Builder::object`]), each also checked by
+/// `check` (`World::check_move`, as the build's `add_instance` checks it), reading its `.npy`
+/// file if it has one; `None` for another type of object, and for copies of a glTF file (made
+/// of its nodes).
+pub(crate) fn copy_transforms(
+    file: &SceneFile,
+    object: usize,
+    mut check: impl FnMut(usize, &Transform) -> std::result::Result<(), WorldError>,
+) -> Result<Option<Vec<Transform>>> {
     let Some(o) = file.desc.objects.get(object) else {
         return Ok(None);
     };
@@ -50,8 +57,25 @@ pub(crate) fn copy_transforms(file: &SceneFile, object: usize) -> Result<Option<
     let at = path.key("transforms");
     let placements = b.placements(&path, &d.transforms)?;
     let copies = placements.iter().enumerate();
-    let transforms = copies.map(|(i, p)| b.copy_transform(&at.index(i), &world, p));
+    let transforms = copies.map(|(i, p)| {
+        let transform = b.copy_transform(&at.index(i), &world, p)?;
+        check(i, &transform).map_err(|e| b.world_error(&at.index(i), e))?;
+        Ok(transform)
+    });
     Ok(Some(transforms.collect::<Result<_>>()?))
+}
+
+/// The error of a world's scale `problem`, at the key the build names for it.
+pub(crate) fn scale_error(file: &SceneFile, problem: Problem) -> SceneError {
+    let path = match &problem {
+        Problem::Camera(_, _) if file.desc.camera.is_some() => {
+            KeyPath::root("camera").key("position")
+        }
+        Problem::Camera(name, _) => KeyPath::root("cameras").key(name).key("position"),
+        Problem::Light(i, _) => KeyPath::root("lights").index(*i),
+        Problem::Tiny(_) => KeyPath::root("objects"),
+    };
+    file.error(ErrorKind::BadValue, &path, problem.to_string())
 }
 
 impl Builder<'_> {
