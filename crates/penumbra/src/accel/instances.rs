@@ -24,6 +24,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3, Vec3A};
 
 use super::placed::{self, Placed};
+use super::tree::{Filter, Keep, KeepAll};
 use super::{build, traverse, Bvh, Tree};
 use crate::geometry::{Hit, Mesh};
 use crate::math::Ray;
@@ -62,6 +63,20 @@ impl Instances {
     /// was grouped.
     #[inline]
     pub(super) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
+        match self.filtered() {
+            false => self.occludes_segment_with::<KeepAll>(origin, end, t_max),
+            true => self.occludes_segment_with::<Filter>(origin, end, t_max),
+        }
+    }
+
+    /// [`Instances::occludes_segment`] with each instance's filter as `K`.
+    #[inline(always)]
+    fn occludes_segment_with<'p, K: Keep<'p>>(
+        &'p self,
+        origin: Vec3,
+        end: Vec3,
+        t_max: f32,
+    ) -> bool {
         let (top, ids) = self.top();
         if top.is_empty() {
             return false;
@@ -74,8 +89,7 @@ impl Instances {
                 let map = e.object_from_world;
                 let (a, b) = (map.transform_point3(origin), map.transform_point3(end));
                 let ray = Ray::new(a, b - a);
-                e.mesh
-                    .any::<Baseline>(&ray, (0.0, t_max), e.filter, &mut ())
+                (e.mesh).any::<Baseline, K>(&ray, (0.0, t_max), K::of(e.filter), &mut ())
             })
         })
     }

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use glam::{Affine3A, DMat4, Vec3, Vec3A};
 
 use super::traverse::{slab_scaled, walk_any, walk_nearest};
-use super::tree::{Filter, Rule, Tree};
+use super::tree::{Filter, Keep, KeepAll, Rule, Tree};
 use super::{build, AlphaTests, Bvh, BvhNode};
 use crate::accel::prim::boundary::Boundary;
 use crate::math::{Aabb, Transform};
@@ -53,6 +53,9 @@ pub(crate) struct Placed<T> {
     /// each leaf slot.
     top: Vec<BvhNode>,
     top_ids: Vec<u32>,
+    /// True when some placement has alpha tests: the walks then ask each placement's filter;
+    /// else they walk with [`KeepAll`], the plain walk.
+    filtered: bool,
 }
 
 impl<T> Default for Placed<T> {
@@ -63,6 +66,7 @@ impl<T> Default for Placed<T> {
             maps: Vec::new(),
             top: Vec::new(),
             top_ids: Vec::new(),
+            filtered: false,
         }
     }
 }
@@ -77,10 +81,12 @@ impl<T: Tree> Placed<T> {
     ) -> Placed<T> {
         debug_assert!(placements.windows(2).all(|w| w[0].id < w[1].id));
         let maps = placements.iter().map(|p| inverse(&p.transform)).collect();
+        let filtered = placements.iter().any(|p| p.alpha.is_some());
         let mut placed = Placed {
             meshes,
             placements,
             maps,
+            filtered,
             ..Placed::default()
         };
         placed.build_top(pool);
@@ -124,6 +130,12 @@ impl<T: Tree> Placed<T> {
     /// The placements, in order.
     pub(crate) fn placements(&self) -> &[Placement] {
         &self.placements
+    }
+
+    /// True when some placement has alpha tests.
+    #[inline(always)]
+    pub(crate) fn filtered(&self) -> bool {
+        self.filtered
     }
 
     /// The top-level tree's nodes and the placement in each leaf slot.
@@ -238,6 +250,21 @@ pub(crate) struct Entry<'a, T> {
 #[inline(always)]
 pub(crate) fn closest<T: Tree, I: Isa>(
     placements: &Placed<T>,
+    ray: (Vec3, Vec3),
+    range: (f32, f32),
+    best: Option<T::Hit>,
+    stack: &mut T::Stack,
+) -> Option<T::Hit> {
+    match placements.filtered {
+        false => closest_with::<T, I, KeepAll>(placements, ray, range, best, stack),
+        true => closest_with::<T, I, Filter>(placements, ray, range, best, stack),
+    }
+}
+
+/// [`closest`] with each placement's filter as `K`.
+#[inline(always)]
+fn closest_with<'p, T: Tree, I: Isa, K: Keep<'p>>(
+    placements: &'p Placed<T>,
     (origin, direction): (Vec3, Vec3),
     (t_min, t_max): (f32, f32),
     mut best: Option<T::Hit>,
@@ -256,9 +283,10 @@ pub(crate) fn closest<T: Tree, I: Isa>(
                 (Rule::Open, None) => t_max,
                 (Rule::Closed, _) => *t,
             };
+            let filter = K::of(entry.filter);
             let Some(hit) = entry
                 .mesh
-                .closest::<I>(ray, (t_min, limit), entry.filter, stack)
+                .closest::<I, K>(ray, (t_min, limit), filter, stack)
             else {
                 return;
             };
@@ -280,6 +308,20 @@ pub(crate) fn any<T: Tree, I: Isa>(
     range: (f32, f32),
     stack: &mut T::Stack,
 ) -> bool {
+    match placements.filtered {
+        false => any_with::<T, I, KeepAll>(placements, ray, range, stack),
+        true => any_with::<T, I, Filter>(placements, ray, range, stack),
+    }
+}
+
+/// [`any`] with each placement's filter as `K`.
+#[inline(always)]
+fn any_with<'p, T: Tree, I: Isa, K: Keep<'p>>(
+    placements: &'p Placed<T>,
+    ray: (Vec3, Vec3),
+    range: (f32, f32),
+    stack: &mut T::Stack,
+) -> bool {
     let (o, d) = ray;
     if !T::ANY_NEAREST_FIRST {
         let (top, ids) = placements.top();
@@ -291,7 +333,7 @@ pub(crate) fn any<T: Tree, I: Isa>(
         return walk_any(top, (origin, inv_dir), range, scale, |slots| {
             ids[slots].iter().any(|&index| {
                 entered(placements, index, ray)
-                    .is_some_and(|(e, r)| e.mesh.any::<I>(&r, range, e.filter, stack))
+                    .is_some_and(|(e, r)| e.mesh.any::<I, K>(&r, range, K::of(e.filter), stack))
             })
         });
     }
@@ -303,7 +345,11 @@ pub(crate) fn any<T: Tree, I: Isa>(
         range.0,
         &mut bound,
         |_, entry, ray, bound| {
-            if !hit && entry.mesh.any::<I>(ray, range, entry.filter, stack) {
+            if !hit
+                && entry
+                    .mesh
+                    .any::<I, K>(ray, range, K::of(entry.filter), stack)
+            {
                 hit = true;
                 // No box is entered before −∞: the walk ends.
                 *bound = f32::NEG_INFINITY;
@@ -331,9 +377,11 @@ pub(crate) fn each<T: Tree, I: Isa>(
         &mut bound,
         |index, entry, ray, _| {
             let filters = (entry.filter, entry.border);
-            entry.mesh.each::<I>(ray, range, filters, stack, &mut |h| {
-                f(T::placed(h, entry.id, index))
-            });
+            entry
+                .mesh
+                .each::<I, Filter>(ray, range, filters, stack, &mut |h| {
+                    f(T::placed(h, entry.id, index))
+                });
         },
     );
 }

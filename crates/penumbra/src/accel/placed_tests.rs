@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::placed::{self, Placed, Placement};
 use super::test_meshes::{icosphere, random_transform, subdivided_cube, MeshData};
-use super::tree::{Rule, Tree};
+use super::tree::{KeepAll, Rule, Tree};
 use super::wide::WideBvh;
 use super::{build, Bvh};
 use crate::sampling::Rng;
@@ -74,7 +74,10 @@ fn one_by_one<T: Tree>(s: &Placed<T>, (o, d): (Vec3, Vec3), range: (f32, f32)) -
         let Some(ray) = T::prepare(map.transform_point3(o), map.transform_vector3(d)) else {
             continue;
         };
-        let Some(h) = e.mesh.closest::<Baseline>(&ray, range, None, &mut stack) else {
+        let Some(h) = e
+            .mesh
+            .closest::<Baseline, KeepAll>(&ray, range, KeepAll, &mut stack)
+        else {
             continue;
         };
         let h = T::placed(h, e.id, index);

@@ -27,9 +27,59 @@ use crate::geometry::Hit;
 use crate::math::Ray;
 use crate::simd::Isa;
 
-/// What a hit must pass after the primitive test: `None` keeps every hit; the alpha tests
-/// keep a hit unless its triangle's material cuts it out where the ray meets it.
+/// What a hit must pass after the primitive test: the alpha tests (`Some`) keep a hit unless
+/// its triangle's material cuts it out where the ray meets it; `None` keeps every hit.
 pub(crate) type Filter<'a> = Option<&'a AlphaTests>;
+
+/// A filter as a walk takes it: [`Filter`], asked on each hit, or [`KeepAll`], which a walk
+/// compiles without a test. A set of placements none of which has alpha tests walks with
+/// `KeepAll` (see `placed`), so that an opaque placement's walk is the plain one.
+pub(crate) trait Keep<'a>: Copy {
+    /// The filter of a placement whose alpha tests are `alpha`.
+    fn of(alpha: Filter<'a>) -> Self;
+    /// Whether the hit at barycentrics `(b1, b2)` of triangle `id` is kept.
+    fn keeps(self, id: u32, b1: f32, b2: f32) -> bool;
+    /// The alpha tests, for a tree whose walks take them as a [`Filter`].
+    fn tests(self) -> Filter<'a>;
+}
+
+/// Keeps every hit, with no test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct KeepAll;
+
+impl<'a> Keep<'a> for KeepAll {
+    #[inline(always)]
+    fn of(alpha: Filter<'a>) -> Self {
+        debug_assert!(
+            alpha.is_none(),
+            "KeepAll walks placements with no alpha tests"
+        );
+        KeepAll
+    }
+    #[inline(always)]
+    fn keeps(self, _: u32, _: f32, _: f32) -> bool {
+        true
+    }
+    #[inline(always)]
+    fn tests(self) -> Filter<'a> {
+        None
+    }
+}
+
+impl<'a> Keep<'a> for Filter<'a> {
+    #[inline(always)]
+    fn of(alpha: Filter<'a>) -> Self {
+        alpha
+    }
+    #[inline(always)]
+    fn keeps(self, id: u32, b1: f32, b2: f32) -> bool {
+        self.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2))
+    }
+    #[inline(always)]
+    fn tests(self) -> Filter<'a> {
+        self
+    }
+}
 
 /// The interval of `t` a tree's hits may take.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,20 +123,20 @@ pub(crate) trait Tree {
     fn prepare(origin: Vec3, direction: Vec3) -> Option<Self::Ray>;
 
     /// The closest hit with `t` in `range` under [`Tree::RULE`] that `filter` keeps, if any.
-    fn closest<I: Isa>(
+    fn closest<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &Self::Ray,
         range: (f32, f32),
-        filter: Filter,
+        filter: K,
         stack: &mut Self::Stack,
     ) -> Option<Self::Hit>;
 
     /// True when some hit with `t` in `range` passes `filter`; stops at the first.
-    fn any<I: Isa>(
+    fn any<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &Self::Ray,
         range: (f32, f32),
-        filter: Filter,
+        filter: K,
         stack: &mut Self::Stack,
     ) -> bool;
 
@@ -94,11 +144,11 @@ pub(crate) trait Tree {
     /// `border` (the wide tree's [`WideBvh::border`]) counts each crossing of the surface
     /// once: a ray through an edge or vertex is reported by the one triangle that owns it;
     /// without it, every triangle the ray meets is reported. The binary tree takes no border.
-    fn each<I: Isa>(
+    fn each<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &Self::Ray,
         range: (f32, f32),
-        filters: (Filter, Option<&[Boundary]>),
+        filters: (K, Option<&[Boundary]>),
         stack: &mut Self::Stack,
         f: &mut impl FnMut(Self::Hit),
     );
@@ -134,41 +184,43 @@ impl Tree for Bvh {
     }
 
     #[inline(always)]
-    fn closest<I: Isa>(
+    fn closest<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &Ray,
         range: (f32, f32),
-        filter: Filter,
+        filter: K,
         _: &mut (),
     ) -> Option<Hit> {
-        // One walk for both cases (a `match` made two, and the larger code was no longer
-        // inlined whole): without a filter the test is a branch on a hit, never taken.
-        let keep = |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2));
+        // One walk for either filter: with alpha tests the test is a branch on a hit (a
+        // `match` that made two walks was slower, and the larger code was no longer inlined
+        // whole); with [`KeepAll`] it is compiled away.
+        let keep = |id, b1, b2| filter.keeps(id, b1, b2);
         traverse::intersect_kept(self, ray, range.0, range.1, keep)
     }
 
     #[inline(always)]
-    fn any<I: Isa>(&self, ray: &Ray, range: (f32, f32), filter: Filter, _: &mut ()) -> bool {
-        let keep = |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2));
-        traverse::occluded_kept(self, ray, range.0, range.1, keep)
-    }
-
-    fn each<I: Isa>(
+    fn any<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &Ray,
         range: (f32, f32),
-        (filter, border): (Filter, Option<&[Boundary]>),
+        filter: K,
+        _: &mut (),
+    ) -> bool {
+        let keep = |id, b1, b2| filter.keeps(id, b1, b2);
+        traverse::occluded_kept(self, ray, range.0, range.1, keep)
+    }
+
+    fn each<'f, I: Isa, K: Keep<'f>>(
+        &self,
+        ray: &Ray,
+        range: (f32, f32),
+        (filter, border): (K, Option<&[Boundary]>),
         _: &mut (),
         f: &mut impl FnMut(Hit),
     ) {
         debug_assert!(border.is_none(), "Möller–Trumbore owns no border");
-        traverse::each_kept(
-            self,
-            ray,
-            range,
-            |id, b1, b2| filter.is_none_or(|alpha| alpha.keeps_flat(id, b1, b2)),
-            f,
-        );
+        let keep = |id, b1, b2| filter.keeps(id, b1, b2);
+        traverse::each_kept(self, ray, range, keep, f);
     }
 
     #[inline(always)]
@@ -213,35 +265,36 @@ impl Tree for WideBvh {
     }
 
     #[inline(always)]
-    fn closest<I: Isa>(
+    fn closest<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &PreparedRay,
         range: (f32, f32),
-        filter: Filter,
+        filter: K,
         stack: &mut Stack,
     ) -> Option<SlotHit> {
-        WideBvh::closest::<I>(self, ray, range, filter, stack)
+        WideBvh::closest::<I>(self, ray, range, filter.tests(), stack)
     }
 
     #[inline(always)]
-    fn any<I: Isa>(
+    fn any<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &PreparedRay,
         range: (f32, f32),
-        filter: Filter,
+        filter: K,
         stack: &mut Stack,
     ) -> bool {
-        WideBvh::occluded::<I>(self, ray, range, filter, stack)
+        WideBvh::occluded::<I>(self, ray, range, filter.tests(), stack)
     }
 
-    fn each<I: Isa>(
+    fn each<'f, I: Isa, K: Keep<'f>>(
         &self,
         ray: &PreparedRay,
         range: (f32, f32),
-        (filter, border): (Filter, Option<&[Boundary]>),
+        (filter, border): (K, Option<&[Boundary]>),
         stack: &mut Stack,
         f: &mut impl FnMut(SlotHit),
     ) {
+        let filter = filter.tests();
         match border {
             Some(border) => self.each_hit::<I>(ray, range, (border, filter), stack, f),
             None => self.each_met::<I>(ray, range, filter, stack, f),

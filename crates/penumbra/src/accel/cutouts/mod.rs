@@ -30,6 +30,7 @@ use glam::Vec3;
 
 use super::instances::{build_meshes, Instances};
 use super::placed::{closer, Placed, Placement};
+use super::tree::Filter;
 use super::{build, Bvh, Tree};
 use crate::geometry::{Geometry, Hit, Mesh};
 use crate::material::Material;
@@ -181,9 +182,9 @@ impl Cutouts {
     ) -> Option<Hit> {
         // Ties with `best` are looked for too: a smaller key may take them.
         let limit = best.map_or(t_max, |b| b.t.next_up());
-        let own = self
-            .flat
-            .closest::<Baseline>(ray, (t_min, limit), Some(&self.alpha), &mut ());
+        let own =
+            self.flat
+                .closest::<Baseline, Filter>(ray, (t_min, limit), Some(&self.alpha), &mut ());
         let own = own.map(|h| Hit {
             triangle: self.flat_ids[h.triangle as usize],
             ..h
@@ -198,7 +199,7 @@ impl Cutouts {
     /// True when a kept hit of a cut-out triangle meets the ray with `t` in `(t_min, t_max)`.
     pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.flat
-            .any::<Baseline>(ray, (t_min, t_max), Some(&self.alpha), &mut ())
+            .any::<Baseline, Filter>(ray, (t_min, t_max), Some(&self.alpha), &mut ())
             || self.instances.occluded(ray, t_min, t_max)
     }
 
@@ -208,7 +209,7 @@ impl Cutouts {
     pub(crate) fn occludes_segment(&self, origin: Vec3, end: Vec3, t_max: f32) -> bool {
         let ray = Ray::new(origin, end - origin);
         self.flat
-            .any::<Baseline>(&ray, (0.0, t_max), Some(&self.alpha), &mut ())
+            .any::<Baseline, Filter>(&ray, (0.0, t_max), Some(&self.alpha), &mut ())
             || self.instances.occludes_segment(origin, end, t_max)
     }
 }
