@@ -16,6 +16,8 @@
 //! far, end an any-hit walk, or be reported. A hit it refuses does not shorten a closest-hit
 //! ray, and an any-hit walk looks on past it. The filter names a triangle by the tree's own
 //! triangle index (its `prim_ids`), which is how [`AlphaTests::keeps_flat`] numbers them.
+//! A walk takes its filter as a type ([`Keep`]): the alpha tests, asked on each hit, or
+//! [`KeepAll`], with no test compiled in, for trees and placements that have none.
 
 use glam::Vec3;
 
