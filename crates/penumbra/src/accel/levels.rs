@@ -12,6 +12,7 @@
 //! them last, and a batched query asks them for each of its rays still open, one at a time.
 
 use std::borrow::Cow;
+use std::sync::Arc;
 
 use glam::Vec3;
 
@@ -26,7 +27,8 @@ use crate::simd::SimdPath;
 /// The two levels of a world's acceleration structure.
 #[derive(Clone, Debug, Default)]
 pub struct Levels {
-    flat: Bvh,
+    /// Shared by `Arc`: a world with moved instances shares it.
+    flat: Arc<Bvh>,
     instances: Instances,
     /// The levels of the triangles whose material may cut; `None` in a world without.
     cutouts: Option<Box<Cutouts>>,
@@ -37,7 +39,7 @@ impl Levels {
     pub(crate) fn build(parts: &Parts, pool: Option<&rayon::ThreadPool>) -> Levels {
         let (flat, instances, cutouts) = cutouts::split(parts, pool);
         Levels {
-            flat,
+            flat: Arc::new(flat),
             instances,
             cutouts: cutouts.map(Box::new),
         }
@@ -62,7 +64,7 @@ impl Levels {
         let Some(cut) = &self.cutouts else {
             return Cow::Borrowed(&self.flat);
         };
-        let joined = build::join(self.flat.clone(), cut.flat_in_world());
+        let joined = build::join(Bvh::clone(&self.flat), cut.flat_in_world());
         Cow::Owned(joined.unwrap_or_else(|| Bvh::build(geometry)))
     }
 

@@ -1,5 +1,6 @@
 //! [`WorldBuilder`]: a world's parts, each checked as it is added, then built.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -278,8 +279,8 @@ impl WorldBuilder {
         };
         let accel = Levels::build(&parts, pool);
         World {
-            geometry: self.geometry,
-            meshes: self.meshes,
+            geometry: Arc::new(self.geometry),
+            meshes: self.meshes.into(),
             mesh_boxes: self.mesh_boxes,
             placed: self.placed,
             instance_materials: self.instance_materials,

@@ -24,6 +24,8 @@ use std::time::Duration;
 
 use thiserror::Error;
 
+use std::sync::Arc;
+
 use crate::accel::Levels;
 use crate::camera::Camera;
 use crate::geometry::{Facet, Geometry, Hit, Mesh, Surface};
@@ -147,8 +149,10 @@ pub struct WorldStats {
 /// moving instances ([`World::set_transform`]).
 #[derive(Clone, Debug)]
 pub struct World {
-    geometry: Geometry,
-    meshes: Vec<Mesh>,
+    /// Shared by `Arc` (as are the meshes and the trees over them), so that a clone, such as
+    /// a world with moved instances, copies only what a move changes.
+    geometry: Arc<Geometry>,
+    meshes: Arc<[Mesh]>,
     /// Bounds of each shared mesh's vertices, in object space.
     mesh_boxes: Vec<Aabb>,
     placed: Vec<Placed>,

@@ -58,13 +58,14 @@ pub(crate) struct Parts<'a> {
 /// may cut, with the alpha tests of their hits.
 #[derive(Clone, Debug)]
 pub(crate) struct Cutouts {
-    /// The tree over the world's own cut-out triangles, numbered in the order of the world's.
-    flat: Bvh,
+    /// The tree over the world's own cut-out triangles, numbered in the order of the world's
+    /// (shared by `Arc`, as the ids and tests are: a world with moved instances shares them).
+    flat: Arc<Bvh>,
     /// The world's index of each of those.
-    flat_ids: Vec<u32>,
+    flat_ids: Arc<[u32]>,
     /// The instances whose materials may cut.
     instances: Instances,
-    alpha: AlphaTests,
+    alpha: Arc<AlphaTests>,
 }
 
 /// The opaque levels (the world's own opaque triangles' tree and the other instances) and,
@@ -124,10 +125,10 @@ pub(crate) fn split(
     let instances = Placed::new(meshes.clone(), opaque_list, pool);
     let cut_instances = Placed::new(meshes, cut_list, pool);
     let cutouts = Cutouts {
-        flat: cut_flat,
-        flat_ids: cut,
+        flat: Arc::new(cut_flat),
+        flat_ids: cut.into(),
         instances: cut_instances,
-        alpha,
+        alpha: Arc::new(alpha),
     };
     (flat, instances, Some(cutouts))
 }
@@ -164,7 +165,7 @@ impl Cutouts {
 
     /// [`Cutouts::flat`], naming its triangles by their index in the world's geometry.
     pub(crate) fn flat_in_world(&self) -> Bvh {
-        let mut bvh = self.flat.clone();
+        let mut bvh = Bvh::clone(&self.flat);
         for id in &mut bvh.prim_ids {
             *id = self.flat_ids[*id as usize];
         }
