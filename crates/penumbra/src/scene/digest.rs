@@ -54,8 +54,8 @@ mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
+    use crate::files::Files;
     use crate::scene::{Override, SceneFormat};
-    use crate::Files;
 
     const TEXT: &str = "[film]\nwidth = 4\nheight = 3\n\
         [camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n";
