@@ -6,7 +6,7 @@ mod support;
 
 use glam::Vec3;
 use penumbra::{AssetKind, ErrorKind, Ray, Scene, SceneError, SceneFile, SceneFormat};
-use support::{npy, TempDir};
+use support::{npy, TempDir, CUBE_OBJ as CUBE};
 
 const HEAD: &str = r#"[film]
 width = 32
@@ -20,12 +20,6 @@ diffuse = [0.8, 0.1, 0.1]
 [materials.blue]
 diffuse = [0.1, 0.1, 0.8]
 "#;
-
-/// A unit cube centred at the origin, as an OBJ file (12 triangles).
-const CUBE: &str = "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n\
-v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n\
-f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 7 3\nf 4 8 7\nf 1 5 8\nf 1 8 4\n\
-f 2 3 7\nf 2 7 6\n";
 
 fn build(dir: &TempDir, objects: &str) -> Result<Scene, SceneError> {
     let text = format!("{HEAD}{objects}");
