@@ -38,7 +38,9 @@ pub(crate) struct Placement {
     pub id: u32,
     /// Object to world; invertible.
     pub transform: Transform,
-    /// The alpha tests of its mesh's triangles under its materials, when some may cut.
+    /// The alpha tests of its mesh's triangles under its materials, when some may cut. Set
+    /// before [`Placed::new`] and never after: whether a set's walks test hits at all is
+    /// decided there, from these.
     pub(crate) alpha: Option<Arc<AlphaTests>>,
 }
 
