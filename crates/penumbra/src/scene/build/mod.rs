@@ -70,7 +70,8 @@ struct Lighting {
 pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
     let start = Instant::now();
     let desc = &file.desc;
-    let mut b = Builder::new(file, thread_pool(threads).ok().map(|(pool, _)| pool));
+    let pool = thread_pool(threads).ok().map(|(pool, _)| pool);
+    let mut b = Builder::new(file, pool, crate::memory::available());
     let film = b.film()?;
     let file_cameras = b.cameras()?;
     let gltf_cameras = b.gltf_cameras()?;
@@ -172,8 +173,12 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
 
 impl<'a> Builder<'a> {
     /// A builder of `file` with nothing built yet, on `pool`'s threads (`None`: the calling
-    /// thread's).
-    fn new(file: &'a SceneFile, pool: Option<rayon::ThreadPool>) -> Builder<'a> {
+    /// thread's), within `available` bytes of memory (`None`: no bound).
+    fn new(
+        file: &'a SceneFile,
+        pool: Option<rayon::ThreadPool>,
+        available: Option<u64>,
+    ) -> Builder<'a> {
         Builder {
             file,
             pool,
@@ -190,7 +195,7 @@ impl<'a> Builder<'a> {
                 ambient: 0.0,
                 model: LightModel::Phong,
             },
-            budget: budget::Budget::new(crate::memory::available()),
+            budget: budget::Budget::new(available),
             paths: Vec::new(),
         }
     }

@@ -51,7 +51,8 @@ pub(crate) fn copy_transforms(
     if super::gltf::gltf_file(o).is_some() {
         return Ok(None);
     }
-    let mut b = Builder::new(file, None);
+    // Nothing is added to a world, so no memory bound is read (a move asks on every call).
+    let mut b = Builder::new(file, None, None);
     let path = KeyPath::root("objects").index(object);
     let world = b.object_transform(&path, o)?;
     let at = path.key("transforms");
