@@ -4,17 +4,21 @@
 //! triangle and applies the alpha test must agree with the closest-hit and any-hit queries
 //! bit for bit; every batched query (camera fans, shadow fans, bundles of segments, shafts)
 //! must agree with the single-ray ones on every SIMD path; instanced meshes (a cut-out
-//! triangle and an opaque one in each) must answer as their copies do.
+//! triangle and an opaque one in each) must answer as their copies do, up to a hair (a ray
+//! through an edge or a texel's border may go either way in two roundings: see `copies`).
 
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use penumbra::bench::{Pairs, Segments};
 use penumbra::{
-    intersect_triangle, supported_paths, Cutout, Filter, Hit, Image, ImageTexture, Material, Mesh,
-    Ray, Texture, TextureKind, Transform, World, WorldBuilder, Wrap,
+    intersect_triangle, supported_paths, Cutout, Filter, Image, ImageTexture, Material, Mesh, Ray,
+    Texture, TextureKind, Transform, World, WorldBuilder, Wrap,
 };
 use proptest::prelude::*;
+
+mod copies;
+use copies::{hit_near, ids, occluded_near};
 
 /// Material kinds: opaque, checker cut-out, image-alpha cut-out, cut away everywhere.
 const KINDS: u32 = 4;
@@ -159,24 +163,8 @@ fn occluded_brute_force(world: &World, ray: &Ray, t_min: f32, t_max: f32) -> boo
     })
 }
 
-/// The object and the triangle's index within it: a copy's triangle index counts from its
-/// object's first triangle.
-fn ids(world: &World, hit: &Hit) -> (u32, u32) {
-    let s = world.surface(hit);
-    if hit.instance.is_some() {
-        return (s.object, s.triangle);
-    }
-    let first = world
-        .geometry()
-        .triangles
-        .iter()
-        .position(|t| t.object == s.object)
-        .unwrap() as u32;
-    (s.object, s.triangle - first)
-}
-
 /// Checks every batched query of `world` against `single`, a world whose single-ray queries
-/// give the expected answers (the same world, or its copies).
+/// give the same answers bit for bit (the same world, or one built where it was moved).
 fn batches_agree(world: &World, single: &World, rays: &[Ray]) -> Result<(), TestCaseError> {
     let origin = rays[0].origin;
     let dirs: Vec<Vec3> = rays.iter().map(|r| r.direction).collect();
@@ -268,15 +256,22 @@ proptest! {
         for ray in &rays {
             let a = inst.intersect(ray, 0.0, f32::INFINITY);
             let b = flat.intersect(ray, 0.0, f32::INFINITY);
-            prop_assert_eq!(a.map(|h| ids(&inst, &h)), b.map(|h| ids(&flat, &h)));
-            if let (Some(a), Some(b)) = (a, b) {
-                prop_assert!((a.t - b.t).abs() <= 1e-5 * a.t.max(1.0), "t {} vs {}", a.t, b.t);
+            let found = a.map(|h| ids(&inst, &h));
+            if found != b.map(|h| ids(&flat, &h)) {
+                prop_assert!(hit_near(&flat, ray, found), "hit {:?} vs {:?}", a, b);
+            } else if let (Some(a), Some(b)) = (a, b) {
+                // Compared off the surface: a grazing ray's t is only as exact as 1 / sin θ.
+                let across = flat.surface(&b).geometric_normal.normalize().dot(ray.direction).abs();
+                let scale = ray.origin.length().max(1.0) + b.t * ray.direction.length();
+                prop_assert!((a.t - b.t).abs() * across <= 1e-5 * scale, "t {} vs {}", a.t, b.t);
             }
             for t_max in [0.3f32, 1.0] {
-                prop_assert_eq!(inst.accel().occluded(ray, 0.0, t_max), flat.accel().occluded(ray, 0.0, t_max));
+                let blocked = inst.accel().occluded(ray, 0.0, t_max);
+                prop_assert!(occluded_near(&flat, ray.origin, ray.origin + ray.direction * t_max, blocked));
             }
         }
-        batches_agree(&inst, &flat, &rays)?;
+        // Batches answer as the instanced world's own single rays, bit for bit.
+        batches_agree(&inst, &inst, &rays)?;
     }
 }
 
