@@ -286,27 +286,18 @@ def from_json(path: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
 
 
 def output_path(pattern: str, v: Mapping[str, Any], index: int) -> str:
-    """``pattern`` formatted with the view's ``name`` and ``index``. The name stays one file
-    name, by the rule the command line's ``{camera}`` follows: path separators, ``:`` and
-    control characters become ``_``, and so does a leading ``.`` or ``-`` (``..`` gives
-    ``_.``), so that no view writes outside the pattern's folder; a pattern whose ``..``
-    after a field leaves that folder (``out/{name}/../../x.png``) is a ``ValueError``, by the
-    command line's check.
+    """``pattern`` with the view's ``{name}`` and ``{index}`` (``{index:04d}``, or
+    ``{index:04}`` as the command line writes ``{frame:04}``: zeros to a width), by the
+    expander the command line's ``-o`` uses. The name stays one file name, by the rule the
+    command line's ``{camera}`` follows: path separators, ``:`` and control characters become
+    ``_``, and so does a leading ``.`` or ``-`` (``..`` gives ``_.``), so that no view writes
+    outside the pattern's folder; a pattern whose ``..`` after a field leaves that folder
+    (``out/{name}/../../x.png``), an unknown field or an unclosed brace is a ``ValueError``.
 
-    >>> output_path("out/{name}/{index}.png", {"name": "../up"}, 3)
-    'out/_._up/3.png'
+    >>> output_path("out/{name}/{index:03d}.png", {"name": "../up"}, 3)
+    'out/_._up/003.png'
     """
-    try:
-        path = pattern.format(name=_core.file_name_part(str(v["name"])), index=index)
-    except (KeyError, IndexError, ValueError) as e:
-        raise ValueError(
-            f"output pattern {pattern!r}: {e} (it may use {{name}} and {{index}})"
-        ) from None
-    try:
-        _core.check_output_inside(pattern, path)
-    except ValueError as e:
-        raise ValueError(f"output pattern {e}") from None
-    return path
+    return _core.view_output_path(pattern, str(v["name"]), index)
 
 
 def output_paths(pattern: str, views: Sequence[Mapping[str, Any]]) -> List[str]:

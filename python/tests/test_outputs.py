@@ -112,6 +112,21 @@ def test_patterns_that_climb_out_or_collide_are_refused():
     assert views.output_path("../out/{name}.png", {"name": ".."}, 0) == "../out/_..png"
 
 
+def test_a_batch_pattern_is_read_as_the_command_line_reads_its_own():
+    # One expander for `penumbra render -o` and a batch's `output`: widths in either
+    # spelling, the same messages for a field it does not know or a brace left open.
+    v = {"name": "front"}
+    assert views.output_path("out/{name}_{index:04d}.png", v, 7) == "out/front_0007.png"
+    assert views.output_path("out/{index:03}.png", v, 7) == "out/007.png"
+    assert views.output_path("{{{name}}}.png", v, 0) == "{front}.png"
+    with pytest.raises(ValueError, match=r"unknown field `\{camera\}`.*known: \{name\}, \{index\}"):
+        views.output_path("{camera}.png", v, 0)
+    with pytest.raises(ValueError, match=r"an unclosed `\{`"):
+        views.output_path("{name.png", v, 0)
+    with pytest.raises(ValueError, match="`name` takes no format"):
+        views.output_path("{name:>9}.png", v, 0)
+
+
 def test_a_views_aovs_are_the_npz_numpy_reads_back(tmp_path):
     # Written by the library's NPZ writer (products::npz), read by numpy as its own.
     rng = np.random.default_rng(3)

@@ -1,6 +1,6 @@
 //! The other files of a batch, by the library's one layout each (`penumbra::products`): the
-//! poses file (penumbra's layout or NeRF's `transforms.json`), the manifest's lines, and the
-//! check that keeps an output name inside its pattern's folder. Frames and lines cross from
+//! poses file (penumbra's layout or NeRF's `transforms.json`), the manifest's lines, and a
+//! view's output name (expanded, and kept inside its pattern's folder). Frames and lines cross from
 //! Python as JSON text.
 
 use std::path::PathBuf;
@@ -64,11 +64,20 @@ pub fn write_poses(py: Python<'_>, path: PathBuf, format: &str, frames: &str) ->
         .map_err(|e| product_error("write_poses", e))
 }
 
-/// Raises `ValueError` when `path`, a name `pattern` gave, leaves the folder the pattern
-/// names (a `..` after a field).
+/// The file of the view `name`, number `index` of its batch, by the output `pattern`: its
+/// `{name}` made one file name and its `{index}` counted from 0, by the library's expander
+/// (`{index:04}` or Python's `{index:04d}`). Raises `ValueError` for a pattern that gives no
+/// name, or one outside its folder (a `..` after a field).
 #[pyfunction]
-pub fn check_output_inside(pattern: &str, path: PathBuf) -> PyResult<()> {
-    output_name::check_inside(pattern, &path).map_err(|e| PyValueError::new_err(e.0))
+pub fn view_output_path(pattern: &str, name: &str, index: usize) -> PyResult<String> {
+    use output_name::Value;
+    let fields = [
+        ("name", Ok(Value::Text(penumbra::file_name_part(name)))),
+        ("index", Ok(Value::Number(index as i128))),
+    ];
+    let path = output_name::expand_fields(pattern, &fields)
+        .and_then(|path| output_name::check_inside(pattern, path.as_ref()).map(|()| path));
+    path.map_err(|e| PyValueError::new_err(format!("output pattern {e}")))
 }
 
 /// A manifest file open for appending (its folder made), as `penumbra render --manifest`

@@ -58,7 +58,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(layouts::pose_frames, m)?)?;
     m.add_function(wrap_pyfunction!(layouts::poses_layout, m)?)?;
     m.add_function(wrap_pyfunction!(layouts::write_poses, m)?)?;
-    m.add_function(wrap_pyfunction!(layouts::check_output_inside, m)?)?;
+    m.add_function(wrap_pyfunction!(layouts::view_output_path, m)?)?;
     m.add_class::<layouts::CoreManifest>()?;
     m.add_function(wrap_pyfunction!(layouts::host_name, m)?)?;
     m.add_function(wrap_pyfunction!(layouts::peak_memory_bytes, m)?)?;

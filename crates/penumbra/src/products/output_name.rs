@@ -84,9 +84,6 @@ pub struct Fields<'a> {
     pub frame: Option<i64>,
 }
 
-/// The names a pattern may use.
-const FIELDS: &str = "{camera}, {frame} (or {frame:04}), {scene}, {spp}, {seed}";
-
 /// A pattern that gives no name: an unknown field, an unclosed brace, a frame of a still
 /// camera, a name outside the pattern's folder. The message quotes the pattern.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -95,10 +92,40 @@ pub struct PatternError(pub String);
 
 /// `pattern` with each `{field}` replaced; `{{` and `}}` are literal braces.
 pub fn expand(pattern: &str, f: &Fields) -> Result<String, PatternError> {
-    expand_text(pattern, f).map_err(PatternError)
+    let frame = f.frame.map(|n| Value::Number(n.into())).ok_or_else(|| {
+        format!(
+            "`{{frame}}` in `{pattern}`: camera `{}` is a still camera, with no frames",
+            f.camera
+        )
+    });
+    let fields = [
+        // One file name each: a scene file `...toml` has the stem `..`.
+        ("camera", Ok(Value::Text(file_name_part(f.camera)))),
+        ("frame", frame),
+        ("scene", Ok(Value::Text(file_name_part(f.scene)))),
+        ("spp", Ok(Value::Number(f.spp.into()))),
+        ("seed", Ok(Value::Number(f.seed.into()))),
+    ];
+    expand_fields(pattern, &fields)
 }
 
-fn expand_text(pattern: &str, f: &Fields) -> Result<String, String> {
+/// What a field of a pattern stands for: text, given as it is, or a number, which a pattern
+/// may pad with zeros to a width (`{frame:04}`, or `{frame:04d}` as Python writes it).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Value {
+    /// Text, as it is (the caller makes a name from a file one file name).
+    Text(String),
+    /// A whole number: a frame, a seed, an index.
+    Number(i128),
+}
+
+/// `pattern` with each `{name}` of `fields` replaced by its value (an error, for a field
+/// that has none here, is the message); `{{` and `}}` are literal braces. The one expander
+/// of the command line's names and Python's batches (`{name}`, `{index}`).
+pub fn expand_fields(
+    pattern: &str,
+    fields: &[(&str, Result<Value, String>)],
+) -> Result<String, PatternError> {
     let mut out = String::new();
     let mut rest = pattern;
     while let Some(i) = rest.find(['{', '}']) {
@@ -114,45 +141,58 @@ fn expand_text(pattern: &str, f: &Fields) -> Result<String, String> {
             rest = after;
             continue;
         }
-        let end = tail
-            .find('}')
-            .ok_or_else(|| format!("an unclosed `{{` in `{pattern}` (write {{{{ for a brace)"))?;
-        let value = match &tail[1..end] {
-            "camera" => file_name_part(f.camera),
-            // One file name, like a camera's: a scene file `...toml` has the stem `..`.
-            "scene" => file_name_part(f.scene),
-            "spp" => f.spp.to_string(),
-            "seed" => f.seed.to_string(),
-            field if field == "frame" || field.starts_with("frame:") => {
-                let width = match &field["frame".len()..] {
-                    "" => 0,
-                    spec => spec[1..]
-                        .parse::<usize>()
-                        .ok()
-                        .filter(|&w| w <= 20 && spec[1..].starts_with('0'))
-                        .ok_or_else(|| {
-                            format!("`{{{field}}}` in `{pattern}`: a frame's width is written {{frame:04}}")
-                        })?,
-                };
-                let frame = f.frame.ok_or_else(|| {
-                    format!(
-                        "`{{frame}}` in `{pattern}`: camera `{}` is a still camera, with no frames",
-                        f.camera
-                    )
-                })?;
-                format!("{frame:0width$}")
-            }
-            other => {
-                return Err(format!(
-                    "unknown field `{{{other}}}` in `{pattern}` (known: {FIELDS})"
-                ))
-            }
+        let end = tail.find('}').ok_or_else(|| {
+            PatternError(format!(
+                "an unclosed `{{` in `{pattern}` (write {{{{ for a brace)"
+            ))
+        })?;
+        let field = &tail[1..end];
+        let (name, spec) = field.split_once(':').unwrap_or((field, ""));
+        let Some((_, value)) = fields.iter().find(|(n, _)| *n == name) else {
+            return Err(PatternError(format!(
+                "unknown field `{{{field}}}` in `{pattern}` (known: {})",
+                known(fields)
+            )));
         };
-        out.push_str(&value);
+        let value = value.clone().map_err(PatternError)?;
+        out.push_str(&formatted(&value, spec).ok_or_else(|| {
+            PatternError(match value {
+                Value::Number(_) => {
+                    format!("`{{{field}}}` in `{pattern}`: a width is written {{{name}:04}}")
+                }
+                Value::Text(_) => format!("`{{{field}}}` in `{pattern}`: `{name}` takes no format"),
+            })
+        })?);
         rest = &tail[end + 1..];
     }
     out.push_str(rest);
     Ok(out)
+}
+
+/// `value` written by `spec`: nothing for text, or `0N` (`0Nd`), N ≤ 20, for a number.
+fn formatted(value: &Value, spec: &str) -> Option<String> {
+    match (value, spec) {
+        (Value::Text(t), "") => Some(t.clone()),
+        (Value::Text(_), _) => None,
+        (Value::Number(n), "") => Some(n.to_string()),
+        (Value::Number(n), spec) => {
+            let digits = spec.strip_suffix('d').unwrap_or(spec);
+            let width = (digits.starts_with('0'))
+                .then(|| digits.parse::<usize>().ok())
+                .flatten()
+                .filter(|&w| w <= 20)?;
+            Some(format!("{n:0width$}"))
+        }
+    }
+}
+
+/// The fields a pattern may use, as an error lists them.
+fn known(fields: &[(&str, Result<Value, String>)]) -> String {
+    let each = fields.iter().map(|(name, value)| match value {
+        Ok(Value::Text(_)) => format!("{{{name}}}"),
+        _ => format!("{{{name}}} (or {{{name}:04}})"),
+    });
+    each.collect::<Vec<_>>().join(", ")
 }
 
 /// True when `pattern` names the camera, so that several cameras get several files.
@@ -180,6 +220,28 @@ mod tests {
             seed: 7,
             frame: Some(42),
         }
+    }
+
+    #[test]
+    fn a_batch_pattern_expands_names_and_indices_in_either_spelling() {
+        let fields = [
+            ("name", Ok(Value::Text("front".to_owned()))),
+            ("index", Ok(Value::Number(7))),
+        ];
+        let e = |p: &str| expand_fields(p, &fields).map_err(|e| e.0);
+        assert_eq!(e("out/{name}_{index}.png").unwrap(), "out/front_7.png");
+        // Python's spelling of a width, and the command line's.
+        assert_eq!(e("{index:04d}.png").unwrap(), "0007.png");
+        assert_eq!(e("{index:04}.png").unwrap(), "0007.png");
+        assert!(e("{name:>9}.png")
+            .unwrap_err()
+            .contains("`name` takes no format"));
+        assert!(e("{index:4}.png").unwrap_err().contains("{index:04}"));
+        let unknown = e("{camera}.png").unwrap_err();
+        assert!(
+            unknown.contains("known: {name}, {index} (or {index:04})"),
+            "{unknown}"
+        );
     }
 
     #[test]
