@@ -152,15 +152,11 @@ class Scene:
     @property
     def objects(self) -> List[Dict[str, Any]]:
         """Each entry of the scene's ``objects``, in file order, as ``penumbra render --meta``
-        records it: ``key`` (``"objects[3]"``), ``type`` (and the file of a mesh:
-        ``"mesh models/bunny.obj"``) and ``ids``, the ``[first, end)`` object ids it added
-        (see :attr:`object_ids`): what the values of an ``object_id`` AOV name."""
-        return [
-            {"key": f"objects[{i}]", "type": kind, "ids": [start, end]}
-            for i, (kind, (start, end)) in enumerate(
-                zip(self._core.object_kinds, self._core.object_ids)
-            )
-        ]
+        records it: ``key`` (``"objects[3]"``), ``name`` (when the entry has one), ``type``
+        (and the file of a mesh: ``"mesh models/bunny.obj"``) and ``ids``, the ``[first,
+        end)`` object ids it added (see :attr:`object_ids`): what the values of an
+        ``object_id`` AOV name."""
+        return list(json.loads(self._core.objects))
 
     @property
     def gamma(self) -> Optional[float]:
@@ -208,10 +204,10 @@ class Scene:
         return f"<penumbra.Scene: {s['triangles']} triangles, {s['lights']} lights, cameras {self.cameras}>"
 
     def set_transform(
-        self, obj: int, matrix: Any, index: Optional[int] = None, threads: int = 0
+        self, obj: Union[int, str], matrix: Any, index: Optional[int] = None, threads: int = 0
     ) -> None:
         """Moves object ``obj`` (its position in the file's ``objects``, as :attr:`objects`
-        lists them) to ``matrix``, a (4, 4) row-major object-to-world matrix whose last row is
+        lists them, or its ``name``) to ``matrix``, a (4, 4) row-major object-to-world matrix whose last row is
         ``[0, 0, 0, 1]`` (an array, nested lists or an Open3D tensor). It replaces the
         object's ``translate``, ``rotate`` and ``scale`` (it does not compose with them), as
         the object's ``matrix`` key would in the file. For an ``instances`` object, ``index``
@@ -227,12 +223,13 @@ class Scene:
         about what the load cost without the reading (see docs/python.md). Renders and
         ray-casting scenes made before keep the scene as it was.
 
-        Raises :class:`SceneError` at the object's key for an ``obj`` or ``index`` the scene
-        lacks, a matrix that is not finite, not affine or cannot be inverted, or an
+        Raises :class:`SceneError` at the object's key for an ``obj`` (a position or a name)
+        or ``index`` the scene lacks, a matrix that is not finite, not affine or cannot be inverted, or an
         ``index`` into placements kept in a ``.npy`` file; the scene is then unchanged.
         """
         call = "set_transform"
-        obj = _args.integer(call, "obj", obj, 0, _args.U32_MAX)
+        if not isinstance(obj, str):
+            obj = _args.integer(call, "obj", obj, 0, _args.U32_MAX)
         index = _args.optional_integer(call, "index", index, 0, _args.U32_MAX)
         rows = _matrix(matrix, (4, 4), f"Scene.{call}", "matrix")
         threads = _args.threads(call, threads)

@@ -43,7 +43,8 @@ def description(cube: str):
         "objects": [
             {"type": "sphere", "center": [0, 0, 0], "radius": 2, "translate": [-6, 0, 4]},
             {"type": "mesh", "file": cube, "scale": 3, "rotate": [0, 30, 0]},
-            {"type": "instances", "file": "spot.obj", "transforms": grid, "translate": [0, 0, -2]},
+            {"type": "instances", "file": "spot.obj", "name": "spots", "transforms": grid,
+             "translate": [0, 0, -2]},
         ],
     }
 
@@ -57,8 +58,11 @@ def cube(tmp_path):
 
 
 def written(desc, obj, matrix, index=None):
-    """The description with object ``obj`` (or its copy ``index``) given ``matrix``."""
+    """The description with object ``obj`` (a position, or a name) or its copy ``index``
+    given ``matrix``."""
     desc = copy.deepcopy(desc)
+    if isinstance(obj, str):
+        obj = next(i for i, o in enumerate(desc["objects"]) if o.get("name") == obj)
     o = desc["objects"][obj]
     if index is None:
         for key in ("translate", "rotate", "scale"):
@@ -69,7 +73,9 @@ def written(desc, obj, matrix, index=None):
     return desc
 
 
-@pytest.mark.parametrize("obj, index", [(0, None), (1, None), (2, None), (2, 77)])
+@pytest.mark.parametrize(
+    "obj, index", [(0, None), (1, None), (2, None), (2, 77), ("spots", 77)]
+)
 def test_a_moved_object_renders_the_bytes_of_a_fresh_load(cube, tmp_path, obj, index):
     desc = description(cube)
     scene = penumbra.load_dict(desc, base_dir=tmp_path)
@@ -114,6 +120,7 @@ def test_bad_moves_are_refused_and_change_nothing(cube, tmp_path):
     projective[3, 0] = 1
     cases = [
         ((3, TURN), {}, "objects", "no object 3"),
+        (("cows", TURN), {}, "objects", "no object named `cows` (the named objects: `spots`)"),
         ((0, TURN), {"index": 0}, "objects[0]", "no placements"),
         ((2, TURN), {"index": 200}, "objects[2].transforms", "no placement 200"),
         ((1, nan), {}, "objects[1].matrix", "NaN"),

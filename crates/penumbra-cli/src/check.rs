@@ -90,12 +90,18 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
             "cameras": cameras,
             "camera_frames": paths,
             "bounds": bounds_json(world.bounds()),
-            "objects": objects.iter().map(|o| json!({
-                "key": o.key,
-                "type": o.kind,
-                "triangles": o.triangles,
-                "bounds": bounds_json(o.bounds),
-            })).collect::<Vec<Value>>(),
+            "objects": objects.iter().map(|o| {
+                let mut entry = json!({
+                    "key": o.key,
+                    "type": o.kind,
+                    "triangles": o.triangles,
+                    "bounds": bounds_json(o.bounds),
+                });
+                if let Some(name) = &o.name {
+                    entry["name"] = json!(name);
+                }
+                entry
+            }).collect::<Vec<Value>>(),
             "warnings": warnings,
         });
         return say(&summary.to_string());
@@ -138,12 +144,21 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
         format!("  bounds     {}", bounds_text(world.bounds())),
         format!("  objects    {}", objects.len()),
     ]);
-    let key_width = objects.iter().map(|o| o.key.len()).max().unwrap_or(0);
+    // An entry by its key, and its name when it has one: `objects[3] "chair"`.
+    let key = |o: &ObjectInfo| match &o.name {
+        Some(name) => format!("{} {name:?}", o.key),
+        None => o.key.clone(),
+    };
+    let key_width = objects
+        .iter()
+        .map(|o| key(o).chars().count())
+        .max()
+        .unwrap_or(0);
     let kind_width = objects.iter().map(|o| o.kind.len()).max().unwrap_or(0);
     for o in &objects {
         lines.push(format!(
             "    {:key_width$}  {:kind_width$}  {:>7} triangles  {}",
-            o.key,
+            key(o),
             o.kind,
             o.triangles,
             bounds_text(o.bounds)
@@ -189,6 +204,8 @@ fn rgb_text(c: glam::Vec3) -> String {
 struct ObjectInfo {
     /// `objects[i]`.
     key: String,
+    /// Its `name`, when it has one.
+    name: Option<String>,
     /// Its type, and the file for a mesh: `mesh models/bunny.obj`.
     kind: String,
     triangles: usize,
@@ -243,6 +260,7 @@ fn objects(world: &World, desc: &SceneDesc, ids: &[Range<u32>]) -> Vec<ObjectInf
         .enumerate()
         .map(|(i, (o, (triangles, bounds)))| ObjectInfo {
             key: format!("objects[{i}]"),
+            name: o.name.clone(),
             kind: o.kind(),
             triangles,
             bounds,

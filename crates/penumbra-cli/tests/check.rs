@@ -52,6 +52,14 @@ fn check_lists_each_object_with_its_triangles_and_bounds() {
         "{}",
         r.out()
     );
+    // A named object is listed with its name.
+    let named = BASE_TOML.replacen("type = \"cube\"", "name = \"box\"\ntype = \"cube\"", 1);
+    dir.write("named.toml", named);
+    let v = json(&ok(run_in(dir.path(), ["check", "named.toml", "--json"])));
+    assert_eq!(v["objects"][1]["name"], "box");
+    assert_eq!(v["objects"][0].get("name"), None);
+    let r = ok(run_in(dir.path(), ["check", "named.toml"]));
+    assert!(r.out().contains("objects[1] \"box\"  cube"), "{}", r.out());
 }
 
 const TETRA: &str = "mtllib t.mtl\nv 0 0 0\nv 2 0 0\nv 0 3 0\nv 0 0 4\nusemtl shiny\n\

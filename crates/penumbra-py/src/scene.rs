@@ -14,6 +14,13 @@ pub use crate::built::CoreScene;
 use crate::raycast::{call_error, rows, vec2, CoreRaycastingScene};
 use crate::render::{render_scene, CameraArgs, Request};
 
+/// An object of a scene file: its position in `objects`, or its `name`.
+#[derive(FromPyObject)]
+pub(crate) enum ObjectRef {
+    Index(usize),
+    Name(String),
+}
+
 /// Loads and builds the `.toml` or `.json` scene file at `path`, or the scene of a bare
 /// `.obj` or `.ply` mesh (see `SceneFile::for_model`); its files may also read in the
 /// folders `allow_paths` (see `SceneFile::load_allowing`).
@@ -81,11 +88,17 @@ impl CoreScene {
     fn moved(
         &self,
         py: Python<'_>,
-        object: usize,
+        object: ObjectRef,
         matrix: [[f64; 4]; 4],
         placement: Option<usize>,
         threads: usize,
     ) -> PyResult<CoreScene> {
+        let object = match object {
+            ObjectRef::Index(i) => i,
+            ObjectRef::Name(name) => {
+                (self.file.object_index(&name)).map_err(|e| crate::errors::scene_error(py, e))?
+            }
+        };
         self.with_move(py, object, placement, matrix, threads)
     }
 
@@ -189,11 +202,14 @@ impl CoreScene {
         self.objects.iter().map(|r| (r.start, r.end)).collect()
     }
 
-    /// For each `objects` entry, in file order, its type (and file): `sphere`,
-    /// `mesh models/bunny.obj`.
+    /// The `objects` entries (JSON text) as records beside images list them: `key`, `name`
+    /// (when it has one), `type` and `ids` (see `penumbra::products::record::objects`).
     #[getter]
-    fn object_kinds(&self) -> Vec<String> {
-        self.file.desc.objects.iter().map(|o| o.kind()).collect()
+    fn objects(&self) -> PyResult<String> {
+        crate::records::to_json(&penumbra::products::record::objects(
+            &self.file,
+            &self.objects,
+        ))
     }
 
     /// The files the build read besides the scene file (meshes, MTL libraries, images).

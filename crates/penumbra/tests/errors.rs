@@ -78,7 +78,7 @@ fn table() -> Vec<Case> {
         // The message says what the kind takes.
         toml("key of another object kind", edit(BASE, "size = 1\n", "size = 1\nradius = 2\n"))
             .parse_error(UnknownKey, value_of("radius = 2"), Some("objects[1].radius"),
-                         &["radius", "cube", "(it takes: center, size, material, scale, rotate, translate, matrix)"]),
+                         &["radius", "cube", "(it takes: center, size, name, material, scale, rotate, translate, matrix)"]),
         toml("key of another light kind",
              edit(BASE, "position = [0, 5, 5]\n", "position = [0, 5, 5]\ncenter = [0, 1, 0]\n"))
             .parse_error(UnknownKey, value_of("center = [0, 1, 0]"), Some("lights[0].center"),
@@ -448,7 +448,7 @@ fn table() -> Vec<Case> {
         json("JSON: key of another object kind, with the keys it takes",
              edit(BASE_JSON, "\"size\": 1}", "\"size\": 1, \"file\": [1]}"))
             .parse_error(UnknownKey, value_of("\"file\": [1]"), Some("objects[1].file"),
-                         &["(it takes: center, size, material, scale, rotate, translate, matrix)"]),
+                         &["(it takes: center, size, name, material, scale, rotate, translate, matrix)"]),
         // Found once the object is read: at its closing brace, like a missing key.
         json("JSON: type after a key of another object kind",
              edit(BASE_JSON, CUBE_JSON, "{\"material\": \"red\", \"radius\": 1, \"type\": \"cube\"}"))

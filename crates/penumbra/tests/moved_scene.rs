@@ -383,3 +383,50 @@ fn any_scene_a_file_loads_moves_json_and_line_breaks_included() {
         assert_eq!(pixels(&pack.load().unwrap().build(1).unwrap()), image);
     }
 }
+
+#[test]
+fn named_objects_are_found_by_name_listed_with_it_and_rendered_as_unnamed() {
+    let dir = TempDir::new("moved_names");
+    dir.write("cube.obj", CUBE);
+    let named = OBJECTS
+        .replacen("type = \"sphere\"", "name = \"ball\"\ntype = \"sphere\"", 1)
+        .replacen(
+            "type = \"instances\"",
+            "name = \"herd\"\ntype = \"instances\"",
+            1,
+        );
+    let file_named = file(&dir, &named);
+    assert_eq!(file_named.object_index("herd").unwrap(), 2);
+    assert_eq!(file_named.object_index("ball").unwrap(), 0);
+    let e = file_named.object_index("box").unwrap_err().to_string();
+    assert!(
+        e.contains("no object named `box`") && e.contains("`ball`, `herd`"),
+        "{e}"
+    );
+    // A name changes nothing in the image, and the records name the entry's ids by it.
+    let scene = file_named.build(1).unwrap();
+    assert_eq!(
+        pixels(&scene),
+        pixels(&file(&dir, OBJECTS).build(1).unwrap())
+    );
+    let entries = penumbra::products::record::objects(&file_named, &scene.objects);
+    let names: Vec<Option<&str>> = entries.iter().map(|o| o.name.as_deref()).collect();
+    assert_eq!(names, [Some("ball"), None, Some("herd")]);
+    assert_eq!(entries[2].ids, [2, 4]);
+    // A name is one object's, and not empty.
+    for (objects, key, words) in [
+        (
+            named.replacen("name = \"herd\"", "name = \"ball\"", 1),
+            "objects[2].name",
+            "already the name of objects[0]",
+        ),
+        (
+            named.replacen("name = \"herd\"", "name = \"\"", 1),
+            "objects[2].name",
+            "not empty",
+        ),
+    ] {
+        let e = file(&dir, &objects).build(1).unwrap_err().to_string();
+        assert!(e.contains(key) && e.contains(words), "{e}");
+    }
+}

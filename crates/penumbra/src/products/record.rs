@@ -77,12 +77,15 @@ impl From<FileDigest> for FileEntry {
     }
 }
 
-/// An `[[objects]]` entry: `key` (`objects[3]`), `type` (and file) and the object ids it
-/// added as `[first, end)`.
+/// An `[[objects]]` entry: `key` (`objects[3]`), its `name` when it has one, `type` (and
+/// file) and the object ids it added as `[first, end)`.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ObjectEntry {
     /// `objects[i]`.
     pub key: String,
+    /// The object's `name`, when it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
     /// Its type, and the file of a mesh or instances (`mesh models/bunny.obj`).
     #[serde(rename = "type")]
     pub kind: String,
@@ -100,6 +103,7 @@ pub fn objects(file: &SceneFile, ids: &[Range<u32>]) -> Vec<ObjectEntry> {
         .enumerate()
         .map(|(i, (o, ids))| ObjectEntry {
             key: format!("objects[{i}]"),
+            name: o.name.clone(),
             kind: o.kind(),
             ids: [ids.start, ids.end],
         })

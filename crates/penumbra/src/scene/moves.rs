@@ -107,6 +107,26 @@ impl SceneFile {
 }
 
 impl SceneFile {
+    /// The position in `objects` of the object whose `name` is `name`; an error at `objects`
+    /// listing the names the scene has when none is.
+    pub fn object_index(&self, name: &str) -> Result<usize, SceneError> {
+        let objects = &self.desc.objects;
+        if let Some(i) = objects.iter().position(|o| o.name.as_deref() == Some(name)) {
+            return Ok(i);
+        }
+        let names: Vec<String> = (objects.iter())
+            .filter_map(|o| Some(format!("`{}`", o.name.as_ref()?)))
+            .collect();
+        let known = match names.is_empty() {
+            true => "no object has a name".to_owned(),
+            false => format!("the named objects: {}", names.join(", ")),
+        };
+        let message = format!("no object named `{name}` ({known})");
+        Err(self.error(ErrorKind::BadValue, &KeyPath::root("objects"), message))
+    }
+}
+
+impl SceneFile {
     /// The world this file builds, made from `world` by moving instances, when that is all
     /// that differs: `world` was built from a file that differs from this one only in the
     /// transform of object `object` (or of one of its copies: see

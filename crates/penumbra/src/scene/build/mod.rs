@@ -147,6 +147,7 @@ pub(super) fn build(file: &SceneFile, threads: usize) -> Result<Scene> {
         b.check_reflected(&bounds::material_key(&path, m, term), "this material", most)?;
     }
     b.uses = b.count_uses(&desc.objects);
+    b.check_names(&desc.objects)?;
     let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, o) in desc.objects.iter().enumerate() {
         let first = b.world.object_count();

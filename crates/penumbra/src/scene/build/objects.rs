@@ -33,6 +33,23 @@ pub(super) struct LoadedObj {
 }
 
 impl Builder<'_> {
+    /// An error at the `name` of an object whose name is empty or an earlier object's.
+    pub(super) fn check_names(&self, objects: &[ObjectDesc]) -> Result<()> {
+        let mut seen = std::collections::HashMap::new();
+        for (i, o) in objects.iter().enumerate() {
+            let Some(name) = &o.name else { continue };
+            let path = KeyPath::root("objects").index(i).key("name");
+            if name.is_empty() {
+                return Err(self.bad(&path, "a name is not empty"));
+            }
+            if let Some(first) = seen.insert(name.as_str(), i) {
+                let message = format!("`{name}` is already the name of objects[{first}]");
+                return Err(self.bad(&path, message));
+            }
+        }
+        Ok(())
+    }
+
     pub(super) fn object(&mut self, path: &KeyPath, o: &ObjectDesc) -> Result<()> {
         let mut world = self.object_transform(path, o)?;
         if let Some(file) = super::gltf::gltf_file(o) {

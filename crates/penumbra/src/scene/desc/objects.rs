@@ -36,6 +36,9 @@ use super::values::{ColorDesc, Exact, Num, Vec2Desc, Vec3Desc};
 pub struct ObjectDesc {
     /// What the object is.
     pub shape: ShapeDesc,
+    /// Its name, unique among the scene's objects, by which Python's `Scene.set_transform`
+    /// finds it and records beside images name its ids.
+    pub name: Option<String>,
     /// Material name (default: the format's default material).
     pub material: Option<String>,
     /// Scale factor(s).
@@ -218,6 +221,7 @@ pub enum ObjectType {
 
 #[derive(Default)]
 pub(super) struct ObjectFields {
+    name: Option<String>,
     material: Option<String>,
     scale: Option<ColorDesc>,
     rotate: Option<Vec3Desc>,
@@ -241,7 +245,8 @@ pub(super) struct ObjectFields {
 impl Tagged for ObjectDesc {
     type Kind = ObjectType;
     type Fields = ObjectFields;
-    const COMMON: &'static [&'static str] = &["material", "scale", "rotate", "translate", "matrix"];
+    const COMMON: &'static [&'static str] =
+        &["name", "material", "scale", "rotate", "translate", "matrix"];
     const ALL: &'static [&'static str] = &[
         "vertices",
         "uvs",
@@ -295,6 +300,7 @@ impl Tagged for ObjectDesc {
         map: &mut A,
     ) -> Result<(), A::Error> {
         match key {
+            "name" => f.name = Some(map.next_value()?),
             "material" => f.material = Some(map.next_value()?),
             "scale" => f.scale = Some(map.next_value()?),
             "rotate" => f.rotate = Some(map.next_value()?),
@@ -349,6 +355,7 @@ impl Tagged for ObjectDesc {
         };
         Ok(ObjectDesc {
             shape,
+            name: f.name,
             material: f.material,
             scale: f.scale,
             rotate: f.rotate,
