@@ -1,14 +1,16 @@
 //! Shading neighbouring points together: the camera samples of a few adjacent pixels, whose
 //! shadow rays toward each light sample are traced as one bundle.
 //!
-//! A point's shadow rays can be traced as a fan, from the point to the samples of its
-//! lights (`Bvh::occlude_from`). A fan's rays spread over the light's extent, so on a fine mesh between
-//! surface and light they part ways after a few levels of the tree. The rays from a few
+//! Which grouping a render's shadow rays take is the tree's choice (`accel::shadows`, from its
+//! size and the samples); the integrator gathers the samples in the layout that grouping
+//! reads and asks. A point's shadow rays can be traced as a fan, from the point to the
+//! samples of its lights (`Bvh::occlude_from`). A fan's rays spread over the light's extent,
+//! so on a fine mesh between surface and light they part ways after a few levels of the tree. The rays from a few
 //! neighbouring points to one light sample stay within a pixel or so of each other for their
 //! whole length, and the finer the image the closer they run: bundled, they share nearly every
 //! node they visit. Fans still serve points with many jittered samples (a fan of hundreds of
 //! rays is a packet of its own, and a bundle would hold every point's segments in memory at
-//! once), and points with more fixed samples than [`BUNDLE_MAX_FIXED`].
+//! once), and points with more fixed samples than `accel::shadows` bundles.
 //!
 //! When every point has the same light samples (no jittered light), a bundle is given as
 //! [`crate::accel::Pairs`]: the batch's points once and the samples once per render, the
@@ -18,7 +20,7 @@
 //! samples are gathered across its points too, each sample one pass of vector loops over
 //! the points (`across`). Jittered samples differ from point to point: each point gathers its
 //! own, and their bundles list every segment ([`Segments`]), which costs their writes; those
-//! pay only on deep trees (see [`BUNDLE_MIN_NODES`]).
+//! pay only on deep trees.
 //!
 //! Either way each shadow ray is the same segment and gets the same answer (both packet kinds
 //! answer as [`crate::accel::Bvh::occluded`] would), and each point's light is summed in light
@@ -27,52 +29,12 @@
 use glam::Vec3;
 
 use super::across::Across;
-use super::{FixedEnds, Integrator, Point, Scratch, SHADOW_T_MAX};
-use crate::accel::{Pairs, Segments};
+use super::{Integrator, Point, Scratch, SHADOW_T_MAX};
+use crate::accel::{Grouping, Segments, SharedEnds};
 use crate::geometry::Hit;
 use crate::math::Rgb;
 use crate::sampling::Rng;
 use crate::simd::{dispatch, Isa, Kernel};
-
-/// Points with more light samples than this (over all lights) trace each their own fan when
-/// their samples are their own (jittered lights): a bundle would hold every point's segments
-/// in memory at once.
-const BUNDLE_MAX_SAMPLES: u64 = 64;
-
-/// Points whose lights are all fixed bundle their shadow rays as pairs up to this many light
-/// samples (64×64), whatever the tree: pairs write each sample once per render and each point
-/// once per batch, so a batch holds only its points' shading terms, about 1 MB at this bound.
-/// Pairs take less time than fans in the seed's room, under four lights
-/// (scenes/bench/four_lights.toml) or at 16×16 samples, and in the 1M-triangle room (measured:
-/// docs/benchmarks.md, «Design measurements», `BUNDLE_MAX_FIXED`). Beyond the bound (lights
-/// of up to 1024×1024 samples) a batch would hold hundreds of megabytes, and fans trace one
-/// point at a time.
-const BUNDLE_MAX_FIXED: u64 = 4096;
-
-/// Fans of fewer samples than this are poor packets (they go one ray at a time): such points
-/// bundle whatever the tree.
-const FAN_MIN_SAMPLES: u64 = 8;
-
-/// Trees with at least this many nodes are deep enough for bundles of segments (jittered
-/// lights: each point has samples of its own) to beat fans. On a room of a few large triangles
-/// a fan's rays stay together anyway, and a fan shares its origin, which saves a third of each
-/// triangle test; bundles of segments gain the more the deeper the tree (the bunny room, the
-/// 1M-triangle room). Fixed samples bundle as pairs, which write each point and sample once
-/// (not once per segment) and beat fans on every tree, the seed's room too (measured:
-/// docs/benchmarks.md, «Design measurements», `BUNDLE_MIN_NODES`).
-const BUNDLE_MIN_NODES: usize = 4096;
-
-/// Whether points with `samples` light samples bundle their shadow rays in a tree of `nodes`
-/// BVH nodes; `fixed` when every point has the same samples (no jittered light).
-pub(super) fn bundles(samples: u64, fixed: bool, nodes: usize) -> bool {
-    match fixed {
-        true => samples <= BUNDLE_MAX_FIXED,
-        false => {
-            samples <= BUNDLE_MAX_SAMPLES
-                && (samples < FAN_MIN_SAMPLES || nodes >= BUNDLE_MIN_NODES)
-        }
-    }
-}
 
 /// Points with at most this many light samples are shaded a batch at a time even when each
 /// traces its own fans: a batch is then a few thousand shadow rays at most.
@@ -134,7 +96,7 @@ impl Kernel for ShadeBatch<'_, '_> {
             across,
             bundle,
         } = scratch;
-        if let (true, Some(ends)) = (integrator.bundles, &integrator.fixed_ends) {
+        if let (Grouping::Pairs, Some(ends)) = (integrator.grouping, &integrator.fixed_ends) {
             across.gather(integrator, directions, hits);
             let masks = (&across.dark[..], &across.behind[..]);
             bundle.pairs(integrator, &across.points, masks, ends);
@@ -142,7 +104,7 @@ impl Kernel for ShadeBatch<'_, '_> {
             return;
         }
         let mut facet = None;
-        if !integrator.bundles {
+        if integrator.grouping == Grouping::Fans {
             // Each point traces its own fans, one point after another in one scratch.
             if points.is_empty() {
                 points.push(Scratch::default());
@@ -197,7 +159,7 @@ impl Bundle {
         integrator: &Integrator,
         points: &[Point],
         (dark, behind): (&[bool], &[bool]),
-        ends: &FixedEnds,
+        ends: &SharedEnds,
     ) {
         // Samples behind the surface wait for the second pass, from the other side.
         let any_behind = masks(&mut self.blocked, dark, behind, false);
@@ -208,13 +170,26 @@ impl Bundle {
             }
         };
         side(&mut self.origin, |p| p.front);
-        occlude_runs(integrator, &self.origin, ends, &mut self.blocked);
+        let accel = integrator.world.accel();
+        accel.occlude_shared(
+            integrator.path,
+            &self.origin,
+            ends,
+            SHADOW_T_MAX,
+            &mut self.blocked,
+        );
         if !any_behind {
             return;
         }
         side(&mut self.end, |p| p.back);
         masks(&mut self.back, dark, behind, true);
-        occlude_runs(integrator, &self.end, ends, &mut self.back);
+        accel.occlude_shared(
+            integrator.path,
+            &self.end,
+            ends,
+            SHADOW_T_MAX,
+            &mut self.back,
+        );
         let n = dark.len();
         let (blocked, back, behind) = (&mut self.blocked[..n], &self.back[..n], &behind[..n]);
         for i in 0..n {
@@ -282,26 +257,6 @@ fn masks(mask: &mut Vec<bool>, dark: &[bool], behind: &[bool], back: bool) -> bo
         any_behind |= !dark[i] & behind[i];
     }
     any_behind
-}
-
-/// Blocks slot `j · origins.len() + i` of `blocked` when something occludes the segment from
-/// origin `i` to sample `j`, run by run of `ends` (see [`FixedEnds`]).
-fn occlude_runs(
-    integrator: &Integrator,
-    origins: &[Vec<f32>; 3],
-    ends: &FixedEnds,
-    blocked: &mut [bool],
-) {
-    let accel = integrator.world.accel();
-    let m = origins[0].len();
-    for run in &ends.runs {
-        let pairs = Pairs {
-            origins: origins.each_ref().map(|axis| &axis[..]),
-            ends: ends.axes.each_ref().map(|axis| &axis[run.clone()]),
-        };
-        let slots = &mut blocked[run.start * m..run.end * m];
-        accel.occlude_pairs_on(integrator.path, pairs, SHADOW_T_MAX, slots);
-    }
 }
 
 impl Integrator<'_> {
@@ -451,9 +406,13 @@ mod tests {
             };
             // Fans, and bundles (gathered across points for fixed lights).
             let mut shaded = [Vec::new(), Vec::new()];
-            for (bundles, out) in [false, true].into_iter().zip(&mut shaded) {
+            for (fans, out) in [true, false].into_iter().zip(&mut shaded) {
                 let mut integrator = Integrator::new(world, settings);
-                integrator.bundles = bundles;
+                integrator.grouping = match (fans, integrator.fixed_ends.is_some()) {
+                    (true, _) => Grouping::Fans,
+                    (false, false) => Grouping::Segments,
+                    (false, true) => Grouping::Pairs,
+                };
                 let mut rngs: Vec<Rng> =
                     (0..rays.len() as u64).map(|i| Rng::new(7, &[i])).collect();
                 let mut scratch = BatchScratch::default();

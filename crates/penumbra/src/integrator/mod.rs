@@ -19,6 +19,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use crate::accel::{Grouping, SharedEnds};
 use crate::geometry::Surface;
 use crate::math::Rgb;
 use crate::sampling::Rng;
@@ -26,7 +27,7 @@ use crate::simd::{simd_path, SimdPath};
 use crate::world::World;
 pub(crate) use batch::BatchScratch;
 use model::{Lanes, Lobe, Model, Physical, Seed};
-use plan::{fixed_ends, plan, Directions, FixedEnds, LightPlan, Points, Source};
+use plan::{fixed_ends, plan, Directions, LightPlan, Points, Source};
 
 /// The specular lobe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
@@ -98,9 +99,8 @@ pub(crate) struct Scratch {
     b: Vec<f32>,
     blocked: Vec<bool>,
     behind: Vec<bool>,
-    /// The two sides' masks when samples lie on both sides.
-    front: Vec<bool>,
-    back: Vec<bool>,
+    /// The two sides' masks when samples lie on both sides (see `Levels::occlude_sides`).
+    sides: (Vec<bool>, Vec<bool>),
 }
 
 /// A shading point as its lights see it.
@@ -161,10 +161,10 @@ pub(crate) struct Integrator<'w> {
     lights: Vec<LightPlan>,
     /// The number of light samples (shadow rays) per point.
     samples: u64,
-    /// Whether points bundle their shadow rays (see `batch`).
-    bundles: bool,
+    /// How the points' shadow rays are grouped, as the tree chose (see `batch`).
+    grouping: Grouping,
     /// Every light sample, when every point has the same ones (no jittered light).
-    fixed_ends: Option<FixedEnds>,
+    fixed_ends: Option<SharedEnds>,
     /// The centre and radius of a sphere around the scene's geometry: shadow rays toward an
     /// environment end outside it.
     sphere: (Vec3, f32),
@@ -182,7 +182,7 @@ impl<'w> Integrator<'w> {
             .collect();
         let samples: u64 = lights.iter().map(LightPlan::sample_count).sum();
         let fixed_ends = fixed_ends(&lights);
-        let bundles = batch::bundles(samples, fixed_ends.is_some(), world.accel().node_count());
+        let grouping = world.accel().grouping(samples, fixed_ends.is_some());
         let bounds = world.bounds();
         let sphere = match bounds.is_empty() {
             true => (Vec3::ZERO, 1.0),
@@ -195,7 +195,7 @@ impl<'w> Integrator<'w> {
             sphere,
             world,
             settings,
-            bundles,
+            grouping,
             fixed_ends,
             lights,
             samples,
@@ -215,7 +215,7 @@ impl<'w> Integrator<'w> {
     /// dispatch to the SIMD kernel, for all of them), else one (each may trace many
     /// thousands, and a cancelled render stops between calls).
     pub(crate) fn batch_points(&self) -> usize {
-        if self.bundles || self.samples <= batch::FEW_SAMPLES {
+        if self.grouping != Grouping::Fans || self.samples <= batch::FEW_SAMPLES {
             BUNDLE_POINTS
         } else {
             1
@@ -385,22 +385,14 @@ impl<'w> Integrator<'w> {
     /// Blocks the gathered samples that something occludes: shadow rays leave from `front`
     /// toward samples on the viewer's side of the surface, from `back` toward the others.
     fn occlude(&self, front: Vec3, back: Vec3, s: &mut Scratch) {
-        let accel = self.world.accel();
-        let both_sides = s.blocked.iter().zip(&s.behind).any(|(&b, &h)| !b && h);
-        if !both_sides {
-            accel.occlude_from(front, &s.ends, SHADOW_T_MAX, &mut s.blocked);
-            return;
-        }
-        s.front.clear();
-        s.front
-            .extend(s.blocked.iter().zip(&s.behind).map(|(&b, &h)| b | h));
-        s.back.clear();
-        s.back
-            .extend(s.blocked.iter().zip(&s.behind).map(|(&b, &h)| b | !h));
-        accel.occlude_from(front, &s.ends, SHADOW_T_MAX, &mut s.front);
-        accel.occlude_from(back, &s.ends, SHADOW_T_MAX, &mut s.back);
-        for i in 0..s.blocked.len() {
-            s.blocked[i] = if s.behind[i] { s.back[i] } else { s.front[i] };
-        }
+        let (ends, behind, blocked) = (&s.ends, &s.behind, &mut s.blocked);
+        (self.world.accel()).occlude_sides(
+            (front, back),
+            ends,
+            behind,
+            SHADOW_T_MAX,
+            blocked,
+            &mut s.sides,
+        );
     }
 }

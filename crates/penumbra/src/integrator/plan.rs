@@ -2,12 +2,10 @@
 //! sample points, fixed grids computed once per render, stored by coordinate so that the
 //! per-sample directions of a shading point are computed many lanes at a time.
 
-use std::ops::Range;
-
 use glam::Vec3;
 
 use super::ShadingSettings;
-use crate::accel::SHAFT_MIN_ENDS;
+use crate::accel::SharedEnds;
 use crate::light::{AreaLight, DirectionalLight, EnvironmentLight, Light, SpotLight};
 use crate::math::Rgb;
 use crate::sampling::Rng;
@@ -215,36 +213,15 @@ pub(super) fn plan(light: &Light, settings: &ShadingSettings, physical: bool) ->
     }
 }
 
-/// Every light sample of a render whose points all have the same ones.
-pub(super) struct FixedEnds {
-    /// The samples by axis, in light and sample order.
-    pub(super) axes: [Vec<f32>; 3],
-    /// The runs of samples whose shadow rays are traced together (indices into `axes`): a
-    /// light with enough samples for a shaft of its own ([`SHAFT_MIN_ENDS`]) alone, lights
-    /// with fewer together, in runs too short for a shaft. A shaft around one light is far
-    /// narrower than one around several, so it holds few triangles more often.
-    pub(super) runs: Vec<Range<usize>>,
-}
-
-/// Every sample of `lights`, if none is jittered.
-pub(super) fn fixed_ends(lights: &[LightPlan]) -> Option<FixedEnds> {
-    let mut ends = FixedEnds {
-        axes: Default::default(),
-        runs: Vec::with_capacity(lights.len()),
-    };
+/// Every sample of `lights` ([`SharedEnds`]: the accel groups them in runs), if none is
+/// jittered.
+pub(super) fn fixed_ends(lights: &[LightPlan]) -> Option<SharedEnds> {
+    let mut ends = SharedEnds::default();
     for light in lights {
         let Source::Fixed(points) = &light.source else {
             return None;
         };
-        let (start, n) = (ends.axes[0].len(), points.len());
-        for (axis, from) in ends.axes.iter_mut().zip([&points.x, &points.y, &points.z]) {
-            axis.extend_from_slice(from);
-        }
-        let end = start + n;
-        match ends.runs.last_mut() {
-            Some(run) if n < SHAFT_MIN_ENDS && run.len() + n < SHAFT_MIN_ENDS => run.end = end,
-            _ => ends.runs.push(start..end),
-        }
+        ends.push_light([&points.x, &points.y, &points.z]);
     }
     Some(ends)
 }
@@ -286,7 +263,7 @@ mod tests {
                 .iter()
                 .map(|&n| plan(&light(n), &settings, false))
                 .collect();
-            fixed_ends(&plans).unwrap().runs
+            fixed_ends(&plans).unwrap().runs().to_vec()
         };
         assert_eq!(runs(&[0, 0, 0]), vec![(0..3)]);
         assert_eq!(runs(&[5]), vec![(0..25)]);
