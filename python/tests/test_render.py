@@ -203,3 +203,21 @@ def test_write_image_is_atomic_and_reports_failures(tmp_path):
     penumbra.write_image(tmp_path / "a.pfm", wide[:, ::2])
     assert np.array_equal(read_pfm(tmp_path / "a.pfm"), wide[:, ::2].astype(np.float32))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pfm"]
+
+
+def test_a_camera_given_by_k_renders_by_name_and_is_not_passed_off_as_a_fov():
+    # Python's Camera holds a field of view: a calibrated K is rendered by its name.
+    scene = penumbra.load_dict({
+        "film": {"width": 32, "height": 24},
+        "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0],
+                   "K": [[40.0, 0.0, 12.0], [0.0, 36.0, 11.5], [0.0, 0.0, 1.0]]},
+        "lights": [{"type": "point", "position": [0, 3, 5]}],
+        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}],
+    })
+    image = scene.render()
+    assert image.shape == (24, 32, 3) and image.max() > 0
+    # Off-centre (cx = 12 of 15.5): the sphere's middle lies left of the image's middle.
+    columns = np.flatnonzero(image.sum(axis=(0, 2)) > 0)
+    assert columns.mean() < 15.5 - 2
+    with pytest.raises(ValueError, match="intrinsic matrix K"):
+        scene.camera()

@@ -134,6 +134,10 @@ fn outside_view(camera: &Camera, aspect: f32, bounds: &Aabb) -> bool {
     if forward == Vec3::ZERO || right == Vec3::ZERO || !aspect.is_finite() || aspect <= 0.0 {
         return false;
     }
+    // A calibrated K may look off its axis: its view is not the centred one below.
+    if camera.intrinsics().is_some() {
+        return false;
+    }
     let half_h = (camera.fov_y_deg().to_radians() / 2.0).tan();
     let half_w = half_h * aspect;
     // Inward normals: a point p is inside a side when (p - eye) · n >= 0.

@@ -175,12 +175,23 @@ impl CoreScene {
     /// The camera `name` (None: the first, the default) as (position, look_at, up, fov);
     /// `None` for a name the scene lacks. A camera with keys or a path gives its first
     /// frame's, the camera a render of the name uses.
+    /// Raises `ValueError` for a camera given by an intrinsic matrix `K`, which Python's
+    /// `Camera` cannot hold yet (it renders by name).
     #[pyo3(signature = (name = None))]
-    fn camera(&self, name: Option<&str>) -> Option<CameraArgs> {
+    fn camera(&self, name: Option<&str>) -> PyResult<Option<CameraArgs>> {
         let view = name.map_or(View::First, |n| View::Named(n.to_owned()));
-        let camera = view.camera(&self.world).ok()?;
+        let Ok(camera) = view.camera(&self.world) else {
+            return Ok(None);
+        };
+        if camera.intrinsics().is_some() {
+            return Err(PyValueError::new_err(format!(
+                "camera {} sees through an intrinsic matrix K, which penumbra.Camera cannot \
+                 hold yet: render it by its name (render(camera=...))",
+                name.map_or("(the first)".to_owned(), |n| format!("{n:?}"))
+            )));
+        }
         let [p, l, u] = [camera.position(), camera.look_at(), camera.up()].map(|v| v.to_array());
-        Some((p, l, u, camera.fov_y_deg()))
+        Ok(Some((p, l, u, camera.fov_y_deg())))
     }
 
     /// The file's `film.gamma`: 8-bit images encode `c^(1/gamma)`; `None` for the sRGB curve.

@@ -24,6 +24,57 @@ pub struct Camera {
     look_at: Vec3,
     up: Vec3,
     fov_y_deg: f32,
+    /// A calibrated K in place of the field of view ([`Camera::with_intrinsics`]).
+    intrinsics: Option<Intrinsics>,
+}
+
+/// A pinhole's intrinsic matrix K as OpenCV writes it, in pixels of a `width × height`
+/// image whose pixel centres lie at integer coordinates (docs/spec.md, "Poses and
+/// intrinsics"): `[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`. On a film of another size it is
+/// scaled with the film ([`Intrinsics::on_film`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// The horizontal focal length in pixels, > 0.
+    pub fx: f64,
+    /// The vertical focal length in pixels, > 0.
+    pub fy: f64,
+    /// The principal point's column, in pixels (a centred one is (W − 1)/2).
+    pub cx: f64,
+    /// The principal point's row, in pixels (a centred one is (H − 1)/2).
+    pub cy: f64,
+    /// The skew term K[0][1] (0 for square-cornered pixels).
+    pub skew: f64,
+    /// The width of the image K is given for.
+    pub width: u32,
+    /// The height of the image K is given for.
+    pub height: u32,
+}
+
+impl Intrinsics {
+    /// K on a `width × height` film: each axis scaled by the film's size over K's, about the
+    /// image's corner (so a pixel centre stays a pixel centre: c′ + ½ = (c + ½)·s).
+    pub fn on_film(&self, width: u32, height: u32) -> Intrinsics {
+        let sx = f64::from(width) / f64::from(self.width);
+        let sy = f64::from(height) / f64::from(self.height);
+        Intrinsics {
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: (self.cx + 0.5) * sx - 0.5,
+            cy: (self.cy + 0.5) * sy - 0.5,
+            skew: self.skew * sx,
+            width,
+            height,
+        }
+    }
+
+    /// K by rows.
+    pub fn rows(&self) -> [[f64; 3]; 3] {
+        [
+            [self.fx, self.skew, self.cx],
+            [0.0, self.fy, self.cy],
+            [0.0, 0.0, 1.0],
+        ]
+    }
 }
 
 /// Why a camera cannot be made.
@@ -35,6 +86,8 @@ pub enum CameraError {
     Degenerate,
     /// The field of view is not inside (0, 180) degrees.
     FovOutOfRange,
+    /// K has a focal length that is not a positive finite number, or an entry not finite.
+    BadIntrinsics,
 }
 
 impl std::fmt::Display for CameraError {
@@ -45,6 +98,9 @@ impl std::fmt::Display for CameraError {
                 "degenerate camera: look_at equals position or the view direction is parallel to up"
             }
             CameraError::FovOutOfRange => "fov must be between 0 and 180 degrees",
+            CameraError::BadIntrinsics => {
+                "K must have finite entries and focal lengths fx and fy greater than 0"
+            }
         })
     }
 }
@@ -87,7 +143,31 @@ impl Camera {
             look_at,
             up,
             fov_y_deg,
+            intrinsics: None,
         })
+    }
+
+    /// This camera seeing through `k` instead of its field of view: rays leave through K's
+    /// pixels exactly (see [`PinholeCamera::direction`]), and `--poses` writes K as given.
+    /// The vertical field of view then reports the one K has through its principal point
+    /// (`2·atan((H/2)/fy)`), for what only describes the view.
+    pub fn with_intrinsics(self, k: Intrinsics) -> Result<Camera, CameraError> {
+        let entries = [k.fx, k.fy, k.cx, k.cy, k.skew];
+        let sized = k.width > 0 && k.height > 0;
+        if !(entries.iter().all(|v| v.is_finite()) && k.fx > 0.0 && k.fy > 0.0 && sized) {
+            return Err(CameraError::BadIntrinsics);
+        }
+        let fov = (2.0 * (0.5 * f64::from(k.height) / k.fy).atan()).to_degrees() as f32;
+        Ok(Camera {
+            fov_y_deg: fov,
+            intrinsics: Some(k),
+            ..self
+        })
+    }
+
+    /// K, when the camera was given one ([`Camera::with_intrinsics`]).
+    pub fn intrinsics(&self) -> Option<Intrinsics> {
+        self.intrinsics
     }
 
     /// The eye position.
@@ -157,6 +237,9 @@ pub struct PinholeCamera {
     aspect: f32,
     width: f32,
     height: f32,
+    /// With K: `(1/fx, 1/fy, cx + ½, cy + ½, skew)` on this film (film points, whose pixel
+    /// centres lie at +½).
+    k: Option<[f64; 5]>,
 }
 
 impl PinholeCamera {
@@ -172,6 +255,10 @@ impl PinholeCamera {
             aspect: width as f32 / height as f32,
             width: width as f32,
             height: height as f32,
+            k: camera.intrinsics.map(|k| {
+                let k = k.on_film(width, height);
+                [1.0 / k.fx, 1.0 / k.fy, k.cx + 0.5, k.cy + 0.5, k.skew]
+            }),
         }
     }
 
@@ -193,12 +280,28 @@ impl PinholeCamera {
 
     /// The unit direction of [`PinholeCamera::ray`]`(x, y)`. Plain arithmetic, inlined, so
     /// that a loop over many film points vectorizes.
+    ///
+    /// With K, the point seen at film point (x, y) is the camera-space direction
+    /// `K⁻¹·(x − ½, y − ½, 1)` (OpenCV's pixel coordinates), worked in double precision, so
+    /// that a hit projects back through K onto (x, y).
     #[inline(always)]
     pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        if let Some(k) = self.k {
+            return self.through_k(k, x, y);
+        }
         let sx = (2.0 * x / self.width - 1.0) * self.aspect * self.half_height;
         let sy = (1.0 - 2.0 * y / self.height) * self.half_height;
         let dir = self.forward + sx * self.right + sy * self.up;
         dir.normalize()
+    }
+
+    /// [`PinholeCamera::direction`] through K (`k` as the field holds it).
+    #[inline(never)]
+    fn through_k(&self, [ifx, ify, cx, cy, skew]: [f64; 5], x: f32, y: f32) -> Vec3 {
+        let down = (f64::from(y) - cy) * ify;
+        let right = (f64::from(x) - cx - skew * down) * ifx;
+        let [f, r, u] = [self.forward, self.right, self.up].map(|v| v.as_dvec3());
+        (f + right * r - down * u).normalize().as_vec3()
     }
 }
 

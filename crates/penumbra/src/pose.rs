@@ -34,8 +34,9 @@ pub type Mat4Rows = [[f64; 4]; 4];
 /// The intrinsics and pose of a camera on a film.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraPose {
-    /// K: fx, fy on the diagonal, the principal point (cx, cy) in the last column, in pixels
-    /// of the image with pixel centers at integer coordinates, row 0 at the top.
+    /// K: fx, fy on the diagonal, the principal point (cx, cy) in the last column (and a
+    /// camera's given skew in K[0][1]), in pixels of the image with pixel centers at integer
+    /// coordinates, row 0 at the top.
     pub k: Mat3Rows,
     /// Camera to world, OpenCV axes: the columns are +x right, +y down, +z forward and the
     /// eye position.
@@ -53,8 +54,17 @@ impl CameraPose {
     pub fn new(camera: &Camera, width: u32, height: u32, offset: (u32, u32)) -> CameraPose {
         let h = (0.5 * f64::from(camera.fov_y_deg()).to_radians()).tan();
         let f = f64::from(height) / (2.0 * h);
-        let cx = f64::from(width) / 2.0 - 0.5 - f64::from(offset.0);
-        let cy = f64::from(height) / 2.0 - 0.5 - f64::from(offset.1);
+        let mut k = [
+            [f, 0.0, f64::from(width) / 2.0 - 0.5],
+            [0.0, f, f64::from(height) / 2.0 - 0.5],
+            [0.0, 0.0, 1.0],
+        ];
+        // A camera given K writes it, as it renders through it on this film.
+        if let Some(given) = camera.intrinsics() {
+            k = given.on_film(width, height).rows();
+        }
+        k[0][2] -= f64::from(offset.0);
+        k[1][2] -= f64::from(offset.1);
         let (forward, right, up) = camera.basis();
         let [fw, r, u, e] = [forward, right, up, camera.position()].map(|v| v.as_dvec3());
         let down = -u;
@@ -72,7 +82,7 @@ impl CameraPose {
         // The inverse of a rotation and translation: Rᵀ and −Rᵀ·e.
         let row = |a: glam::DVec3| [a.x, a.y, a.z, -a.dot(e) + 0.0];
         CameraPose {
-            k: [[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]],
+            k,
             camera_to_world: pose(r, down, fw),
             camera_to_world_opengl: pose(r, u, back),
             world_to_camera: [row(r), row(down), row(fw), [0.0, 0.0, 0.0, 1.0]],

@@ -68,7 +68,10 @@ fn a_later_override_wins_and_tables_are_created() {
     let Some(penumbra::desc::CameraDesc::Still(camera)) = file.desc.camera else {
         panic!("not a still camera: {:?}", file.desc.camera);
     };
-    assert_eq!(camera.fov.0, 30.0);
+    let penumbra::desc::LensDesc::Fov(fov) = camera.lens else {
+        panic!("a camera of fov: {camera:?}");
+    };
+    assert_eq!(fov.0, 30.0);
 }
 
 #[test]

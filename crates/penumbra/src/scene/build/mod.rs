@@ -13,6 +13,7 @@ mod paths;
 mod placements;
 pub(crate) use placements::{copy_transforms, scale_error};
 mod settings;
+mod still;
 
 use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;

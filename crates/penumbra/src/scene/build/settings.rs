@@ -5,12 +5,12 @@
 use std::path::{Path, PathBuf};
 
 use super::{Builder, Result};
-use crate::camera::{Camera, CameraError};
+use crate::camera::Camera;
 use crate::camera_path::CameraPath;
 use crate::image_format::OutputFormat;
 use crate::render::{implied_spp, RenderSettings, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP};
 use crate::sampling::{nearest_squares, perfect_square_root, Sampler};
-use crate::scene::desc::{CameraDesc, Num, StillCameraDesc};
+use crate::scene::desc::{CameraDesc, Num};
 use crate::scene::error::{ErrorKind, KeyPath};
 
 /// Area-light N when neither the light nor `[render]` gives one.
@@ -133,28 +133,6 @@ impl Builder<'_> {
             .ok_or_else(|| self.bad(table, "the path has no first frame"))?;
         self.paths.push((name, path));
         Ok(first)
-    }
-
-    /// A still camera, checked.
-    fn still_camera(&self, path: &KeyPath, c: &StillCameraDesc) -> Result<Camera> {
-        let up = c.up.map_or(glam::Vec3::Y, |u| u.vec3());
-        Camera::new(c.position.vec3(), c.look_at.vec3(), up, c.fov.f32()).map_err(|e| match e {
-            CameraError::FovOutOfRange => self.bad(
-                &path.key("fov"),
-                format!("fov must be between 0 and 180 degrees, not {}", c.fov.0),
-            ),
-            CameraError::Degenerate => self.bad(&path.key("look_at"), e.to_string()),
-            CameraError::NotFinite => {
-                let key = [
-                    ("position", c.position.vec3()),
-                    ("look_at", c.look_at.vec3()),
-                ]
-                .into_iter()
-                .find(|(_, v)| !v.is_finite())
-                .map_or("up", |(key, _)| key);
-                self.bad(&path.key(key), e.to_string())
-            }
-        })
     }
 
     /// True when an object asks for a glTF file's cameras.

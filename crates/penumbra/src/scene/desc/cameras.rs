@@ -30,6 +30,7 @@
 use serde::de::{Deserializer, Error as _};
 use serde::Deserialize;
 
+use super::objects::Matrix;
 use super::values::{Num, Vec3Desc};
 
 /// `[camera]` or `[cameras.NAME]`.
@@ -58,17 +59,39 @@ pub enum CameraDesc {
     },
 }
 
-/// A still camera.
+/// A still camera: where it stands, and what it sees.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StillCameraDesc {
-    /// Eye position.
-    pub position: Vec3Desc,
-    /// The point seen at the film's center.
-    pub look_at: Vec3Desc,
-    /// Up direction (default +y).
-    pub up: Option<Vec3Desc>,
-    /// Vertical field of view in degrees, in (0, 180).
-    pub fov: Num,
+    /// Its pose.
+    pub pose: PoseDesc,
+    /// Its lens.
+    pub lens: LensDesc,
+}
+
+/// Where a still camera stands.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PoseDesc {
+    /// `position`, `look_at` and `up`.
+    LookAt {
+        /// Eye position.
+        position: Vec3Desc,
+        /// The point seen at the film's center.
+        look_at: Vec3Desc,
+        /// Up direction (default +y).
+        up: Option<Vec3Desc>,
+    },
+    /// `camera_to_world`: a rigid 4×4 matrix by rows in OpenCV's camera axes (x right, y
+    /// down, z forward), as `--poses` writes it.
+    Matrix(Matrix),
+}
+
+/// What a camera sees through.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LensDesc {
+    /// `fov`: the vertical field of view in degrees, in (0, 180).
+    Fov(Num),
+    /// `K`: the intrinsic matrix by rows, in pixels of the film (`film.width × film.height`).
+    K([[Num; 3]; 3]),
 }
 
 /// `[[cameras.NAME.keys]]`.
@@ -122,6 +145,9 @@ struct CameraTable {
     look_at: Option<Vec3Desc>,
     up: Option<Vec3Desc>,
     fov: Option<Num>,
+    #[serde(rename = "K")]
+    k: Option<[[Num; 3]; 3]>,
+    camera_to_world: Option<Matrix>,
     keys: Option<Vec<CameraKeyDesc>>,
     path: Option<CameraPathDesc>,
 }
@@ -145,6 +171,12 @@ impl<'de> Deserialize<'de> for CameraDesc {
                     "a camera with {how} takes no position or look_at of its own (its {how} give them)"
                 )));
             }
+            if t.k.is_some() || t.camera_to_world.is_some() {
+                return Err(D::Error::custom(format!(
+                    "K and camera_to_world are a still camera's: a camera with {how} takes fov, \
+                     and its {how} give its positions"
+                )));
+            }
         }
         Ok(match (t.keys, t.path) {
             (Some(keys), _) => CameraDesc::Keys {
@@ -158,14 +190,31 @@ impl<'de> Deserialize<'de> for CameraDesc {
                 path,
             },
             (None, None) => CameraDesc::Still(StillCameraDesc {
-                position: t
-                    .position
-                    .ok_or_else(|| D::Error::missing_field("position"))?,
-                look_at: t
-                    .look_at
-                    .ok_or_else(|| D::Error::missing_field("look_at"))?,
-                up: t.up,
-                fov: t.fov.ok_or_else(|| D::Error::missing_field("fov"))?,
+                pose: match t.camera_to_world {
+                    Some(_) if t.position.is_some() || t.look_at.is_some() || t.up.is_some() => {
+                        return Err(D::Error::custom(
+                            "a camera takes camera_to_world or position, look_at and up, not both",
+                        ))
+                    }
+                    Some(m) => PoseDesc::Matrix(m),
+                    None => PoseDesc::LookAt {
+                        position: t
+                            .position
+                            .ok_or_else(|| D::Error::missing_field("position"))?,
+                        look_at: t
+                            .look_at
+                            .ok_or_else(|| D::Error::missing_field("look_at"))?,
+                        up: t.up,
+                    },
+                },
+                lens: match (t.fov, t.k) {
+                    (Some(_), Some(_)) => {
+                        return Err(D::Error::custom("a camera takes fov or K, not both"))
+                    }
+                    (Some(fov), None) => LensDesc::Fov(fov),
+                    (None, Some(k)) => LensDesc::K(k),
+                    (None, None) => return Err(D::Error::missing_field("fov")),
+                },
             }),
         })
     }

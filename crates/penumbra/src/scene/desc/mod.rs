@@ -40,7 +40,9 @@ mod values;
 
 use serde::Deserialize;
 
-pub use cameras::{CameraDesc, CameraKeyDesc, CameraPathDesc, PathType, StillCameraDesc};
+pub use cameras::{
+    CameraDesc, CameraKeyDesc, CameraPathDesc, LensDesc, PathType, PoseDesc, StillCameraDesc,
+};
 pub use lights::{
     AreaLightDesc, DirectionalLightDesc, EnvironmentLightDesc, LightDesc, LightType,
     PointLightDesc, SpotLightDesc,
