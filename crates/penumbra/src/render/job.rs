@@ -158,7 +158,7 @@ impl Job<'_> {
         // each film point).
         dirs.clear();
         let camera = &self.camera;
-        dirs.extend(film.iter().map(|&(x, y)| camera.direction(x, y)));
+        camera.extend_directions(film, dirs);
         let eye = self.camera.eye();
         hits.resize(dirs.len(), None);
         self.world
