@@ -52,6 +52,8 @@ pub fn write(
     poses::write(path, format, &frames).map_err(|e| match e {
         // "--poses out/p.json: cannot make its folder: ..."
         ProductError::Io { .. } => runtime(format!("--poses {e}")),
+        // A camera the layout cannot hold: the input's fault, found before rendering.
+        ProductError::Invalid { .. } => invalid(format!("--poses-format nerf: {e}")),
         e => runtime(format!("--poses: {e}")),
     })
 }

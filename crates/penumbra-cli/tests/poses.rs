@@ -211,3 +211,32 @@ fn nerf_transforms_name_the_images_beside_them_with_opengl_poses() {
         assert_eq!(frame["transform_matrix"], pose["camera_to_world_opengl"]);
     }
 }
+
+#[test]
+fn a_calibrated_camera_writes_its_k_and_nerf_refuses_a_skew_it_cannot_hold() {
+    let dir = TempDir::new("poses-k");
+    // K in pixels of the file's 16×12 film; rendered at twice the size, it scales.
+    let camera = |skew: f64| {
+        format!(
+            "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\n\
+             K = [[20, {skew:?}, 7], [0, 18, 5.5], [0, 0, 1]]\n"
+        )
+    };
+    dir.write("k.toml", BASE_TOML.replace(STILL, &camera(0.0)));
+    dir.write("skew.toml", BASE_TOML.replace(STILL, &camera(0.5)));
+    let args = ["--width", "32", "--height", "24", "--poses"];
+    ok(run_in(
+        dir.path(),
+        [&["render", "k.toml", "-o", "k.png"][..], &args, &["k.json"]].concat(),
+    ));
+    let k = matrix(&read_json(&dir.join("k.json"))["frames"][0]["K"]);
+    assert_eq!(k, [[40.0, 0.0, 14.5], [0.0, 36.0, 11.5], [0.0, 0.0, 1.0]]);
+    let nerf = [
+        &["render", "skew.toml", "-o", "skew.png"][..],
+        &args,
+        &["n.json", "--poses-format", "nerf"],
+    ];
+    let line = harness::error_line(&run_in(dir.path(), nerf.concat()), 2);
+    assert!(line.contains("skew") && line.contains("NeRF"), "{line}");
+    assert!(!dir.join("n.json").exists() && !dir.join("skew.png").exists());
+}

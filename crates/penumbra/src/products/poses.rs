@@ -129,8 +129,22 @@ pub fn layout(format: PosesFormat, frames: &[PoseFrame], path: &Path) -> Value {
 }
 
 /// Writes the poses of `frames` to `path` in `format` (pretty JSON and a newline), whole or
-/// not at all; its folder is made when missing.
+/// not at all; its folder is made when missing. A camera NeRF's model cannot hold (a K with
+/// skew) is [`ProductError::Invalid`], and nothing is written.
 pub fn write(path: &Path, format: PosesFormat, frames: &[PoseFrame]) -> Result<(), ProductError> {
+    if format == PosesFormat::Nerf {
+        // NeRF's model has no skew: a K with one cannot be written without changing it.
+        if let Some(f) = frames.iter().find(|f| f.k[0][1] != 0.0) {
+            return Err(ProductError::Invalid {
+                path: path.to_owned(),
+                message: format!(
+                    "camera `{}` has a skew (K[0][1] = {}), which NeRF's camera model cannot \
+                     hold: write the penumbra layout",
+                    f.camera, f.k[0][1]
+                ),
+            });
+        }
+    }
     let value = layout(format, frames, path);
     let text = serde_json::to_string_pretty(&value).map_err(|e| ProductError::io(path, e))? + "\n";
     if let Some(dir) = path
