@@ -108,8 +108,9 @@ def write_poses(
     format: str = "penumbra",
 ) -> None:
     """Writes the :func:`poses` of ``specs`` to ``path`` (JSON) as ``penumbra render --poses``
-    does, or with ``format="nerf"`` as ``--poses-format nerf`` does (:func:`nerf`), with the
-    command line's code; the file appears complete or not at all (its folder is made when
-    missing)."""
+    does, or with ``format="nerf"`` as ``--poses-format nerf`` does (:func:`nerf`), or with
+    ``format="colmap"`` COLMAP's text model into the folder ``path`` (``cameras.txt``,
+    ``images.txt``, ``points3D.txt``), with the command line's code; the files appear
+    complete or not at all (the folder is made when missing)."""
     frames = _frames("write_poses", specs, width, height, output)
     _core.write_poses(os.fspath(path), format, frames)

@@ -73,8 +73,16 @@ def test_python_written_poses_read_back_as_their_views(tmp_path):
     frames = poses.poses(specs, 32, 24, output="out/{name}.png")
     assert written == poses.nerf(frames, str(tmp_path / "sub"))
     assert written["frames"][0]["file_path"] == os.path.relpath("out/a.png", tmp_path / "sub")
-    with pytest.raises(ValueError, match=r'unknown poses format "colmap"'):
-        poses.write_poses(tmp_path / "c.json", specs, 32, 24, format="colmap")
+    # COLMAP's model: a folder of three files, by the command line's code.
+    poses.write_poses(tmp_path / "sparse" / "0", specs, 32, 24, output="out/{name}.png",
+                      format="colmap")
+    assert sorted(os.listdir(tmp_path / "sparse" / "0")) == [
+        "cameras.txt", "images.txt", "points3D.txt"]
+    images = (tmp_path / "sparse" / "0" / "images.txt").read_text().splitlines()
+    assert [line.split(" ")[-1] for line in images if line and not line.startswith("#")] == [
+        "a.png", "b.png"]
+    with pytest.raises(ValueError, match=r'unknown poses format "bundler"'):
+        poses.write_poses(tmp_path / "c.json", specs, 32, 24, format="bundler")
 
 
 def nerf_file(tmp_path, **change):

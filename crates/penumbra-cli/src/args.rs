@@ -155,12 +155,14 @@ pub struct RenderArgs {
     /// written, K and the pose, and which object ids belong to which [[objects]] entry.
     #[arg(long)]
     pub meta: bool,
-    /// Write every task's camera (intrinsics K and pose) to this JSON file.
+    /// Write every task's camera (intrinsics K and pose) to this JSON file (a folder for
+    /// --poses-format colmap).
     #[arg(long, value_name = "FILE.json")]
     pub poses: Option<PathBuf>,
-    /// The layout of --poses: `penumbra` ({"frames": [...]}, OpenCV and OpenGL poses) or
-    /// `nerf` (a transforms.json as instant-ngp and nerfstudio read it).
-    #[arg(long, value_name = "F", default_value = "penumbra", value_parser = ["penumbra", "nerf"], requires = "poses")]
+    /// The layout of --poses: `penumbra` ({"frames": [...]}, OpenCV and OpenGL poses),
+    /// `nerf` (a transforms.json as instant-ngp and nerfstudio read it) or `colmap` (COLMAP's
+    /// text model: cameras.txt, images.txt and points3D.txt in the folder --poses names).
+    #[arg(long, value_name = "F", default_value = "penumbra", value_parser = ["penumbra", "nerf", "colmap"], requires = "poses")]
     pub poses_format: String,
     /// Worker threads (0: all cores).
     // Hyphen values are taken so that "-1" is answered with the range, not with clap's

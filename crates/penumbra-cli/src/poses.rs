@@ -22,14 +22,24 @@ pub fn write(
     interrupt: &Interrupt,
 ) -> Result<(), Failure> {
     let json = path.extension().and_then(|e| e.to_str());
-    if !json.is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+    let named_json = json.is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    if format != "colmap" && !named_json {
         return Err(invalid(format!(
             "--poses {}: the poses file is JSON: name it .json",
             path.display()
         )));
     }
+    if format == "colmap" && named_json {
+        return Err(invalid(format!(
+            "--poses {}: COLMAP's model is a folder (cameras.txt, images.txt, points3D.txt): \
+             name the folder, such as out/sparse/0",
+            path.display()
+        )));
+    }
+    let name = format;
     let format = match format {
         "nerf" => PosesFormat::Nerf,
+        "colmap" => PosesFormat::Colmap,
         _ => PosesFormat::Penumbra,
     };
     let frames: Vec<PoseFrame> = jobs
@@ -53,7 +63,7 @@ pub fn write(
         // "--poses out/p.json: cannot make its folder: ..."
         ProductError::Io { .. } => runtime(format!("--poses {e}")),
         // A camera the layout cannot hold: the input's fault, found before rendering.
-        ProductError::Invalid { .. } => invalid(format!("--poses-format nerf: {e}")),
+        ProductError::Invalid { .. } => invalid(format!("--poses-format {name}: {e}")),
         e => runtime(format!("--poses: {e}")),
     })
 }

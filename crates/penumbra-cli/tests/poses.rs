@@ -240,3 +240,104 @@ fn a_calibrated_camera_writes_its_k_and_nerf_refuses_a_skew_it_cannot_hold() {
     assert!(line.contains("skew") && line.contains("NeRF"), "{line}");
     assert!(!dir.join("n.json").exists() && !dir.join("skew.png").exists());
 }
+
+/// The rotation (rows) of a unit quaternion (w, x, y, z), as COLMAP's `QuaternionToRotationMatrix`.
+fn rotation([w, x, y, z]: [f64; 4]) -> [[f64; 3]; 3] {
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+#[test]
+fn colmap_models_hold_each_images_k_and_world_to_camera_pose() {
+    let dir = TempDir::new("poses-colmap");
+    dir.write("s.toml", scene());
+    let args = [
+        "render", "s.toml", "--camera", "fly", "--width", "16", "--height", "12",
+    ];
+    let run = |extra: &[&str]| ok(run_in(dir.path(), [&args[..], extra].concat()));
+    run(&[
+        "-o",
+        "out/images/{frame:03}.png",
+        "--poses",
+        "out/sparse/0",
+        "--poses-format",
+        "colmap",
+    ]);
+    run(&["-o", "cv/{frame}.png", "--poses", "cv/poses.json"]);
+    let cv = read_json(&dir.join("cv/poses.json"));
+    let text = |name: &str| std::fs::read_to_string(dir.join("out/sparse/0").join(name)).unwrap();
+    let data = |t: String| -> Vec<Vec<String>> {
+        t.lines()
+            .filter(|l| !l.starts_with('#') && !l.is_empty())
+            .map(|l| l.split(' ').map(str::to_owned).collect())
+            .collect()
+    };
+    let cameras = data(text("cameras.txt"));
+    let images = data(text("images.txt"));
+    assert!(text("points3D.txt").lines().all(|l| l.starts_with('#')));
+    // The path's fov changes from frame to frame: a camera each.
+    assert_eq!((cameras.len(), images.len()), (5, 5));
+    let num = |s: &String| s.parse::<f64>().unwrap();
+    for (i, image) in images.iter().enumerate() {
+        let frame = &cv["frames"][i];
+        assert_eq!(image[9], format!("{i:03}.png"));
+        let camera = cameras.iter().find(|c| c[0] == image[8]).unwrap();
+        let k = matrix(&frame["K"]);
+        assert_eq!(&camera[1..4], ["PINHOLE", "16", "12"]);
+        let params: Vec<f64> = camera[4..].iter().map(num).collect();
+        // COLMAP's pixel centres lie at +½ (serde_json reads a float to within an ulp).
+        let expected = [k[0][0], k[1][1], k[0][2] + 0.5, k[1][2] + 0.5];
+        for (p, e) in params.iter().zip(expected) {
+            assert!(
+                (p - e).abs() <= 1e-12 * e.abs(),
+                "{params:?} vs {expected:?}"
+            );
+        }
+        let q = [1, 2, 3, 4].map(|j| num(&image[j]));
+        assert!(q[0] >= 0.0);
+        let (r, t) = (rotation(q), [5, 6, 7].map(|j| num(&image[j])));
+        let w2c = matrix(&frame["world_to_camera"]);
+        for a in 0..3 {
+            assert!((t[a] - w2c[a][3]).abs() < 1e-12, "{t:?} vs {w2c:?}");
+            for b in 0..3 {
+                // The pose is the camera's f32 frame: orthonormal to about 1e-7.
+                assert!((r[a][b] - w2c[a][b]).abs() < 1e-6, "{r:?} vs {w2c:?}");
+            }
+        }
+    }
+    // A .json name is not a folder.
+    let line = harness::error_line(
+        &run_in(
+            dir.path(),
+            [
+                &args[..],
+                &[
+                    "-o",
+                    "x{frame}.png",
+                    "--poses",
+                    "p.json",
+                    "--poses-format",
+                    "colmap",
+                ],
+            ]
+            .concat(),
+        ),
+        2,
+    );
+    assert!(line.contains("a folder"), "{line}");
+}

@@ -51,7 +51,8 @@ fn frames_of(text: &str) -> PyResult<Vec<PoseFrame>> {
 /// folder).
 #[pyfunction]
 pub fn poses_layout(format: &str, frames: &str, path: PathBuf) -> PyResult<String> {
-    let layout = poses::layout(format_of(format)?, &frames_of(frames)?, &path);
+    let layout = poses::layout(format_of(format)?, &frames_of(frames)?, &path)
+        .map_err(|e| product_error("poses_layout", e))?;
     Ok(layout.to_string())
 }
 

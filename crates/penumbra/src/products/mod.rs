@@ -4,7 +4,8 @@
 //! - [`record`]: the record beside an image (`out.png` → `out.meta.json`): how it was made
 //!   ([`RecordSettings`], a named serialization, never Debug text), the files written with
 //!   their digests, the camera and the object ids; and the rule that says a view is done;
-//! - [`poses`]: every image's camera in penumbra's layout or NeRF's `transforms.json`;
+//! - [`poses`]: every image's camera in penumbra's layout, NeRF's `transforms.json` or
+//!   COLMAP's text model ([`colmap`]);
 //! - [`manifest`]: one JSON line per task, appended;
 //! - [`output_name`]: output patterns (`out/{camera}_{frame:04}.png`) and their checks;
 //! - [`aov_files`]: the AOV files (a multi-layer EXR, PFM and id EXR files, Python's NPZ).
@@ -13,6 +14,7 @@
 //! ([`StagedFile`](crate::StagedFile)); errors name the file asked for.
 
 pub mod aov_files;
+pub mod colmap;
 mod error;
 pub mod manifest;
 mod npz;

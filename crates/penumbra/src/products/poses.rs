@@ -1,5 +1,5 @@
 //! Every image's camera as computer vision reads it (see [`CameraPose`] and docs/spec.md,
-//! "Poses and intrinsics"), in one of two layouts ([`PosesFormat`]), as `penumbra render
+//! "Poses and intrinsics"), in one of three layouts ([`PosesFormat`]), as `penumbra render
 //! --poses` and Python's `penumbra.poses.write_poses` write them:
 //!
 //! - `penumbra`: `{"frames": [...]}`, per image its `frame`, `camera`, `file`, `width`,
@@ -10,7 +10,9 @@
 //!   "OPENCV", `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h` (NeRF's pixel centres at +½, so a centred
 //!   camera has cx = W/2), `camera_angle_x`/`_y`, zero distortion, and per frame `file_path`
 //!   (relative to the file's folder) and `transform_matrix` (camera to world, OpenGL axes),
-//!   with the intrinsics repeated per frame for paths whose fov changes.
+//!   with the intrinsics repeated per frame for paths whose fov changes;
+//! - `colmap`: COLMAP's text model, a folder of `cameras.txt`, `images.txt` and
+//!   `points3D.txt` (see [`super::colmap`]).
 //!
 //! ```
 //! use glam::Vec3;
@@ -19,10 +21,10 @@
 //!
 //! let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0)?;
 //! let frame = PoseFrame::new(Some(0), "front", "out/front.png", &camera, CameraPose::new(&camera, 64, 48, (0, 0)), (64, 48));
-//! let nerf = layout(PosesFormat::Nerf, &[frame], std::path::Path::new("out/transforms.json"));
+//! let nerf = layout(PosesFormat::Nerf, &[frame], std::path::Path::new("out/transforms.json"))?;
 //! assert_eq!(nerf["cx"], 32.0); // NeRF's centre: W/2
 //! assert_eq!(nerf["frames"][0]["file_path"], "front.png");
-//! # Ok::<(), penumbra::CameraError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 use std::path::{Component, Path, PathBuf};
@@ -35,23 +37,30 @@ use crate::camera::Camera;
 use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
 use crate::staged::StagedFile;
 
-/// The two layouts of a poses file.
+/// The layouts of poses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PosesFormat {
     /// penumbra's own: `{"frames": [...]}`.
     Penumbra,
     /// NeRF's `transforms.json`.
     Nerf,
+    /// COLMAP's text model, a folder of three files (see [`super::colmap`]).
+    Colmap,
 }
 
 impl std::str::FromStr for PosesFormat {
     type Err = crate::UnknownName;
 
     fn from_str(name: &str) -> Result<PosesFormat, crate::UnknownName> {
-        let all = [PosesFormat::Penumbra, PosesFormat::Nerf];
+        let all = [
+            PosesFormat::Penumbra,
+            PosesFormat::Nerf,
+            PosesFormat::Colmap,
+        ];
         crate::names::parse_name("poses format", name, &all, |f| match f {
             PosesFormat::Penumbra => "penumbra",
             PosesFormat::Nerf => "nerf",
+            PosesFormat::Colmap => "colmap",
         })
     }
 }
@@ -121,31 +130,49 @@ impl PoseFrame {
 
 /// The poses file of `frames` in `format`, for the file at `path` (NeRF's `file_path`s are
 /// relative to its folder).
-pub fn layout(format: PosesFormat, frames: &[PoseFrame], path: &Path) -> Value {
-    match format {
+pub fn layout(
+    format: PosesFormat,
+    frames: &[PoseFrame],
+    path: &Path,
+) -> Result<Value, ProductError> {
+    let skewed = || frames.iter().find(|f| f.k[0][1] != 0.0);
+    Ok(match format {
         PosesFormat::Penumbra => json!({ "frames": frames }),
-        PosesFormat::Nerf => nerf(frames, path.parent().unwrap_or(Path::new(""))),
-    }
+        PosesFormat::Nerf => {
+            // NeRF's model has no skew: a K with one cannot be written without changing it.
+            if let Some(f) = skewed() {
+                return Err(ProductError::Invalid {
+                    path: path.to_owned(),
+                    message: format!(
+                        "camera `{}` has a skew (K[0][1] = {}), which NeRF's camera model \
+                         cannot hold: write the penumbra layout",
+                        f.camera, f.k[0][1]
+                    ),
+                });
+            }
+            nerf(frames, path.parent().unwrap_or(Path::new("")))
+        }
+        PosesFormat::Colmap => {
+            let files = super::colmap::files(frames, path)?;
+            Value::Object(
+                files
+                    .into_iter()
+                    .map(|(n, t)| (n, Value::String(t)))
+                    .collect(),
+            )
+        }
+    })
 }
 
 /// Writes the poses of `frames` to `path` in `format` (pretty JSON and a newline), whole or
-/// not at all; its folder is made when missing. A camera NeRF's model cannot hold (a K with
-/// skew) is [`ProductError::Invalid`], and nothing is written.
+/// not at all; its folder is made when missing. For COLMAP, `path` is the model's folder
+/// ([`super::colmap::write`]). A camera the layout cannot hold (a K with skew, for NeRF and
+/// COLMAP) is [`ProductError::Invalid`], and nothing is written.
 pub fn write(path: &Path, format: PosesFormat, frames: &[PoseFrame]) -> Result<(), ProductError> {
-    if format == PosesFormat::Nerf {
-        // NeRF's model has no skew: a K with one cannot be written without changing it.
-        if let Some(f) = frames.iter().find(|f| f.k[0][1] != 0.0) {
-            return Err(ProductError::Invalid {
-                path: path.to_owned(),
-                message: format!(
-                    "camera `{}` has a skew (K[0][1] = {}), which NeRF's camera model cannot \
-                     hold: write the penumbra layout",
-                    f.camera, f.k[0][1]
-                ),
-            });
-        }
+    if format == PosesFormat::Colmap {
+        return super::colmap::write(path, frames);
     }
-    let value = layout(format, frames, path);
+    let value = layout(format, frames, path)?;
     let text = serde_json::to_string_pretty(&value).map_err(|e| ProductError::io(path, e))? + "\n";
     if let Some(dir) = path
         .parent()
@@ -244,10 +271,14 @@ mod tests {
     #[test]
     fn formats_parse_by_name() {
         assert_eq!("nerf".parse::<PosesFormat>().unwrap(), PosesFormat::Nerf);
-        let e = "colmap".parse::<PosesFormat>().unwrap_err().to_string();
+        assert_eq!(
+            "colmap".parse::<PosesFormat>().unwrap(),
+            PosesFormat::Colmap
+        );
+        let e = "bundler".parse::<PosesFormat>().unwrap_err().to_string();
         assert_eq!(
             e,
-            r#"unknown poses format "colmap" (use "penumbra" or "nerf")"#
+            r#"unknown poses format "bundler" (use "penumbra", "nerf" or "colmap")"#
         );
     }
 }
