@@ -54,6 +54,10 @@ impl Intrinsics {
     /// K on a `width × height` film: each axis scaled by the film's size over K's, about the
     /// image's corner (so a pixel centre stays a pixel centre: c′ + ½ = (c + ½)·s).
     pub fn on_film(&self, width: u32, height: u32) -> Intrinsics {
+        if (width, height) == (self.width, self.height) {
+            // K as given, every digit (`(c + ½) − ½` need not be c in floating point).
+            return *self;
+        }
         let sx = f64::from(width) / f64::from(self.width);
         let sy = f64::from(height) / f64::from(self.height);
         Intrinsics {
