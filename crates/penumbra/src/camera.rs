@@ -282,8 +282,8 @@ impl PinholeCamera {
         Ray::new(self.eye, self.direction(x, y))
     }
 
-    /// The unit direction of [`PinholeCamera::ray`]`(x, y)`. Plain arithmetic, inlined, so
-    /// that a loop over many film points vectorizes.
+    /// The unit direction of [`PinholeCamera::ray`]`(x, y)` (for many film points,
+    /// [`PinholeCamera::extend_directions`]).
     ///
     /// With K, the point seen at film point (x, y) is the camera-space direction
     /// `K⁻¹·(x − ½, y − ½, 1)` (OpenCV's pixel coordinates), worked in double precision, so
@@ -316,9 +316,8 @@ impl PinholeCamera {
         dir.normalize()
     }
 
-    /// [`PinholeCamera::direction`] through K (`k` as the field holds it). Kept out of the
-    /// field of view's loop, which it would otherwise slow (measured in instructions).
-    #[cold]
+    /// [`PinholeCamera::direction`] through K (`k` as the field holds it), out of line so
+    /// that the field of view's loop compiles as it did before K.
     #[inline(never)]
     fn through_k(&self, [ifx, ify, cx, cy, skew]: [f64; 5], x: f32, y: f32) -> Vec3 {
         let down = (f64::from(y) - cy) * ify;
