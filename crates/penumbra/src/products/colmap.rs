@@ -30,20 +30,11 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
          #   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
          #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
     );
+    super::poses::unskewed(frames, folder, "COLMAP's PINHOLE")?;
     let mut ids: HashMap<String, usize> = HashMap::new();
     let mut lines = String::new();
     let root = shared_folder(frames);
     for (i, f) in frames.iter().enumerate() {
-        if f.k[0][1] != 0.0 {
-            let message = format!(
-                "camera `{}` has a skew (K[0][1] = {}), which COLMAP's PINHOLE cannot hold",
-                f.camera, f.k[0][1]
-            );
-            return Err(ProductError::Invalid {
-                path: folder.to_owned(),
-                message,
-            });
-        }
         let camera = format!(
             "PINHOLE {} {} {:?} {:?} {:?} {:?}",
             f.width,

@@ -135,21 +135,10 @@ pub fn layout(
     frames: &[PoseFrame],
     path: &Path,
 ) -> Result<Value, ProductError> {
-    let skewed = || frames.iter().find(|f| f.k[0][1] != 0.0);
     Ok(match format {
         PosesFormat::Penumbra => json!({ "frames": frames }),
         PosesFormat::Nerf => {
-            // NeRF's model has no skew: a K with one cannot be written without changing it.
-            if let Some(f) = skewed() {
-                return Err(ProductError::Invalid {
-                    path: path.to_owned(),
-                    message: format!(
-                        "camera `{}` has a skew (K[0][1] = {}), which NeRF's camera model \
-                         cannot hold: write the penumbra layout",
-                        f.camera, f.k[0][1]
-                    ),
-                });
-            }
+            unskewed(frames, path, "NeRF's camera model")?;
             nerf(frames, path.parent().unwrap_or(Path::new("")))
         }
         PosesFormat::Colmap => {
@@ -162,6 +151,23 @@ pub fn layout(
             )
         }
     })
+}
+
+/// An error naming the first camera of `frames` whose K has a skew, which `model` (NeRF's,
+/// COLMAP's `PINHOLE`) cannot hold: written without it, the file would describe another
+/// camera.
+pub(crate) fn unskewed(frames: &[PoseFrame], path: &Path, model: &str) -> Result<(), ProductError> {
+    match frames.iter().find(|f| f.k[0][1] != 0.0) {
+        None => Ok(()),
+        Some(f) => Err(ProductError::Invalid {
+            path: path.to_owned(),
+            message: format!(
+                "camera `{}` has a skew (K[0][1] = {}), which {model} cannot hold: write the \
+                 penumbra layout",
+                f.camera, f.k[0][1]
+            ),
+        }),
+    }
 }
 
 /// Writes the poses of `frames` to `path` in `format` (pretty JSON and a newline), whole or
