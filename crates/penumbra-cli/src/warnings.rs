@@ -134,8 +134,9 @@ fn outside_view(camera: &Camera, aspect: f32, bounds: &Aabb) -> bool {
     if forward == Vec3::ZERO || right == Vec3::ZERO || !aspect.is_finite() || aspect <= 0.0 {
         return false;
     }
-    // A calibrated K may look off its axis: its view is not the centred one below.
-    if camera.intrinsics().is_some() {
+    // A calibrated K may look off its axis, and other lens models see other views than the
+    // centred pinhole's below.
+    if !camera.sees_by_fov() {
         return false;
     }
     let half_h = (camera.fov_y_deg().to_radians() / 2.0).tan();

@@ -341,3 +341,97 @@ fn colmap_models_hold_each_images_k_and_world_to_camera_pose() {
     );
     assert!(line.contains("a folder"), "{line}");
 }
+
+#[test]
+fn lens_models_are_written_as_each_format_names_them() {
+    let dir = TempDir::new("poses-lens");
+    let lens =
+        |keys: &str| format!("[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\n{keys}\n");
+    let k = "K = [[20, 0, 7.5], [0, 18, 5.5], [0, 0, 1]]";
+    let scenes = [
+        ("radial", format!("model = \"opencv\"\n{k}\ndistortion = [-0.2, 0.05, 0.001, -0.002, 0.0]")),
+        ("rational", format!("model = \"opencv\"\n{k}\ndistortion = [-0.2, 0.05, 0.001, -0.002, 0.01, 0.02, 0, 0]")),
+        ("prism", format!("model = \"opencv\"\n{k}\ndistortion = [-0.2, 0.05, 0.001, -0.002, 0, 0, 0, 0, 0.001, 0, 0, 0]")),
+        ("fish", format!("model = \"fisheye\"\n{k}\ndistortion = [0.01, -0.002, 0.0003, 0]\nmax_angle = 100")),
+        ("pano", "model = \"equirectangular\"".to_owned()),
+    ];
+    for (name, keys) in &scenes {
+        let file = format!("{name}.toml");
+        dir.write(&file, BASE_TOML.replace(STILL, &lens(keys)));
+    }
+    let run = |name: &str, format: &str, to: &str| {
+        run_in(
+            dir.path(),
+            [
+                "render",
+                &format!("{name}.toml"),
+                "-o",
+                &format!("{name}-{format}.png"),
+                "--poses",
+                to,
+                "--poses-format",
+                format,
+            ],
+        )
+    };
+    // penumbra's layout carries the model and its coefficients as given.
+    ok(run("fish", "penumbra", "fish.json"));
+    let frame = &read_json(&dir.join("fish.json"))["frames"][0];
+    assert_eq!(frame["model"], "fisheye");
+    assert_eq!(
+        frame["distortion"],
+        serde_json::json!([0.01, -0.002, 0.0003, 0.0])
+    );
+    assert_eq!(frame["max_angle"], 100.0);
+    // COLMAP: the model that holds the coefficients, after fx fy cx cy.
+    let colmap_camera = |name: &str| {
+        ok(run(name, "colmap", &format!("{name}-sparse")));
+        let text = std::fs::read_to_string(dir.join(format!("{name}-sparse/cameras.txt"))).unwrap();
+        let line = text
+            .lines()
+            .find(|l| !l.starts_with('#'))
+            .unwrap()
+            .to_owned();
+        line.split(' ')
+            .skip(1)
+            .map(str::to_owned)
+            .collect::<Vec<_>>()
+    };
+    let radial = colmap_camera("radial");
+    assert_eq!(radial[0], "OPENCV");
+    assert_eq!(radial[7..], ["-0.2", "0.05", "0.001", "-0.002"]);
+    let rational = colmap_camera("rational");
+    assert_eq!((rational[0].as_str(), rational.len()), ("FULL_OPENCV", 15));
+    let fish = colmap_camera("fish");
+    assert_eq!(fish[0], "OPENCV_FISHEYE");
+    assert_eq!(fish[3..7], ["20.0", "18.0", "8.0", "6.0"]);
+    for (name, words) in [("prism", "thin-prism"), ("pano", "panorama")] {
+        let line = harness::error_line(&run(name, "colmap", "x"), 2);
+        assert!(line.contains(words) && line.contains("COLMAP"), "{line}");
+    }
+    // nerfstudio: its camera_model names, k3 among the radial terms.
+    for (name, model) in [
+        ("radial", "OPENCV"),
+        ("fish", "OPENCV_FISHEYE"),
+        ("pano", "EQUIRECTANGULAR"),
+    ] {
+        ok(run(name, "nerf", &format!("{name}-nerf.json")));
+        let t = read_json(&dir.join(format!("{name}-nerf.json")));
+        assert_eq!(t["camera_model"], model, "{name}");
+    }
+    let t = read_json(&dir.join("radial-nerf.json"));
+    assert_eq!(
+        (t["k1"].as_f64(), t["k3"].as_f64(), t["p2"].as_f64()),
+        (Some(-0.2), Some(0.0), Some(-0.002))
+    );
+    let pano = read_json(&dir.join("pano-nerf.json"));
+    assert_eq!(
+        (pano["fl_x"].as_f64(), pano["w"].as_f64()),
+        (Some(8.0), Some(16.0))
+    );
+    let line = harness::error_line(&run("rational", "nerf", "r.json"), 2);
+    assert!(
+        line.contains("rational") && line.contains("nerfstudio"),
+        "{line}"
+    );
+}

@@ -88,7 +88,7 @@ pub fn camera_rays<'py>(
 ) -> PyResult<Bound<'py, numpy::PyArray3<f32>>> {
     use numpy::IntoPyArray;
     let c = film_camera(position, look_at, up, fov, (width, height))?;
-    let pinhole = penumbra::PinholeCamera::new(&c, width, height);
+    let pinhole = penumbra::FilmCamera::new(&c, width, height);
     let (w, h) = (width as usize, height as usize);
     let rays = py.detach(|| {
         let no_memory = || crate::errors::no_memory("camera_rays", "the rays");
@@ -98,7 +98,9 @@ pub fn camera_rays<'py>(
             .map_err(|_| no_memory())?;
         for y in 0..h {
             for x in 0..w {
-                let ray = pinhole.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let ray = pinhole
+                    .ray(x as f32 + 0.5, y as f32 + 0.5)
+                    .expect("a pinhole sees every film point");
                 rows.extend(ray.origin.to_array());
                 rows.extend(ray.direction.to_array());
             }

@@ -175,18 +175,20 @@ impl CoreScene {
     /// The camera `name` (None: the first, the default) as (position, look_at, up, fov);
     /// `None` for a name the scene lacks. A camera with keys or a path gives its first
     /// frame's, the camera a render of the name uses.
-    /// Raises `ValueError` for a camera given by an intrinsic matrix `K`, which Python's
-    /// `Camera` cannot hold yet (it renders by name).
+    /// Raises `ValueError` for a camera given by an intrinsic matrix `K`, a lens model other
+    /// than the pinhole or an aperture, which Python's `Camera` cannot hold yet (it renders
+    /// by name).
     #[pyo3(signature = (name = None))]
     fn camera(&self, name: Option<&str>) -> PyResult<Option<CameraArgs>> {
         let view = name.map_or(View::First, |n| View::Named(n.to_owned()));
         let Ok(camera) = view.camera(&self.world) else {
             return Ok(None);
         };
-        if camera.intrinsics().is_some() {
+        if !camera.sees_by_fov() {
             return Err(PyValueError::new_err(format!(
-                "camera {} sees through an intrinsic matrix K, which penumbra.Camera cannot \
-                 hold yet: render it by its name (render(camera=...))",
+                "camera {} sees through an intrinsic matrix K, a lens model or an aperture, \
+                 which penumbra.Camera cannot hold yet: render it by its name \
+                 (render(camera=...))",
                 name.map_or("(the first)".to_owned(), |n| format!("{n:?}"))
             )));
         }

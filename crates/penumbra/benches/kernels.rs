@@ -16,7 +16,7 @@ use std::path::Path;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use penumbra::bench::{Pairs, Segments};
-use penumbra::{supported_paths, Light, PinholeCamera, Ray, Rng, SceneFile, World};
+use penumbra::{supported_paths, FilmCamera, Light, Ray, Rng, SceneFile, World};
 
 /// The seed's room, built once.
 fn world() -> std::sync::Arc<World> {
@@ -145,10 +145,14 @@ fn bench_bundles(c: &mut Criterion) {
 
 fn bench_camera(c: &mut Criterion) {
     let world = world();
-    let camera = PinholeCamera::new(&world.cameras()[0].1, 64, 64);
+    let camera = FilmCamera::new(&world.cameras()[0].1, 64, 64);
     // Rows of pixels, as the renderer batches them: 16 rays of neighbouring pixels at a time.
     let rays: Vec<Ray> = (0..64 * 64)
-        .map(|i| camera.ray((i % 64) as f32 + 0.5, (i / 64) as f32 + 0.5))
+        .map(|i| {
+            camera
+                .ray((i % 64) as f32 + 0.5, (i / 64) as f32 + 0.5)
+                .expect("a pinhole")
+        })
         .collect();
     let dirs: Vec<Vec3> = rays.iter().map(|r| r.direction).collect();
     let mut group = c.benchmark_group("closest_hit_4096_camera_rays");

@@ -24,7 +24,7 @@
 //! # Ok::<(), penumbra::CameraError>(())
 //! ```
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Lens};
 
 /// A 3×3 matrix, row by row.
 pub type Mat3Rows = [[f64; 3]; 3];
@@ -36,7 +36,9 @@ pub type Mat4Rows = [[f64; 4]; 4];
 pub struct CameraPose {
     /// K: fx, fy on the diagonal, the principal point (cx, cy) in the last column (and a
     /// camera's given skew in K[0][1]), in pixels of the image with pixel centers at integer
-    /// coordinates, row 0 at the top.
+    /// coordinates, row 0 at the top. A distorted lens's K is the one before its distortion.
+    /// A panorama's maps (longitude, −latitude) in radians to pixels (fx = W/2π, fy = H/π),
+    /// an orthographic camera's (x, y) in world units on its image plane (fx = fy = H/height).
     pub k: Mat3Rows,
     /// Camera to world, OpenCV axes: the columns are +x right, +y down, +z forward and the
     /// eye position.
@@ -53,10 +55,17 @@ impl CameraPose {
     /// (x0, y0) on (a `--pixelbounds` region; (0, 0) for the whole film).
     pub fn new(camera: &Camera, width: u32, height: u32, offset: (u32, u32)) -> CameraPose {
         let h = (0.5 * f64::from(camera.fov_y_deg()).to_radians()).tan();
-        let f = f64::from(height) / (2.0 * h);
+        let (w, hh) = (f64::from(width), f64::from(height));
+        // The pinhole's f, or for a panorama pixels per radian of longitude and latitude, for
+        // an orthographic camera pixels per world unit.
+        let (fx, fy) = match camera.lens() {
+            Lens::Equirectangular => (w / std::f64::consts::TAU, hh / std::f64::consts::PI),
+            Lens::Orthographic { height: span } => (hh / f64::from(span), hh / f64::from(span)),
+            _ => (hh / (2.0 * h), hh / (2.0 * h)),
+        };
         let mut k = [
-            [f, 0.0, f64::from(width) / 2.0 - 0.5],
-            [0.0, f, f64::from(height) / 2.0 - 0.5],
+            [fx, 0.0, w / 2.0 - 0.5],
+            [0.0, fy, hh / 2.0 - 0.5],
             [0.0, 0.0, 1.0],
         ];
         // A camera given K writes it, as it renders through it on this film.
@@ -89,8 +98,9 @@ impl CameraPose {
         }
     }
 
-    /// Where the world point `p` appears in the image (OpenCV pixel coordinates: pixel
-    /// centers at integers) and its depth along the forward axis; `None` behind the camera.
+    /// Where the world point `p` appears in the image of a pinhole (OpenCV pixel
+    /// coordinates: pixel centers at integers) and its depth along the forward axis; `None`
+    /// behind the camera.
     pub fn project(&self, p: glam::DVec3) -> Option<(f64, f64, f64)> {
         let m = &self.world_to_camera;
         let c = |i: usize| m[i][0] * p.x + m[i][1] * p.y + m[i][2] * p.z + m[i][3];
@@ -108,7 +118,7 @@ mod tests {
     use glam::{DVec3, Vec3};
 
     use super::*;
-    use crate::camera::PinholeCamera;
+    use crate::camera::FilmCamera;
 
     #[test]
     fn a_pixel_centres_ray_projects_back_onto_that_pixel() {
@@ -123,9 +133,9 @@ mod tests {
         .unwrap();
         let (w, h) = (37, 23);
         let pose = CameraPose::new(&camera, w, h, (0, 0));
-        let pinhole = PinholeCamera::new(&camera, w, h);
+        let pinhole = FilmCamera::new(&camera, w, h);
         for (i, j) in [(0, 0), (36, 22), (18, 11), (5, 17)] {
-            let ray = pinhole.ray(i as f32 + 0.5, j as f32 + 0.5);
+            let ray = pinhole.ray(i as f32 + 0.5, j as f32 + 0.5).unwrap();
             let p = (ray.origin + 7.0 * ray.direction).as_dvec3();
             let (u, v, _) = pose.project(p).unwrap();
             assert!(

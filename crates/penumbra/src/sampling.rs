@@ -168,6 +168,21 @@ impl Rng {
     }
 }
 
+/// Shirley and Chiu's concentric map of `u` in [0, 1)² onto the unit disk: area-preserving,
+/// with (½, ½) at the centre.
+pub fn concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let quarter = std::f32::consts::FRAC_PI_4;
+    let (r, theta) = match o.x.abs() > o.y.abs() {
+        true => (o.x, quarter * (o.y / o.x)),
+        false => (o.y, 2.0 * quarter - quarter * (o.x / o.y)),
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

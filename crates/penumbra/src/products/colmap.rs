@@ -1,5 +1,6 @@
 //! Poses as COLMAP's text model, the input Gaussian splatting and most NeRF trainers read
-//! (`sparse/0/`): a folder of `cameras.txt` (one `PINHOLE` camera per distinct size and K),
+//! (`sparse/0/`): a folder of `cameras.txt` (one camera per distinct model, size, K and
+//! distortion),
 //! `images.txt` (each image's world-to-camera rotation as a quaternion `QW QX QY QZ`, its
 //! translation, its camera and its name, and an empty line for its 2D points) and an empty
 //! `points3D.txt`, as COLMAP's `model_converter` writes them.
@@ -9,7 +10,9 @@
 //! folder every image of the model shares, with `/` between names (`images/0001.png` in a
 //! folder `out` gives `0001.png` when every image is in `out/images`).
 //!
-//! A camera COLMAP's `PINHOLE` cannot hold (a K with skew) is an error that names it.
+//! Cameras are `PINHOLE`, `OPENCV`, `FULL_OPENCV` or `OPENCV_FISHEYE` by their lens
+//! ([`colmap_model`]). A camera COLMAP cannot hold (a K with skew, thin-prism terms, a
+//! panorama, an orthographic camera) is an error that names it.
 
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -30,13 +33,14 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
          #   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
          #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
     );
-    super::poses::unskewed(frames, folder, "COLMAP's PINHOLE")?;
+    super::poses::unskewed(frames, folder, "COLMAP's camera models")?;
     let mut ids: HashMap<String, usize> = HashMap::new();
     let mut lines = String::new();
     let root = shared_folder(frames);
     for (i, f) in frames.iter().enumerate() {
-        let camera = format!(
-            "PINHOLE {} {} {:?} {:?} {:?} {:?}",
+        let (model, distortion) = colmap_model(f, folder)?;
+        let mut camera = format!(
+            "{model} {} {} {:?} {:?} {:?} {:?}",
             f.width,
             f.height,
             f.k[0][0],
@@ -44,6 +48,9 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
             f.k[0][2] + 0.5,
             f.k[1][2] + 0.5
         );
+        for c in distortion {
+            let _ = write!(camera, " {c:?}");
+        }
         let next = ids.len() + 1;
         let id = *ids.entry(camera.clone()).or_insert_with(|| {
             let _ = writeln!(lines, "{next} {camera}");
@@ -71,6 +78,26 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
         ("images.txt".to_owned(), images),
         ("points3D.txt".to_owned(), points.to_owned()),
     ])
+}
+
+/// COLMAP's camera model of frame `f` and its distortion parameters: `PINHOLE`, `OPENCV`
+/// (k1 k2 p1 p2, for OpenCV's model without k3 or rational terms), `FULL_OPENCV` (k1 k2 p1 p2
+/// k3 k4 k5 k6) or `OPENCV_FISHEYE` (k1 k2 k3 k4); an error for thin-prism terms, panoramas
+/// and orthographic cameras.
+fn colmap_model(f: &PoseFrame, folder: &Path) -> Result<(&'static str, Vec<f64>), ProductError> {
+    let d = f.opencv_coefficients();
+    let cannot = |why: &str| super::poses::cannot_hold(folder, f, "COLMAP", why);
+    Ok(match f.model.as_str() {
+        "pinhole" => ("PINHOLE", vec![]),
+        "opencv" if d[8..].iter().any(|&c| c != 0.0) => {
+            return Err(cannot("has thin-prism terms (s1 … s4)"))
+        }
+        "opencv" if d[4..].iter().all(|&c| c == 0.0) => ("OPENCV", d[..4].to_vec()),
+        "opencv" => ("FULL_OPENCV", d[..8].to_vec()),
+        "fisheye" => ("OPENCV_FISHEYE", d[..4].to_vec()),
+        "equirectangular" => return Err(cannot("is a panorama")),
+        _ => return Err(cannot("is parallel")),
+    })
 }
 
 /// Writes the model of `frames` into `folder` (made when missing), its three files together

@@ -4,13 +4,15 @@
 //!
 //! - `penumbra`: `{"frames": [...]}`, per image its `frame`, `camera`, `file`, `width`,
 //!   `height`, `fov` (vertical, degrees), `K` (OpenCV: pixel centres at integer coordinates),
-//!   `camera_to_world` (OpenCV axes), `camera_to_world_opengl`, `world_to_camera`, and the
-//!   camera's `position`, `look_at` and `up`;
+//!   `camera_to_world` (OpenCV axes), `camera_to_world_opengl`, `world_to_camera`, the
+//!   camera's `position`, `look_at` and `up`, and its lens: `model`, and as the model has them
+//!   `distortion`, `max_angle`, `orthographic_height`, `aperture_radius`, `focus_distance`;
 //! - `nerf`: a `transforms.json` as instant-ngp and nerfstudio read it: `camera_model`
-//!   "OPENCV", `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h` (NeRF's pixel centres at +½, so a centred
-//!   camera has cx = W/2), `camera_angle_x`/`_y`, zero distortion, and per frame `file_path`
-//!   (relative to the file's folder) and `transform_matrix` (camera to world, OpenGL axes),
-//!   with the intrinsics repeated per frame for paths whose fov changes;
+//!   ("OPENCV" for the pinhole and OpenCV's model, with k1 k2 k3 p1 p2; "OPENCV_FISHEYE" with
+//!   k1 … k4; "EQUIRECTANGULAR"), `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h` (NeRF's pixel centres
+//!   at +½, so a centred camera has cx = W/2), `camera_angle_x`/`_y`, and per frame
+//!   `file_path` (relative to the file's folder) and `transform_matrix` (camera to world,
+//!   OpenGL axes), with the intrinsics repeated per frame for paths whose fov changes;
 //! - `colmap`: COLMAP's text model, a folder of `cameras.txt`, `images.txt` and
 //!   `points3D.txt` (see [`super::colmap`]).
 //!
@@ -33,7 +35,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Map, Value};
 
 use super::ProductError;
-use crate::camera::Camera;
+use crate::camera::{Camera, Lens};
 use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
 use crate::staged::StagedFile;
 
@@ -97,6 +99,29 @@ pub struct PoseFrame {
     pub look_at: [f64; 3],
     /// The up direction.
     pub up: [f64; 3],
+    /// The lens model, as the scene's `model` key names it (files written before lens
+    /// models read as "pinhole").
+    #[serde(default = "pinhole")]
+    pub model: String,
+    /// The distortion coefficients as given, in OpenCV's order (`opencv`, `fisheye`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub distortion: Vec<f64>,
+    /// A fisheye's widest angle off the axis, in degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_angle: Option<f64>,
+    /// An orthographic camera's image height in world units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orthographic_height: Option<f64>,
+    /// A thin lens's radius and focus distance (the pose is its centre's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aperture_radius: Option<f64>,
+    /// See `aperture_radius`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
+}
+
+fn pinhole() -> String {
+    "pinhole".to_owned()
 }
 
 impl PoseFrame {
@@ -110,6 +135,8 @@ impl PoseFrame {
         (width, height): (u32, u32),
     ) -> PoseFrame {
         let wide = |v: glam::Vec3| v.as_dvec3().to_array();
+        let lens = camera.lens();
+        let aperture = camera.aperture();
         PoseFrame {
             frame,
             camera: name.to_owned(),
@@ -124,7 +151,31 @@ impl PoseFrame {
             position: wide(camera.position()),
             look_at: wide(camera.look_at()),
             up: wide(camera.up()),
+            model: lens.name().to_owned(),
+            distortion: match lens {
+                Lens::OpenCv(d) => d.given().to_vec(),
+                Lens::Fisheye(d) => d.coefficients.to_vec(),
+                _ => vec![],
+            },
+            max_angle: match lens {
+                Lens::Fisheye(d) => Some(d.max_angle_deg()),
+                _ => None,
+            },
+            orthographic_height: match lens {
+                Lens::Orthographic { height } => Some(f64::from(height)),
+                _ => None,
+            },
+            aperture_radius: aperture.map(|a| f64::from(a.radius)),
+            focus_distance: aperture.map(|a| f64::from(a.focus_distance)),
         }
+    }
+
+    /// OpenCV's distortion coefficients, all twelve (the ones not given 0).
+    pub(crate) fn opencv_coefficients(&self) -> [f64; 12] {
+        let mut all = [0.0; 12];
+        let n = self.distortion.len().min(12);
+        all[..n].copy_from_slice(&self.distortion[..n]);
+        all
     }
 }
 
@@ -139,7 +190,7 @@ pub fn layout(
         PosesFormat::Penumbra => json!({ "frames": frames }),
         PosesFormat::Nerf => {
             unskewed(frames, path, "NeRF's camera model")?;
-            nerf(frames, path.parent().unwrap_or(Path::new("")))
+            nerf(frames, path)?
         }
         PosesFormat::Colmap => {
             let files = super::colmap::files(frames, path)?;
@@ -190,11 +241,79 @@ pub fn write(path: &Path, format: PosesFormat, frames: &[PoseFrame]) -> Result<(
     Ok(StagedFile::write_bytes(path, text.as_bytes())?.commit()?)
 }
 
-/// NeRF's intrinsics of one image: pixel centres at +½, so cx and cy are K's plus ½.
+/// An error for the camera of frame `f`, which `format` cannot hold because of `why`.
+pub(crate) fn cannot_hold(path: &Path, f: &PoseFrame, format: &str, why: &str) -> ProductError {
+    ProductError::Invalid {
+        path: path.to_owned(),
+        message: format!(
+            "camera `{}` ({}) {why}, which {format} cannot hold: write the penumbra layout",
+            f.camera, f.model
+        ),
+    }
+}
+
+/// A `camera_model` and its distortion keys.
+type NerfModel = (&'static str, Vec<(&'static str, f64)>);
+
+/// nerfstudio's `camera_model` of frame `f` and its distortion keys: the pinhole and
+/// OpenCV's model as `OPENCV` (k1 k2 k3 p1 p2), the fisheye as `OPENCV_FISHEYE` (k1…k4), the
+/// panorama as `EQUIRECTANGULAR`.
+fn nerf_model(f: &PoseFrame, path: &Path) -> Result<NerfModel, ProductError> {
+    let d = f.opencv_coefficients();
+    Ok(match f.model.as_str() {
+        "pinhole" => (
+            "OPENCV",
+            vec![("k1", 0.0), ("k2", 0.0), ("p1", 0.0), ("p2", 0.0)],
+        ),
+        "opencv" if d[5..].iter().any(|&c| c != 0.0) => {
+            let why = "has rational or thin-prism terms (k4 … s4)";
+            return Err(cannot_hold(path, f, "nerfstudio's OPENCV", why));
+        }
+        "opencv" => (
+            "OPENCV",
+            vec![
+                ("k1", d[0]),
+                ("k2", d[1]),
+                ("k3", d[4]),
+                ("p1", d[2]),
+                ("p2", d[3]),
+            ],
+        ),
+        "fisheye" => (
+            "OPENCV_FISHEYE",
+            vec![("k1", d[0]), ("k2", d[1]), ("k3", d[2]), ("k4", d[3])],
+        ),
+        "equirectangular" => ("EQUIRECTANGULAR", vec![]),
+        _ => {
+            return Err(cannot_hold(
+                path,
+                f,
+                "NeRF's transforms.json",
+                "is parallel",
+            ))
+        }
+    })
+}
+
+/// NeRF's intrinsics of one image: pixel centres at +½, so cx and cy are K's plus ½. A
+/// panorama's are nerfstudio's: fl_x = W/2, fl_y = H and the centre (W/2, H/2).
 fn nerf_intrinsics(f: &PoseFrame) -> Map<String, Value> {
-    let (fx, fy) = (f.k[0][0], f.k[1][1]);
     let (w, h) = (f64::from(f.width), f64::from(f.height));
     let mut m = Map::new();
+    if f.model == "equirectangular" {
+        for (key, v) in [
+            ("fl_x", w / 2.0),
+            ("fl_y", h),
+            ("cx", w / 2.0),
+            ("cy", h / 2.0),
+        ] {
+            m.insert(key.into(), json!(v));
+        }
+        m.insert("w".into(), json!(f.width));
+        m.insert("h".into(), json!(f.height));
+        return m;
+    }
+    let (fx, fy) = (f.k[0][0], f.k[1][1]);
     m.insert("fl_x".into(), json!(fx));
     m.insert("fl_y".into(), json!(fy));
     m.insert("cx".into(), json!(f.k[0][2] + 0.5));
@@ -212,19 +331,28 @@ fn nerf_intrinsics(f: &PoseFrame) -> Map<String, Value> {
     m
 }
 
-fn nerf(frames: &[PoseFrame], folder: &Path) -> Value {
-    let folder = absolute(folder);
+/// The `transforms.json` of `frames` at `path`: one camera model and distortion for the
+/// file (nerfstudio reads them once), intrinsics per frame.
+fn nerf(frames: &[PoseFrame], path: &Path) -> Result<Value, ProductError> {
+    let folder = absolute(path.parent().unwrap_or(Path::new("")));
     let mut top = Map::new();
     top.insert("camera_model".into(), json!("OPENCV"));
+    if let Some(first) = frames.first() {
+        let lens = |f: &PoseFrame| (f.model.clone(), f.distortion.clone());
+        if let Some(other) = frames.iter().find(|f| lens(f) != lens(first)) {
+            let why = format!("has another lens than camera `{}`", first.camera);
+            return Err(cannot_hold(path, other, "one transforms.json", &why));
+        }
+        let (model, distortion) = nerf_model(first, path)?;
+        top.insert("camera_model".into(), json!(model));
+        top.extend(nerf_intrinsics(first));
+        for (key, v) in distortion {
+            top.insert(key.into(), json!(v));
+        }
+    }
     let mut listed = Vec::with_capacity(frames.len());
     for f in frames {
         let intrinsics = nerf_intrinsics(f);
-        if listed.is_empty() {
-            top.extend(intrinsics.clone());
-            for k in ["k1", "k2", "p1", "p2"] {
-                top.insert(k.into(), json!(0.0));
-            }
-        }
         let file_path = relative(&absolute(Path::new(&f.file)), &folder);
         let mut frame = Map::new();
         frame.insert("file_path".into(), json!(file_path.display().to_string()));
@@ -235,7 +363,7 @@ fn nerf(frames: &[PoseFrame], folder: &Path) -> Value {
         listed.push(Value::Object(frame));
     }
     top.insert("frames".into(), Value::Array(listed));
-    Value::Object(top)
+    Ok(Value::Object(top))
 }
 
 /// `path` from the current folder, each `.` dropped and each `..` taking off the name before

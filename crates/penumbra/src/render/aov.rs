@@ -38,7 +38,7 @@ use std::str::FromStr;
 
 use glam::Vec3;
 
-use crate::camera::PinholeCamera;
+use crate::camera::FilmCamera;
 use crate::geometry::Surface;
 use crate::integrator::CAMERA_T_MIN;
 use crate::math::{Ray, Rgb};
@@ -232,8 +232,11 @@ impl AovContext {
     }
 
     /// The geometric AOVs of pixel `(x, y)` from the ray through its center; albedo zero.
-    pub(crate) fn center(&self, world: &World, camera: &PinholeCamera, x: u32, y: u32) -> AovPixel {
-        let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+    pub(crate) fn center(&self, world: &World, camera: &FilmCamera, x: u32, y: u32) -> AovPixel {
+        // The lens's centre: a thin lens's AOVs are the pinhole's.
+        let Some(ray) = camera.ray(x as f32 + 0.5, y as f32 + 0.5) else {
+            return AovPixel::MISS;
+        };
         let Some(hit) = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY) else {
             return AovPixel::MISS;
         };
@@ -286,7 +289,7 @@ mod tests {
         b.add_mesh(&q, &Transform::IDENTITY, &[m]).unwrap();
         let world = b.build(1);
         let cam = Camera::new(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0).unwrap();
-        let camera = PinholeCamera::new(&cam, 1, 1);
+        let camera = FilmCamera::new(&cam, 1, 1);
         let ctx = AovContext::new(&world);
         let px = ctx.center(&world, &camera, 0, 0);
         assert_eq!(px.depth, 3.0);
@@ -295,7 +298,7 @@ mod tests {
         assert_eq!(px.normal, Vec3::Z);
         assert!(px.position.length() < 1e-6);
 
-        let ray = camera.ray(0.5, 0.5);
+        let ray = camera.ray(0.5, 0.5).unwrap();
         let hit = world.intersect(&ray, CAMERA_T_MIN, f32::INFINITY).unwrap();
         let s = world.surface(&hit);
         assert_eq!(world.albedo(&s), Rgb::new(0.5, 0.25, 1.0));
@@ -312,7 +315,7 @@ mod tests {
         let world = b.build(1);
         let eye = Vec3::new(0.0, 0.0, 3.0);
         let cam = Camera::new(eye, Vec3::ZERO, Vec3::Y, 90.0).unwrap();
-        let camera = PinholeCamera::new(&cam, 7, 5);
+        let camera = FilmCamera::new(&cam, 7, 5);
         let ctx = AovContext::new(&world);
         for (x, y) in [(0, 0), (3, 2), (6, 4), (1, 3)] {
             let px = ctx.center(&world, &camera, x, y);
@@ -382,7 +385,7 @@ mod tests {
     fn a_miss_has_the_documented_values() {
         let world = WorldBuilder::new().build(1);
         let cam = Camera::new(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0).unwrap();
-        let px = AovContext::new(&world).center(&world, &PinholeCamera::new(&cam, 2, 2), 1, 1);
+        let px = AovContext::new(&world).center(&world, &FilmCamera::new(&cam, 2, 2), 1, 1);
         assert_eq!(px, AovPixel::MISS);
         assert_eq!((px.object_id, px.primitive_id), (NO_ID, NO_ID));
     }

@@ -8,13 +8,16 @@ use glam::{Vec2, Vec3};
 
 use super::aov::{AovContext, AovPixel};
 use super::RenderSettings;
-use crate::camera::PinholeCamera;
+use crate::camera::FilmCamera;
 use crate::geometry::Hit;
 use crate::integrator::{BatchScratch, Integrator, CAMERA_T_MIN};
 use crate::light::{EnvironmentLight, Light};
-use crate::math::Rgb;
+use crate::math::{Ray, Rgb};
 use crate::sampling::{jittered_offset, Rng};
 use crate::world::World;
+
+/// Salts the seed of the thin lens's samples (see [`Job::pixels`]).
+const LENS_STREAM: u64 = 0x6c65_6e73_2d73_6d70;
 
 /// Camera rays traced together: a packet of the widest SIMD path, four pixels of the usual
 /// 4 samples. More pixels per batch only when they have fewer samples.
@@ -24,7 +27,7 @@ const BATCH_RAYS: u32 = 16;
 pub(super) struct Job<'a> {
     pub(super) world: &'a World,
     pub(super) settings: &'a RenderSettings,
-    pub(super) camera: PinholeCamera,
+    pub(super) camera: FilmCamera,
     pub(super) integrator: Integrator<'a>,
     /// The pixel offsets of a deterministic sampler; `None` for jittered.
     pub(super) offsets: Option<Vec<Vec2>>,
@@ -65,18 +68,86 @@ pub(super) struct Buffers {
     hit_dirs: Vec<Vec3>,
     hit_rngs: Vec<Rng>,
     shaded: Vec<(Rgb, u64)>,
+    /// A thin lens's sample of each camera ray (empty without an aperture).
+    lens: Vec<Vec2>,
+    lens_rays: LensRays,
+}
+
+/// What [`Job::trace_lens`] reuses: each ray's origin, and the rays the lens sees.
+#[derive(Default)]
+struct LensRays {
+    origins: Vec<Vec3>,
+    seen: Vec<usize>,
+    seen_dirs: Vec<Vec3>,
+    seen_hits: Vec<Option<Hit>>,
 }
 
 impl Job<'_> {
     /// What a camera ray in direction `d` that hits nothing sees: the environments marked
-    /// visible, summed, or the background when there is none.
+    /// visible, summed, or the background when there is none (or no direction: the lens
+    /// sees nothing there).
     fn miss(&self, d: Vec3) -> Rgb {
-        let Some((first, rest)) = self.sky.split_first() else {
+        let Some((first, rest)) = self.sky.split_first().filter(|_| d != Vec3::ZERO) else {
             return self.settings.background;
         };
         let d = d.normalize();
         rest.iter()
             .fold(first.radiance(d), |sum, e| sum + e.radiance(d))
+    }
+
+    /// The camera rays of a lens other than the plain pinhole: each film point's ray by the
+    /// lens model, its direction written to `dirs` (zero where the model sees nothing: never
+    /// traced, a miss of alpha 0) and its hit to `hits`. Rays from the eye are traced as
+    /// packets; rays from an aperture or an orthographic film one by one.
+    fn trace_lens(
+        &self,
+        film: &[(f32, f32)],
+        lens: &[Vec2],
+        dirs: &mut Vec<Vec3>,
+        hits: &mut Vec<Option<Hit>>,
+        rays: &mut LensRays,
+    ) {
+        let camera = &self.camera;
+        let accel = self.world.accel();
+        let LensRays {
+            origins,
+            seen,
+            seen_dirs,
+            seen_hits,
+        } = rays;
+        origins.clear();
+        for (i, &(x, y)) in film.iter().enumerate() {
+            let on_lens = lens.get(i).copied().unwrap_or(Vec2::splat(0.5));
+            let ray = camera.sample_ray(x, y, on_lens);
+            origins.push(ray.map_or(camera.eye(), |r| r.origin));
+            dirs.push(ray.map_or(Vec3::ZERO, |r| r.direction));
+        }
+        hits.clear();
+        hits.resize(dirs.len(), None);
+        let traced = (0..dirs.len()).filter(|&i| dirs[i] != Vec3::ZERO);
+        if !camera.shares_origin() {
+            for i in traced {
+                let ray = Ray::new(origins[i], dirs[i]);
+                hits[i] = accel.intersect(&ray, CAMERA_T_MIN, f32::INFINITY);
+            }
+            return;
+        }
+        seen.clear();
+        seen.extend(traced);
+        seen_dirs.clear();
+        seen_dirs.extend(seen.iter().map(|&i| dirs[i]));
+        seen_hits.clear();
+        seen_hits.resize(seen.len(), None);
+        accel.intersect_from(
+            camera.eye(),
+            seen_dirs,
+            CAMERA_T_MIN,
+            f32::INFINITY,
+            seen_hits,
+        );
+        for (&i, &hit) in seen.iter().zip(seen_hits.iter()) {
+            hits[i] = hit;
+        }
     }
 
     /// Adds to `sums` (one per pixel of `xs`, in order) the samples `samples` of the pixels
@@ -130,9 +201,13 @@ impl Job<'_> {
             hit_dirs,
             hit_rngs,
             shaded,
+            lens,
+            lens_rays,
         } = buffers;
         film.clear();
         rngs.clear();
+        lens.clear();
+        let camera = &self.camera;
         // A sample's generator is hashed from its pixel and index, and kept, only when
         // something draws from it (3 % of the instructions under three point lights).
         let draws = self.offsets.is_none() || self.integrator.draws();
@@ -149,22 +224,30 @@ impl Job<'_> {
                     None => jittered_offset(n, s / n, s % n, rng.uniform2()),
                 };
                 film.push((x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y));
+                if camera.has_aperture() {
+                    // A stream of its own, so that the rest of the sample draws as a
+                    // pinhole's would.
+                    let mut on_lens =
+                        Rng::new(settings.seed ^ LENS_STREAM, &[pixel_index, s as u64]);
+                    lens.push(on_lens.uniform2());
+                }
                 if draws {
                     rngs.push(rng);
                 }
             }
         }
-        // The directions in a loop of their own, which vectorizes (`PinholeCamera::ray` of
-        // each film point).
         dirs.clear();
-        let camera = &self.camera;
-        camera.extend_directions(film, dirs);
-        let eye = self.camera.eye();
-        hits.resize(dirs.len(), None);
-        self.world
-            .accel()
-            .intersect_from(eye, dirs, CAMERA_T_MIN, f32::INFINITY, hits);
-
+        match camera.is_pinhole() {
+            // The directions in a loop of their own, which vectorizes, then traced as
+            // packets from the shared eye.
+            true => {
+                camera.extend_directions(film, dirs);
+                hits.resize(dirs.len(), None);
+                let accel = self.world.accel();
+                accel.intersect_from(camera.eye(), dirs, CAMERA_T_MIN, f32::INFINITY, hits);
+            }
+            false => self.trace_lens(film, lens, dirs, hits, lens_rays),
+        }
         hit_dirs.clear();
         found.clear();
         for (hit, &dir) in hits.iter().zip(dirs.iter()) {

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 use thiserror::Error;
 
-use crate::camera::PinholeCamera;
+use crate::camera::FilmCamera;
 use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::math::Rgb;
@@ -286,7 +286,7 @@ fn render_impl(
     let aov_len = if with_aovs { len } else { 0 };
     let aov_pixels = buffer(aov_len, AovPixel::MISS, (rw, rh), &pool)?;
     let job = Job {
-        camera: PinholeCamera::new(&camera, width, height),
+        camera: FilmCamera::new(&camera, width, height),
         integrator: Integrator::new(world, settings.shading_settings()),
         world,
         settings,

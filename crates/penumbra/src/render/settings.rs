@@ -21,6 +21,8 @@ pub const MAX_LIGHT_SAMPLES: u32 = 1024;
 pub const MAX_SPP: u32 = 1 << 16;
 
 /// Which camera a render looks through.
+// A camera with a lens model is a few hundred bytes; a render holds one View.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum View {
     /// The world's first camera.
@@ -29,7 +31,7 @@ pub enum View {
     /// The world's camera of this name; `auto` ([`FRAMING_CAMERA`]), when the world has no
     /// camera of that name, is the camera framing the world's bounds ([`Camera::framing`]).
     Named(String),
-    /// An explicit pinhole camera, whether or not the world has it.
+    /// An explicit camera, whether or not the world has it.
     Camera(Camera),
 }
 

@@ -1,12 +1,15 @@
 //! A still camera of the file: its pose (`position`, `look_at` and `up`, or a
-//! `camera_to_world` matrix in OpenCV's axes, as `--poses` writes one) and its lens (`fov`, or
-//! an intrinsic matrix `K` in pixels of the file's film), checked at their keys.
+//! `camera_to_world` matrix in OpenCV's axes, as `--poses` writes one), its lens (`fov`, or
+//! an intrinsic matrix `K` in pixels of the file's film), its model (`model` and its keys) and
+//! its aperture, checked at their keys.
 
 use glam::{DMat3, DVec3, Vec3};
 
 use super::{Builder, Result};
-use crate::camera::{Camera, CameraError, Intrinsics};
-use crate::scene::desc::{LensDesc, Matrix, Num, PoseDesc, StillCameraDesc};
+use crate::camera::{
+    Camera, CameraError, DistortionError, FisheyeDistortion, Intrinsics, Lens, OpenCvDistortion,
+};
+use crate::scene::desc::{LensDesc, Matrix, ModelDesc, Num, PoseDesc, StillCameraDesc};
 use crate::scene::error::KeyPath;
 
 /// How far `camera_to_world`'s rotation may be from orthonormal, entry by entry of RᵀR − I:
@@ -30,8 +33,8 @@ impl Builder<'_> {
         };
         let fov = match &c.lens {
             LensDesc::Fov(fov) => fov.f32(),
-            // Replaced by K's own below.
-            LensDesc::K(_) => 60.0,
+            // Replaced by K's own below; a panorama's or orthographic camera's is not used.
+            LensDesc::K(_) | LensDesc::None => 60.0,
         };
         let camera = Camera::new(position, look_at, up, fov).map_err(|e| match e {
             CameraError::FovOutOfRange => self.bad(
@@ -49,16 +52,72 @@ impl Builder<'_> {
                 };
                 self.bad(&path.key(key), e.to_string())
             }
-            CameraError::BadIntrinsics => self.bad(&path.key("K"), e.to_string()),
+            // Only the lens and aperture make these, below.
+            CameraError::BadIntrinsics
+            | CameraError::BadHeight
+            | CameraError::BadAperture
+            | CameraError::NoAperture => self.bad(&path.key("K"), e.to_string()),
         })?;
-        let LensDesc::K(k) = &c.lens else {
+        let camera = match &c.lens {
+            LensDesc::K(k) => {
+                let at = path.key("K");
+                let k = self.intrinsics(&at, k)?;
+                camera
+                    .with_intrinsics(k)
+                    .map_err(|e| self.bad(&at, e.to_string()))?
+            }
+            LensDesc::Fov(_) | LensDesc::None => camera,
+        };
+        let camera = self.model(path, camera, &c.model)?;
+        let Some(a) = &c.aperture else {
             return Ok(camera);
         };
-        let at = path.key("K");
-        let k = self.intrinsics(&at, k)?;
-        camera
-            .with_intrinsics(k)
-            .map_err(|e| self.bad(&at, e.to_string()))
+        let (radius, focus) = (a.radius.f32(), a.focus_distance.f32());
+        camera.with_aperture(radius, focus).map_err(|e| {
+            let key = match radius >= 0.0 && radius.is_finite() {
+                true => "focus_distance",
+                false => "aperture_radius",
+            };
+            let message = format!("{e} (aperture_radius {radius}, focus_distance {focus})");
+            self.bad(&path.key(key), message)
+        })
+    }
+
+    /// `camera` seeing through its `model`.
+    fn model(&self, path: &KeyPath, camera: Camera, model: &ModelDesc) -> Result<Camera> {
+        let values = |d: &[Num]| d.iter().map(|n| n.0).collect::<Vec<f64>>();
+        let lens = match model {
+            ModelDesc::Pinhole => Lens::Pinhole,
+            ModelDesc::OpenCv { distortion } => {
+                let d = OpenCvDistortion::new(&values(distortion));
+                Lens::OpenCv(d.map_err(|e| self.bad(&path.key("distortion"), e.to_string()))?)
+            }
+            ModelDesc::Fisheye {
+                distortion,
+                max_angle,
+            } => {
+                let angle = max_angle.as_ref().map_or(90.0, |a| a.0);
+                let d = FisheyeDistortion::new(&values(distortion), angle).map_err(|e| {
+                    let key = match e {
+                        DistortionError::Count(_) | DistortionError::NotFinite => "distortion",
+                        DistortionError::MaxAngle(_) | DistortionError::Folds(_) => "max_angle",
+                    };
+                    self.bad(&path.key(key), e.to_string())
+                })?;
+                Lens::Fisheye(d)
+            }
+            ModelDesc::Equirectangular => Lens::Equirectangular,
+            ModelDesc::Orthographic { height } => Lens::Orthographic {
+                height: height.f32(),
+            },
+        };
+        camera.with_lens(lens).map_err(|e| {
+            let message = match model {
+                ModelDesc::Orthographic { height } => format!("{e}, not {}", height.0),
+                _ => e.to_string(),
+            };
+            self.bad(&path.key("height"), message)
+        })
     }
 
     /// `K` by rows, `[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`, in pixels of the file's film.

@@ -64,8 +64,59 @@ pub enum CameraDesc {
 pub struct StillCameraDesc {
     /// Its pose.
     pub pose: PoseDesc,
-    /// Its lens.
+    /// Its field of view or K (the perspective models').
     pub lens: LensDesc,
+    /// Its lens model (`model`, default the pinhole).
+    pub model: ModelDesc,
+    /// `aperture_radius` and `focus_distance`, for depth of field.
+    pub aperture: Option<ApertureDesc>,
+}
+
+/// `model` and the keys of its kind.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelDesc {
+    /// `"pinhole"`.
+    Pinhole,
+    /// `"opencv"`: K or fov, then OpenCV's radial-tangential `distortion`.
+    OpenCv {
+        /// k1 k2 p1 p2 [k3 [k4 k5 k6 [s1 s2 s3 s4]]].
+        distortion: Vec<Num>,
+    },
+    /// `"fisheye"`: K over OpenCV's fisheye model.
+    Fisheye {
+        /// k1 k2 k3 k4.
+        distortion: Vec<Num>,
+        /// The widest angle seen off the axis, in degrees (default 90).
+        max_angle: Option<Num>,
+    },
+    /// `"equirectangular"`: a 360° × 180° panorama.
+    Equirectangular,
+    /// `"orthographic"`: parallel rays.
+    Orthographic {
+        /// The image's height in world units.
+        height: Num,
+    },
+}
+
+/// A thin lens: `aperture_radius` and `focus_distance` (pbrt's `lensradius` and
+/// `focaldistance`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ApertureDesc {
+    /// The lens's radius in world units (0: the pinhole).
+    pub radius: Num,
+    /// The distance along forward to the plane in focus.
+    pub focus_distance: Num,
+}
+
+/// The names of `model`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum ModelName {
+    Pinhole,
+    OpenCv,
+    Fisheye,
+    Equirectangular,
+    Orthographic,
 }
 
 /// Where a still camera stands.
@@ -85,13 +136,15 @@ pub enum PoseDesc {
     Matrix(Matrix),
 }
 
-/// What a camera sees through.
+/// What a perspective camera sees through.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LensDesc {
     /// `fov`: the vertical field of view in degrees, in (0, 180).
     Fov(Num),
     /// `K`: the intrinsic matrix by rows, in pixels of the film (`film.width × film.height`).
     K([[Num; 3]; 3]),
+    /// Neither: a panorama or an orthographic camera.
+    None,
 }
 
 /// `[[cameras.NAME.keys]]`.
@@ -150,11 +203,106 @@ struct CameraTable {
     camera_to_world: Option<Matrix>,
     keys: Option<Vec<CameraKeyDesc>>,
     path: Option<CameraPathDesc>,
+    model: Option<ModelName>,
+    distortion: Option<Vec<Num>>,
+    max_angle: Option<Num>,
+    height: Option<Num>,
+    aperture_radius: Option<Num>,
+    focus_distance: Option<Num>,
+}
+
+impl CameraTable {
+    /// The lens keys given, by name, for messages.
+    fn lens_keys(&self) -> Vec<&'static str> {
+        let given = [
+            ("model", self.model.is_some()),
+            ("distortion", self.distortion.is_some()),
+            ("max_angle", self.max_angle.is_some()),
+            ("height", self.height.is_some()),
+            ("aperture_radius", self.aperture_radius.is_some()),
+            ("focus_distance", self.focus_distance.is_some()),
+        ];
+        given.iter().filter(|g| g.1).map(|g| g.0).collect()
+    }
+
+    /// `model` and its keys, each only on its model.
+    fn model<E: serde::de::Error>(&mut self) -> Result<ModelDesc, E> {
+        let model = self.model.unwrap_or(ModelName::Pinhole);
+        let name = format!("{model:?}").to_lowercase();
+        let only = |key: &str, owner: &str| {
+            E::custom(format!(
+                "{key} is a key of model = \"{owner}\" cameras, not of model = \"{name}\""
+            ))
+        };
+        if self.max_angle.is_some() && model != ModelName::Fisheye {
+            return Err(only("max_angle", "fisheye"));
+        }
+        if self.height.is_some() && model != ModelName::Orthographic {
+            return Err(only("height", "orthographic"));
+        }
+        let distorted = matches!(model, ModelName::OpenCv | ModelName::Fisheye);
+        if self.distortion.is_some() && !distorted {
+            return Err(E::custom(format!(
+                "distortion is a key of model = \"opencv\" or \"fisheye\" cameras, not of \
+                 model = \"{name}\""
+            )));
+        }
+        let perspective = distorted || model == ModelName::Pinhole;
+        let opening = self.aperture_radius.is_some() || self.focus_distance.is_some();
+        if opening && !perspective {
+            return Err(E::custom(format!(
+                "a model = \"{name}\" camera has no aperture: aperture_radius and \
+                 focus_distance are the perspective models' (pinhole, opencv, fisheye)"
+            )));
+        }
+        if !perspective && (self.fov.is_some() || self.k.is_some()) {
+            return Err(E::custom(format!(
+                "a model = \"{name}\" camera takes no fov or K"
+            )));
+        }
+        if model == ModelName::Fisheye && self.fov.is_some() {
+            return Err(E::custom(
+                "a fisheye camera takes K, not fov (its coefficients and max_angle give its view)",
+            ));
+        }
+        let mut distortion = || {
+            self.distortion
+                .take()
+                .ok_or_else(|| E::missing_field("distortion"))
+        };
+        Ok(match model {
+            ModelName::Pinhole => ModelDesc::Pinhole,
+            ModelName::OpenCv => ModelDesc::OpenCv {
+                distortion: distortion()?,
+            },
+            ModelName::Fisheye => ModelDesc::Fisheye {
+                distortion: distortion()?,
+                max_angle: self.max_angle,
+            },
+            ModelName::Equirectangular => ModelDesc::Equirectangular,
+            ModelName::Orthographic => ModelDesc::Orthographic {
+                height: self.height.ok_or_else(|| E::missing_field("height"))?,
+            },
+        })
+    }
+
+    /// `aperture_radius` with `focus_distance`, or neither.
+    fn aperture<E: serde::de::Error>(&self) -> Result<Option<ApertureDesc>, E> {
+        match (self.aperture_radius, self.focus_distance) {
+            (None, None) => Ok(None),
+            (Some(radius), Some(focus_distance)) => Ok(Some(ApertureDesc {
+                radius,
+                focus_distance,
+            })),
+            (Some(_), None) => Err(E::missing_field("focus_distance")),
+            (None, Some(_)) => Err(E::missing_field("aperture_radius")),
+        }
+    }
 }
 
 impl<'de> Deserialize<'de> for CameraDesc {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let t = CameraTable::deserialize(d)?;
+        let mut t = CameraTable::deserialize(d)?;
         let moving = match (&t.keys, &t.path) {
             (Some(_), Some(_)) => {
                 return Err(D::Error::custom(
@@ -177,7 +325,18 @@ impl<'de> Deserialize<'de> for CameraDesc {
                      and its {how} give its positions"
                 )));
             }
+            if let Some(key) = t.lens_keys().first() {
+                return Err(D::Error::custom(format!(
+                    "{key} is a still camera's: a camera with {how} is a pinhole of fov"
+                )));
+            }
         }
+        let model = t.model()?;
+        let aperture = t.aperture()?;
+        let perspective = matches!(
+            model,
+            ModelDesc::Pinhole | ModelDesc::OpenCv { .. } | ModelDesc::Fisheye { .. }
+        );
         Ok(match (t.keys, t.path) {
             (Some(keys), _) => CameraDesc::Keys {
                 up: t.up,
@@ -213,8 +372,14 @@ impl<'de> Deserialize<'de> for CameraDesc {
                     }
                     (Some(fov), None) => LensDesc::Fov(fov),
                     (None, Some(k)) => LensDesc::K(k),
+                    (None, None) if !perspective => LensDesc::None,
+                    (None, None) if matches!(model, ModelDesc::Fisheye { .. }) => {
+                        return Err(D::Error::missing_field("K"))
+                    }
                     (None, None) => return Err(D::Error::missing_field("fov")),
                 },
+                model,
+                aperture,
             }),
         })
     }

@@ -41,7 +41,8 @@ mod values;
 use serde::Deserialize;
 
 pub use cameras::{
-    CameraDesc, CameraKeyDesc, CameraPathDesc, LensDesc, PathType, PoseDesc, StillCameraDesc,
+    ApertureDesc, CameraDesc, CameraKeyDesc, CameraPathDesc, LensDesc, ModelDesc, PathType,
+    PoseDesc, StillCameraDesc,
 };
 pub use lights::{
     AreaLightDesc, DirectionalLightDesc, EnvironmentLightDesc, LightDesc, LightType,

@@ -1,9 +1,16 @@
-//! The pinhole camera of SPEC §3 (docs/spec.md): a [`Camera`] is a pose and a field of view; paired with a
-//! film size it becomes a [`PinholeCamera`] that turns film points into rays from the eye.
+//! The camera of SPEC §3 (docs/spec.md): a [`Camera`] is a pose, a field of view or K, and a
+//! lens model; paired with a film size it becomes a [`FilmCamera`] that turns film points into
+//! rays.
+
+mod film;
+mod lens;
 
 use glam::{DVec3, Vec3};
 
-use crate::math::{unit, Aabb, Ray};
+pub use film::FilmCamera;
+pub use lens::{DistortionError, FisheyeDistortion, OpenCvDistortion};
+
+use crate::math::{unit, Aabb};
 
 /// Vertical field of view of the framing camera ([`Camera::framing`]), in degrees.
 pub const FRAMING_FOV_DEG: f64 = 40.0;
@@ -17,7 +24,7 @@ pub const FRAMING_CAMERA: &str = "auto";
 
 /// Where a pinhole camera stands and what it sees: a checked pose and vertical field of view,
 /// independent of any film. A [`World`](crate::World) keeps its cameras in this form; a render
-/// pairs one with a film size ([`PinholeCamera::new`]).
+/// pairs one with a film size ([`FilmCamera::new`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     position: Vec3,
@@ -26,6 +33,38 @@ pub struct Camera {
     fov_y_deg: f32,
     /// A calibrated K in place of the field of view ([`Camera::with_intrinsics`]).
     intrinsics: Option<Intrinsics>,
+    /// The lens model ([`Camera::with_lens`]).
+    lens: Lens,
+    /// A thin lens's aperture, for depth of field ([`Camera::with_aperture`]).
+    aperture: Option<Aperture>,
+}
+
+/// How a camera maps film points to directions (docs/scene-format.md, "Camera models").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lens {
+    /// The pinhole: the field of view or K.
+    Pinhole,
+    /// The pinhole's K, then OpenCV's radial-tangential distortion.
+    OpenCv(OpenCvDistortion),
+    /// K over OpenCV's fisheye (Kannala–Brandt) model.
+    Fisheye(FisheyeDistortion),
+    /// A 360° × 180° latitude–longitude image around the camera.
+    Equirectangular,
+    /// Parallel rays along forward from an image plane `height` world units tall, through the
+    /// camera's position (the film's centre).
+    Orthographic {
+        /// The image's height in world units (its width follows the film's aspect).
+        height: f32,
+    },
+}
+
+/// A thin lens's opening, as pbrt's `lensradius` and `focaldistance`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aperture {
+    /// The lens's radius in world units, > 0.
+    pub radius: f32,
+    /// The distance along forward to the plane in focus, > 0.
+    pub focus_distance: f32,
 }
 
 /// A pinhole's intrinsic matrix K as OpenCV writes it, in pixels of a `width × height`
@@ -92,6 +131,12 @@ pub enum CameraError {
     FovOutOfRange,
     /// K has a focal length that is not a positive finite number, or an entry not finite.
     BadIntrinsics,
+    /// An orthographic height that is not a positive finite number.
+    BadHeight,
+    /// An aperture radius below 0 or a focus distance not above 0 (or either not finite).
+    BadAperture,
+    /// An aperture on a lens that has none (a panorama, an orthographic camera).
+    NoAperture,
 }
 
 impl std::fmt::Display for CameraError {
@@ -104,6 +149,13 @@ impl std::fmt::Display for CameraError {
             CameraError::FovOutOfRange => "fov must be between 0 and 180 degrees",
             CameraError::BadIntrinsics => {
                 "K must have finite entries and focal lengths fx and fy greater than 0"
+            }
+            CameraError::BadHeight => "an orthographic camera's height must be greater than 0",
+            CameraError::BadAperture => {
+                "aperture_radius must be at least 0 and focus_distance greater than 0"
+            }
+            CameraError::NoAperture => {
+                "only perspective cameras (pinhole, opencv, fisheye) have an aperture"
             }
         })
     }
@@ -148,11 +200,13 @@ impl Camera {
             up,
             fov_y_deg,
             intrinsics: None,
+            lens: Lens::Pinhole,
+            aperture: None,
         })
     }
 
     /// This camera seeing through `k` instead of its field of view: rays leave through K's
-    /// pixels exactly (see [`PinholeCamera::direction`]), and `--poses` writes K as given.
+    /// pixels exactly (see [`FilmCamera::ray`]), and `--poses` writes K as given.
     /// The vertical field of view then reports the one K has through its principal point
     /// (`2·atan((H/2)/fy)`), for what only describes the view.
     pub fn with_intrinsics(self, k: Intrinsics) -> Result<Camera, CameraError> {
@@ -167,6 +221,53 @@ impl Camera {
             intrinsics: Some(k),
             ..self
         })
+    }
+
+    /// This camera seeing through `lens`. A distorted lens without K distorts the field of
+    /// view's pinhole (a centred K with fx = fy).
+    pub fn with_lens(self, lens: Lens) -> Result<Camera, CameraError> {
+        if let Lens::Orthographic { height } = lens {
+            if !(height > 0.0 && height.is_finite()) {
+                return Err(CameraError::BadHeight);
+            }
+        }
+        if self.aperture.is_some() && !lens.has_aperture() {
+            return Err(CameraError::NoAperture);
+        }
+        Ok(Camera { lens, ..self })
+    }
+
+    /// This camera with a thin lens of `radius` focused at `focus_distance` along forward
+    /// (pbrt's `lensradius` and `focaldistance`). A radius of 0 is the pinhole, exactly.
+    pub fn with_aperture(self, radius: f32, focus_distance: f32) -> Result<Camera, CameraError> {
+        let finite = radius.is_finite() && focus_distance.is_finite();
+        if !(finite && radius >= 0.0 && focus_distance > 0.0) {
+            return Err(CameraError::BadAperture);
+        }
+        if radius > 0.0 && !self.lens.has_aperture() {
+            return Err(CameraError::NoAperture);
+        }
+        let aperture = (radius > 0.0).then_some(Aperture {
+            radius,
+            focus_distance,
+        });
+        Ok(Camera { aperture, ..self })
+    }
+
+    /// True when the camera is all its pose and field of view: a pinhole without K or an
+    /// aperture (what `penumbra.Camera` holds, and what a view from the fov describes).
+    pub fn sees_by_fov(&self) -> bool {
+        self.intrinsics.is_none() && self.lens == Lens::Pinhole && self.aperture.is_none()
+    }
+
+    /// The lens model.
+    pub fn lens(&self) -> Lens {
+        self.lens
+    }
+
+    /// The aperture, for depth of field.
+    pub fn aperture(&self) -> Option<Aperture> {
+        self.aperture
     }
 
     /// K, when the camera was given one ([`Camera::with_intrinsics`]).
@@ -219,6 +320,24 @@ impl Camera {
     }
 }
 
+impl Lens {
+    /// The model's name, as the scene's `model` key takes it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Lens::Pinhole => "pinhole",
+            Lens::OpenCv(_) => "opencv",
+            Lens::Fisheye(_) => "fisheye",
+            Lens::Equirectangular => "equirectangular",
+            Lens::Orthographic { .. } => "orthographic",
+        }
+    }
+
+    /// True for the perspective models, which a thin lens can open.
+    pub fn has_aperture(&self) -> bool {
+        matches!(self, Lens::Pinhole | Lens::OpenCv(_) | Lens::Fisheye(_))
+    }
+}
+
 /// The framing camera's (position, look_at) for `bounds`, in double precision (see
 /// [`Camera::framing`]). Empty or non-finite bounds are framed as the unit sphere at the
 /// origin.
@@ -229,111 +348,13 @@ pub(crate) fn framing_view(bounds: Aabb) -> (DVec3, DVec3) {
     (centre + distance * dir, centre)
 }
 
-/// A [`Camera`] projected onto a film of `width × height` pixels: turns film points into rays.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PinholeCamera {
-    eye: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-    /// tan(fov_y / 2).
-    half_height: f32,
-    aspect: f32,
-    width: f32,
-    height: f32,
-    /// With K: `(1/fx, 1/fy, cx + ½, cy + ½, skew)` on this film (film points, whose pixel
-    /// centres lie at +½).
-    k: Option<[f64; 5]>,
-}
-
-impl PinholeCamera {
-    /// `camera` on a film of `width × height` pixels (both at least 1).
-    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        let (forward, right, up) = camera.basis();
-        Self {
-            eye: camera.position,
-            forward,
-            right,
-            up,
-            half_height: (0.5 * camera.fov_y_deg.to_radians()).tan(),
-            aspect: width as f32 / height as f32,
-            width: width as f32,
-            height: height as f32,
-            k: camera.intrinsics.map(|k| {
-                let k = k.on_film(width, height);
-                [1.0 / k.fx, 1.0 / k.fy, k.cx + 0.5, k.cy + 0.5, k.skew]
-            }),
-        }
-    }
-
-    /// Where every ray starts: the camera's position.
-    pub fn eye(&self) -> Vec3 {
-        self.eye
-    }
-
-    /// The unit direction the camera looks in (toward `look_at`).
-    pub fn forward(&self) -> Vec3 {
-        self.forward
-    }
-
-    /// The ray through film point `(x, y)`: x in `[0, width)` from the left edge, y in
-    /// `[0, height)` from the top edge. The direction is normalized.
-    pub fn ray(&self, x: f32, y: f32) -> Ray {
-        Ray::new(self.eye, self.direction(x, y))
-    }
-
-    /// The unit direction of [`PinholeCamera::ray`]`(x, y)` (for many film points,
-    /// [`PinholeCamera::extend_directions`]).
-    ///
-    /// With K, the point seen at film point (x, y) is the camera-space direction
-    /// `K⁻¹·(x − ½, y − ½, 1)` (OpenCV's pixel coordinates), worked in double precision, so
-    /// that a hit projects back through K onto (x, y).
-    #[inline(always)]
-    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
-        match self.k {
-            Some(k) => self.through_k(k, x, y),
-            None => self.through_fov(x, y),
-        }
-    }
-
-    /// The directions of `points` (film points), appended to `out`: the camera's kind is
-    /// decided once, so that the loop of a camera without K stays plain arithmetic and
-    /// vectorizes.
-    #[inline(always)]
-    pub fn extend_directions(&self, points: &[(f32, f32)], out: &mut Vec<Vec3>) {
-        match self.k {
-            Some(k) => out.extend(points.iter().map(|&(x, y)| self.through_k(k, x, y))),
-            None => out.extend(points.iter().map(|&(x, y)| self.through_fov(x, y))),
-        }
-    }
-
-    /// [`PinholeCamera::direction`] by the field of view.
-    #[inline(always)]
-    fn through_fov(&self, x: f32, y: f32) -> Vec3 {
-        let sx = (2.0 * x / self.width - 1.0) * self.aspect * self.half_height;
-        let sy = (1.0 - 2.0 * y / self.height) * self.half_height;
-        let dir = self.forward + sx * self.right + sy * self.up;
-        dir.normalize()
-    }
-
-    /// [`PinholeCamera::direction`] through K (`k` as the field holds it), out of line so
-    /// that the field of view's loop compiles as it did before K.
-    #[inline(never)]
-    fn through_k(&self, [ifx, ify, cx, cy, skew]: [f64; 5], x: f32, y: f32) -> Vec3 {
-        let down = (f64::from(y) - cy) * ify;
-        let right = (f64::from(x) - cx - skew * down) * ifx;
-        let [f, r, u] = [self.forward, self.right, self.up].map(|v| v.as_dvec3());
-        (f + right * r - down * u).normalize().as_vec3()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn cam(w: u32, h: u32) -> PinholeCamera {
+    fn cam(w: u32, h: u32) -> FilmCamera {
         let c = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0).unwrap();
-        PinholeCamera::new(&c, w, h)
+        FilmCamera::new(&c, w, h)
     }
 
     #[test]
@@ -358,7 +379,7 @@ mod tests {
 
     #[test]
     fn film_center_looks_at_the_target() {
-        let r = cam(200, 100).ray(100.0, 50.0);
+        let r = cam(200, 100).ray(100.0, 50.0).unwrap();
         assert!((r.direction - -Vec3::Z).length() < 1e-6);
         assert_eq!(r.origin, Vec3::new(0.0, 0.0, 5.0));
     }
@@ -368,12 +389,12 @@ mod tests {
         // fov 90: tan(45°) = 1, so the top edge center is 45° up and, with aspect 2, the right
         // edge center is atan(2) to the right.
         let c = cam(200, 100);
-        let top = c.ray(100.0, 0.0).direction;
+        let top = c.ray(100.0, 0.0).unwrap().direction;
         assert!((top - Vec3::new(0.0, 1.0, -1.0).normalize()).length() < 1e-6);
-        let right = c.ray(200.0, 50.0).direction;
+        let right = c.ray(200.0, 50.0).unwrap().direction;
         assert!((right - Vec3::new(2.0, 0.0, -1.0).normalize()).length() < 1e-6);
         // Top-left corner: +y is up, x grows to the right.
-        let tl = c.ray(0.0, 0.0).direction;
+        let tl = c.ray(0.0, 0.0).unwrap().direction;
         assert!((tl - Vec3::new(-2.0, 1.0, -1.0).normalize()).length() < 1e-6);
     }
 
@@ -388,7 +409,7 @@ mod tests {
         ] {
             let c = Camera::new(position, at, Vec3::new(0.0, 1e30, 0.0), 60.0)
                 .unwrap_or_else(|e| panic!("{position}: {e}"));
-            let r = PinholeCamera::new(&c, 2, 2).ray(1.0, 1.0);
+            let r = FilmCamera::new(&c, 2, 2).ray(1.0, 1.0).unwrap();
             assert!(
                 (r.direction - -Vec3::X).length() < 1e-6,
                 "{position}: {r:?}"
