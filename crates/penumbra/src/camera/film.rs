@@ -7,12 +7,13 @@
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 
+use super::grid::Guesses;
 use super::{Aperture, Camera, Lens};
 use crate::math::Ray;
 use crate::sampling::concentric_disk;
 
 /// A [`Camera`] projected onto a film of `width × height` pixels: turns film points into rays.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FilmCamera {
     eye: Vec3,
     forward: Vec3,
@@ -29,6 +30,8 @@ pub struct FilmCamera {
     k: Option<[f64; 5]>,
     lens: Lens,
     aperture: Option<Aperture>,
+    /// OpenCV's model's first guesses on this film.
+    guesses: Option<Guesses>,
 }
 
 impl FilmCamera {
@@ -48,6 +51,13 @@ impl FilmCamera {
             }
             (None, _) => None,
         };
+        let guesses = match (camera.lens(), k) {
+            (Lens::OpenCv(d), Some(k)) => {
+                let film = (width as f32, height as f32);
+                Some(Guesses::new(&d, film, |x, y| unproject(k, x, y)))
+            }
+            _ => None,
+        };
         Self {
             eye: camera.position(),
             forward,
@@ -60,6 +70,7 @@ impl FilmCamera {
             k,
             lens: camera.lens(),
             aperture: camera.aperture(),
+            guesses,
         }
     }
 
@@ -183,7 +194,9 @@ impl FilmCamera {
                 Some(DVec3::new(p.x, p.y, 1.0))
             }
             Lens::OpenCv(d) => {
-                let p = d.undistort(unproject(k, x, y))?;
+                let q = unproject(k, x, y);
+                let guess = self.guesses.as_ref().and_then(|g| g.at(x, y));
+                let p = d.undistort_from(q, guess.unwrap_or(q))?;
                 Some(DVec3::new(p.x, p.y, 1.0))
             }
             Lens::Fisheye(d) => {

@@ -10,6 +10,9 @@ use glam::DVec2;
 /// How close a distorted point must come to its target, in normalized image coordinates
 /// (at a focal length of 10⁴ pixels, 10⁻¹⁰ px).
 const CONVERGED: f64 = 1e-14;
+/// A Newton step this short (in normalized coordinates) is the last: the error it leaves is
+/// of the order of its square.
+const TINY_STEP: f64 = 1e-9;
 /// Newton steps before an inversion gives up.
 const MAX_STEPS: usize = 60;
 /// How far out (in normalized radius, 89.4° off the axis) the radial-tangential model's
@@ -162,7 +165,16 @@ impl OpenCvDistortion {
     /// The undistorted point whose distortion is `target`, by Newton's method from `target`;
     /// `None` where there is none inside the valid radius (the sample misses).
     pub fn undistort(&self, target: DVec2) -> Option<DVec2> {
-        let mut p = target;
+        self.undistort_from(target, target)
+    }
+
+    /// [`OpenCvDistortion::undistort`] from the first guess `guess`: the closer, the fewer
+    /// steps. It stops when the distortion meets `target` to [`CONVERGED`], or after a step
+    /// shorter than [`TINY_STEP`], which it takes (Newton's error after a step is of the
+    /// order of the step squared).
+    pub fn undistort_from(&self, target: DVec2, guess: DVec2) -> Option<DVec2> {
+        let scale = target.length().max(1.0);
+        let mut p = guess;
         for _ in 0..MAX_STEPS {
             let (at, [jx, jy]) = self.distort(p);
             let e = at - target;
@@ -170,16 +182,25 @@ impl OpenCvDistortion {
             if det.is_nan() || det <= 0.0 {
                 return None;
             }
-            if e.length() <= CONVERGED * target.length().max(1.0) {
-                return (p.length() <= self.valid_radius).then_some(p);
+            if e.length() <= CONVERGED * scale {
+                return self.inside(p);
             }
             // p −= J⁻¹·e.
-            p -= DVec2::new(jy.y * e.x - jy.x * e.y, jx.x * e.y - jx.y * e.x) / det;
+            let step = DVec2::new(jy.y * e.x - jy.x * e.y, jx.x * e.y - jx.y * e.x) / det;
+            p -= step;
             if !p.is_finite() {
                 return None;
             }
+            if step.length() <= TINY_STEP * scale {
+                return self.inside(p);
+            }
         }
         None
+    }
+
+    /// `p`, when it lies inside the valid radius.
+    fn inside(&self, p: DVec2) -> Option<DVec2> {
+        (p.length() <= self.valid_radius).then_some(p)
     }
 }
 

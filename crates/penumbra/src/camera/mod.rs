@@ -3,6 +3,7 @@
 //! rays.
 
 mod film;
+mod grid;
 mod lens;
 
 use glam::{DVec3, Vec3};
