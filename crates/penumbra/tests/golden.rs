@@ -143,6 +143,13 @@ fn cornell_cyan_light() {
 }
 
 #[test]
+fn lens_models() {
+    // An OpenCV fisheye beyond 90° and an equirectangular panorama of the seed's room.
+    check("cornell_lenses", Some("fisheye"));
+    check("cornell_lenses", Some("panorama"));
+}
+
+#[test]
 fn texture_scenes() {
     check("texture_map", None);
     check("textured_room", None);
