@@ -15,7 +15,7 @@ use glam::{Mat4, Vec3};
 
 use super::placements::Placement;
 use super::{Builder, Result};
-use crate::camera::Camera;
+use crate::camera::{Camera, Lens};
 use crate::light::{DirectionalLight, Light, PointLight, SpotLight};
 use crate::material::{Cutout, Material};
 use crate::math::Transform;
@@ -143,9 +143,14 @@ impl Builder<'_> {
                 let (position, look_at, up) = c.view(world);
                 let name = unique(&c.name, |n| taken.iter().any(|t| t == n));
                 taken.push(name.clone());
-                let camera = Camera::new(position, look_at, up, c.fov_y_deg).map_err(|e| {
-                    self.bad(&path.key("cameras"), format!("camera \"{}\": {e}", c.name))
-                })?;
+                let camera = Camera::new(position, look_at, up, c.fov_y_deg)
+                    .and_then(|camera| match c.orthographic_height(world) {
+                        Some(height) => camera.with_lens(Lens::Orthographic { height }),
+                        None => Ok(camera),
+                    })
+                    .map_err(|e| {
+                        self.bad(&path.key("cameras"), format!("camera \"{}\": {e}", c.name))
+                    })?;
                 self.world
                     .add_camera(name, camera)
                     .map_err(|e| self.bad(&path.key("cameras"), e.to_string()))?;

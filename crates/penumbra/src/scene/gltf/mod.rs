@@ -16,8 +16,7 @@
 //!   down the image, penumbra's t up) and COLOR_0.
 //! - **Materials, cameras, lights:** see [`GltfMaterial`], [`GltfCamera`], [`GltfLight`].
 //! - Everything else is ignored with a warning (animations, skins, morph targets, emissive,
-//!   normal, occlusion and metallic-roughness maps, orthographic
-//!   cameras, extensions penumbra does not read). A file that *requires* an extension penumbra
+//!   normal, occlusion and metallic-roughness maps, extensions penumbra does not read). A file that *requires* an extension penumbra
 //!   does not read (Draco, meshopt, basisu, …) is refused, naming it.
 //!
 //! Every problem is a [`GltfError`] at a JSON path (`meshes[3].primitives[0].attributes.
@@ -187,15 +186,17 @@ pub(crate) enum ImageSource {
     File(PathBuf),
 }
 
-/// A perspective camera of a node, in the file's space.
+/// A camera of a node, in the file's space: perspective, or orthographic.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct GltfCamera {
     /// The camera's name, else the node's, else `camera`; made unique in the file.
     pub name: String,
     /// The node's world matrix: the camera sits at its origin looking down −z, +y up.
     pub matrix: Mat4,
-    /// `yfov` in degrees.
+    /// `yfov` in degrees (a perspective camera's; 60 for an orthographic one, unused).
     pub fov_y_deg: f32,
+    /// An orthographic camera's `ymag`: half the height it sees, in the node's units.
+    pub ymag: Option<f32>,
 }
 
 impl GltfCamera {
@@ -206,6 +207,13 @@ impl GltfCamera {
         let forward = m.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
         let up = m.transform_vector3(Vec3::Y).normalize_or_zero();
         (position, position + forward, up)
+    }
+
+    /// An orthographic camera's height of view after `world`: 2·ymag in its node's units,
+    /// scaled with its up axis; `None` for a perspective camera.
+    pub fn orthographic_height(&self, world: Mat4) -> Option<f32> {
+        let scale = (world * self.matrix).transform_vector3(Vec3::Y).length();
+        self.ymag.map(|ymag| 2.0 * ymag * scale)
     }
 }
 

@@ -103,13 +103,19 @@ impl Reader<'_> {
         camera: gltf::Camera,
         matrix: Mat4,
     ) {
-        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
-            self.ignored.note(
-                "{n} orthographic camera(s) are ignored (penumbra's cameras are perspective)",
-            );
-            return;
+        let (fov, ymag) = match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => (p.yfov().to_degrees(), None),
+            // The film's aspect gives the width, as it does a perspective camera's.
+            gltf::camera::Projection::Orthographic(o) => {
+                let ymag = o.ymag().abs();
+                if !(ymag > 0.0 && ymag.is_finite()) {
+                    self.ignored
+                        .note("{n} orthographic camera(s) with a ymag of 0 are ignored");
+                    return;
+                }
+                (60.0, Some(ymag))
+            }
         };
-        let fov = p.yfov().to_degrees();
         if !(fov > 0.0 && fov < 180.0) {
             self.ignored
                 .note("{n} camera(s) with a yfov outside (0, 180) degrees are ignored");
@@ -125,6 +131,7 @@ impl Reader<'_> {
             name,
             matrix,
             fov_y_deg: fov,
+            ymag,
         });
     }
 
