@@ -19,6 +19,8 @@ pub struct FilmCamera {
     forward: Vec3,
     right: Vec3,
     up: Vec3,
+    /// forward, right and up in double precision, for [`FilmCamera::in_world`].
+    basis: [DVec3; 3],
     /// tan(fov_y / 2).
     half_height: f32,
     aspect: f32,
@@ -63,6 +65,7 @@ impl FilmCamera {
             forward,
             right,
             up,
+            basis: [forward, right, up].map(|v| v.as_dvec3()),
             half_height,
             aspect: width as f32 / height as f32,
             width: width as f32,
@@ -223,7 +226,7 @@ impl FilmCamera {
 
     /// A camera-space vector (OpenCV axes) in the world, in double precision.
     fn in_world(&self, c: DVec3) -> DVec3 {
-        let [f, r, u] = [self.forward, self.right, self.up].map(|v| v.as_dvec3());
+        let [f, r, u] = self.basis;
         f * c.z + r * c.x - u * c.y
     }
 }

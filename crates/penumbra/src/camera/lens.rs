@@ -111,7 +111,10 @@ impl OpenCvDistortion {
         let d = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
         let dn = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3);
         let dd = k4 + r2 * (2.0 * k5 + r2 * 3.0 * k6);
-        (n / d, (dn * d - n * dd) / (d * d), d)
+        // One division: R = n/d and R′ = (n′ − R·d′)/d.
+        let inv = 1.0 / d;
+        let f = n * inv;
+        (f, (dn - f * dd) * inv, d)
     }
 
     /// The first radius where the radial part r·R(r²) stops growing or R's denominator
@@ -173,7 +176,12 @@ impl OpenCvDistortion {
     /// shorter than [`TINY_STEP`], which it takes (Newton's error after a step is of the
     /// order of the step squared).
     pub fn undistort_from(&self, target: DVec2, guess: DVec2) -> Option<DVec2> {
-        let scale = target.length().max(1.0);
+        // Squared lengths throughout: no square root per step.
+        let scale2 = target.length_squared().max(1.0);
+        let (converged2, tiny2) = (
+            CONVERGED * CONVERGED * scale2,
+            TINY_STEP * TINY_STEP * scale2,
+        );
         let mut p = guess;
         for _ in 0..MAX_STEPS {
             let (at, [jx, jy]) = self.distort(p);
@@ -182,7 +190,7 @@ impl OpenCvDistortion {
             if det.is_nan() || det <= 0.0 {
                 return None;
             }
-            if e.length() <= CONVERGED * scale {
+            if e.length_squared() <= converged2 {
                 return self.inside(p);
             }
             // p −= J⁻¹·e.
@@ -191,7 +199,7 @@ impl OpenCvDistortion {
             if !p.is_finite() {
                 return None;
             }
-            if step.length() <= TINY_STEP * scale {
+            if step.length_squared() <= tiny2 {
                 return self.inside(p);
             }
         }
@@ -200,7 +208,7 @@ impl OpenCvDistortion {
 
     /// `p`, when it lies inside the valid radius.
     fn inside(&self, p: DVec2) -> Option<DVec2> {
-        (p.length() <= self.valid_radius).then_some(p)
+        (p.length_squared() <= self.valid_radius * self.valid_radius).then_some(p)
     }
 }
 
