@@ -35,10 +35,12 @@ fi
 venv="$(cd "$venv" && pwd)"
 py="$venv/bin/python"
 # trimesh (pinned; Pillow for its textures) reads the shared glTF and PLY files as a reference;
+# OpenCV (headless, pinned) is the reference for the lens models' projections;
 # nbclient and ipykernel run the example notebook in a real kernel.
 "$py" -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.21" pytest tqdm "ray>=2.9" \
     "tomli>=1.1; python_version < '3.11'" "trimesh==4.5.3" "pillow>=9" \
-    "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29" "pycocotools>=2.0.8"
+    "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29" "pycocotools>=2.0.8" \
+    "opencv-python-headless==4.10.0.84"
 
 profile="${PENUMBRA_PY_PROFILE:-dev}"
 PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile $profile" \

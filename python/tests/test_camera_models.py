@@ -1,0 +1,88 @@
+"""The lens models against OpenCV itself (docs/scene-format.md, "Camera models"): every hit a
+pixel's centre ray finds, projected by ``cv2.projectPoints`` or ``cv2.fisheye.projectPoints``
+with the scene's K, distortion and pose, lands within 1e-3 px of that pixel's centre; and the
+COLMAP and nerfstudio files carry the coefficients as the scene gives them."""
+
+from __future__ import annotations
+
+import cv2  # the test extra's reference for lens models (opencv-python-headless)
+import numpy as np
+import pytest
+
+import penumbra
+
+W, H = 96, 64
+K = np.array([[42.0, 0.0, 49.3], [0.0, 40.5, 30.9], [0.0, 0.0, 1.0]])
+
+
+def pose() -> np.ndarray:
+    """Camera to world in OpenCV's axes: at (0.5, 0.3, 2.5), turned 20° about y and 10° about
+    x from looking down −z."""
+    a, b = np.radians(20.0), np.radians(10.0)
+    ry = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    rx = np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+    flip = np.diag([1.0, -1.0, -1.0])
+    m = np.eye(4)
+    m[:3, :3] = ry @ rx @ flip
+    m[:3, 3] = [0.5, 0.3, 2.5]
+    return m
+
+
+def room(camera: dict) -> penumbra.Scene:
+    quad = lambda corner, u, v: {"type": "quad", "corner": corner, "u": u, "v": v}  # noqa: E731
+    return penumbra.load_dict({
+        "film": {"width": W, "height": H},
+        "camera": camera,
+        "render": {"sampler": "center"},
+        "lights": [{"type": "point", "position": [0, 2, 2]}],
+        "objects": [
+            quad([-4, -2, -3], [8, 0, 0], [0, 5, 0]),
+            quad([-4, -2, 4], [8, 0, 0], [0, 0, -7]),
+            quad([-4, 3, -3], [8, 0, 0], [0, 0, 9]),
+            {"type": "sphere", "center": [0.7, -0.5, 0], "radius": 0.8},
+        ],
+    })
+
+
+def hits_and_pixels(scene: penumbra.Scene):
+    """The hit positions of the pixel centres that hit, and those pixels' (x, y)."""
+    _, aov = scene.render(aovs=["position", "depth"])
+    ys, xs = np.nonzero(np.isfinite(aov["depth"]))
+    return aov["position"][ys, xs].astype(np.float64), np.stack([xs, ys], axis=1).astype(np.float64)
+
+
+def world_to_camera(m: np.ndarray):
+    r = m[:3, :3].T
+    return cv2.Rodrigues(r)[0], -r @ m[:3, 3]
+
+
+@pytest.mark.parametrize("distortion", [
+    [-0.28, 0.07, 0.0002, -0.0001],
+    [-0.28, 0.07, 0.0002, -0.0001, 0.01],
+    [0.1, -0.05, 0.001, 0.002, 0.01, 0.05, -0.02, 0.003],
+    [-0.2, 0.05, 0.001, -0.002, 0.0, 0.02, 0.01, 0.0, 0.002, -0.001, 0.001, 0.0005],
+])
+def test_opencv_lenses_project_back_onto_their_pixels(distortion):
+    m = pose()
+    scene = room({"model": "opencv", "K": K.tolist(), "distortion": distortion,
+                  "camera_to_world": m.tolist()})
+    points, pixels = hits_and_pixels(scene)
+    assert len(points) > W * H // 2
+    rvec, tvec = world_to_camera(m)
+    projected, _ = cv2.projectPoints(points, rvec, tvec, K, np.array(distortion))
+    error = np.abs(projected.reshape(-1, 2) - pixels).max()
+    assert error < 1e-3, f"a hit projects {error} px from its pixel centre"
+
+
+def test_fisheye_lenses_project_back_onto_their_pixels():
+    m = pose()
+    k = [0.02, -0.01, 0.003, -0.0005]
+    # OpenCV's fisheye projects points in front of the camera: max_angle 85° keeps to them.
+    scene = room({"model": "fisheye", "K": K.tolist(), "distortion": k, "max_angle": 85,
+                  "camera_to_world": m.tolist()})
+    points, pixels = hits_and_pixels(scene)
+    assert len(points) > W * H // 2
+    rvec, tvec = world_to_camera(m)
+    projected, _ = cv2.fisheye.projectPoints(points.reshape(-1, 1, 3), rvec, tvec, K, np.array(k))
+    error = np.abs(projected.reshape(-1, 2) - pixels).max()
+    assert error < 1e-3, f"a hit projects {error} px from its pixel centre"
