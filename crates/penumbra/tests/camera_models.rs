@@ -125,6 +125,25 @@ fn reprojects(camera: &str, project: impl Fn(DVec3) -> DVec2) -> usize {
 }
 
 #[test]
+fn a_pinhole_of_k_with_skew_reprojects_exactly() {
+    // K as OpenCV's camera matrix: u = fx·x + skew·y + cx.
+    let k = [[70.0, 0.8, 51.3], [0.0, 64.5, 33.9], [0.0, 0.0, 1.0]];
+    let row = |r: [f64; 3]| format!("[{:?}, {:?}, {:?}]", r[0], r[1], r[2]);
+    let camera = format!(
+        "K = [{}, {}, {}]\n{}",
+        row(k[0]),
+        row(k[1]),
+        row(k[2]),
+        pose_key()
+    );
+    let hits = reprojects(&camera, |c| {
+        let (x, y) = (c.x / c.z, c.y / c.z);
+        DVec2::new(k[0][0] * x + k[0][1] * y + k[0][2], k[1][1] * y + k[1][2])
+    });
+    assert!(hits as u32 > W * H / 4, "{hits} hits");
+}
+
+#[test]
 fn opencv_lenses_reproject_exactly_with_4_5_8_and_12_coefficients() {
     let sets: [&[f64]; 4] = [
         &[-0.28, 0.07, 0.0002, -0.0001],
