@@ -383,6 +383,14 @@ fn lens_models_are_written_as_each_format_names_them() {
         serde_json::json!([0.01, -0.002, 0.0003, 0.0])
     );
     assert_eq!(frame["max_angle"], 100.0);
+    // So does the record beside an image.
+    ok(run_in(
+        dir.path(),
+        ["render", "fish.toml", "-o", "meta.png", "--meta"],
+    ));
+    let record = read_json(&dir.join("meta.meta.json"));
+    assert_eq!(record["model"], "fisheye");
+    assert_eq!(record["distortion"], frame["distortion"]);
     // COLMAP: the model that holds the coefficients, after fx fy cx cy.
     let colmap_camera = |name: &str| {
         ok(run(name, "colmap", &format!("{name}-sparse")));

@@ -24,7 +24,7 @@
 //! # Ok::<(), penumbra::CameraError>(())
 //! ```
 
-use crate::camera::{Camera, Lens};
+use crate::camera::{Aperture, Camera, Lens};
 
 /// A 3×3 matrix, row by row.
 pub type Mat3Rows = [[f64; 3]; 3];
@@ -48,6 +48,10 @@ pub struct CameraPose {
     /// World to camera, OpenCV axes (BOP's `cam_R_w2c`, `cam_t_w2c`): the inverse of
     /// `camera_to_world`.
     pub world_to_camera: Mat4Rows,
+    /// The camera's lens model, which K goes with.
+    pub lens: Lens,
+    /// The camera's aperture (the pose is the aperture centre's).
+    pub aperture: Option<Aperture>,
 }
 
 impl CameraPose {
@@ -95,6 +99,8 @@ impl CameraPose {
             camera_to_world: pose(r, down, fw),
             camera_to_world_opengl: pose(r, u, back),
             world_to_camera: [row(r), row(down), row(fw), [0.0, 0.0, 0.0, 1.0]],
+            lens: camera.lens(),
+            aperture: camera.aperture(),
         }
     }
 

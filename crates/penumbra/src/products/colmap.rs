@@ -85,9 +85,9 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
 /// k3 k4 k5 k6) or `OPENCV_FISHEYE` (k1 k2 k3 k4); an error for thin-prism terms, panoramas
 /// and orthographic cameras.
 fn colmap_model(f: &PoseFrame, folder: &Path) -> Result<(&'static str, Vec<f64>), ProductError> {
-    let d = f.opencv_coefficients();
+    let d = f.lens.opencv_coefficients();
     let cannot = |why: &str| super::poses::cannot_hold(folder, f, "COLMAP", why);
-    Ok(match f.model.as_str() {
+    Ok(match f.lens.model.as_str() {
         "pinhole" => ("PINHOLE", vec![]),
         "opencv" if d[8..].iter().any(|&c| c != 0.0) => {
             return Err(cannot("has thin-prism terms (s1 … s4)"))

@@ -99,6 +99,15 @@ pub struct PoseFrame {
     pub look_at: [f64; 3],
     /// The up direction.
     pub up: [f64; 3],
+    /// The camera's lens.
+    #[serde(flatten)]
+    pub lens: LensFields,
+}
+
+/// A camera's lens as poses and records write it: `model` and, as the model has them, its
+/// coefficients and aperture.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LensFields {
     /// The lens model, as the scene's `model` key names it (files written before lens
     /// models read as "pinhole").
     #[serde(default = "pinhole")]
@@ -120,37 +129,12 @@ pub struct PoseFrame {
     pub focus_distance: Option<f64>,
 }
 
-fn pinhole() -> String {
-    "pinhole".to_owned()
-}
-
-impl PoseFrame {
-    /// The frame of the image `file`, `width × height`, of `camera` seen as `pose`.
-    pub fn new(
-        frame: Option<i64>,
-        name: &str,
-        file: &str,
-        camera: &Camera,
-        pose: CameraPose,
-        (width, height): (u32, u32),
-    ) -> PoseFrame {
-        let wide = |v: glam::Vec3| v.as_dvec3().to_array();
-        let lens = camera.lens();
-        let aperture = camera.aperture();
-        PoseFrame {
-            frame,
-            camera: name.to_owned(),
-            file: file.to_owned(),
-            width,
-            height,
-            fov: f64::from(camera.fov_y_deg()),
-            k: pose.k,
-            camera_to_world: pose.camera_to_world,
-            camera_to_world_opengl: pose.camera_to_world_opengl,
-            world_to_camera: pose.world_to_camera,
-            position: wide(camera.position()),
-            look_at: wide(camera.look_at()),
-            up: wide(camera.up()),
+impl LensFields {
+    /// The lens of `pose`.
+    pub fn of(pose: &CameraPose) -> LensFields {
+        let lens = pose.lens;
+        let aperture = pose.aperture;
+        LensFields {
             model: lens.name().to_owned(),
             distortion: match lens {
                 Lens::OpenCv(d) => d.given().to_vec(),
@@ -176,6 +160,40 @@ impl PoseFrame {
         let n = self.distortion.len().min(12);
         all[..n].copy_from_slice(&self.distortion[..n]);
         all
+    }
+}
+
+fn pinhole() -> String {
+    "pinhole".to_owned()
+}
+
+impl PoseFrame {
+    /// The frame of the image `file`, `width × height`, of `camera` seen as `pose`.
+    pub fn new(
+        frame: Option<i64>,
+        name: &str,
+        file: &str,
+        camera: &Camera,
+        pose: CameraPose,
+        (width, height): (u32, u32),
+    ) -> PoseFrame {
+        let wide = |v: glam::Vec3| v.as_dvec3().to_array();
+        PoseFrame {
+            frame,
+            camera: name.to_owned(),
+            file: file.to_owned(),
+            width,
+            height,
+            fov: f64::from(camera.fov_y_deg()),
+            k: pose.k,
+            camera_to_world: pose.camera_to_world,
+            camera_to_world_opengl: pose.camera_to_world_opengl,
+            world_to_camera: pose.world_to_camera,
+            position: wide(camera.position()),
+            look_at: wide(camera.look_at()),
+            up: wide(camera.up()),
+            lens: LensFields::of(&pose),
+        }
     }
 }
 
@@ -247,7 +265,7 @@ pub(crate) fn cannot_hold(path: &Path, f: &PoseFrame, format: &str, why: &str) -
         path: path.to_owned(),
         message: format!(
             "camera `{}` ({}) {why}, which {format} cannot hold: write the penumbra layout",
-            f.camera, f.model
+            f.camera, f.lens.model
         ),
     }
 }
@@ -259,8 +277,8 @@ type NerfModel = (&'static str, Vec<(&'static str, f64)>);
 /// OpenCV's model as `OPENCV` (k1 k2 k3 p1 p2), the fisheye as `OPENCV_FISHEYE` (k1…k4), the
 /// panorama as `EQUIRECTANGULAR`.
 fn nerf_model(f: &PoseFrame, path: &Path) -> Result<NerfModel, ProductError> {
-    let d = f.opencv_coefficients();
-    Ok(match f.model.as_str() {
+    let d = f.lens.opencv_coefficients();
+    Ok(match f.lens.model.as_str() {
         "pinhole" => (
             "OPENCV",
             vec![("k1", 0.0), ("k2", 0.0), ("p1", 0.0), ("p2", 0.0)],
@@ -300,7 +318,7 @@ fn nerf_model(f: &PoseFrame, path: &Path) -> Result<NerfModel, ProductError> {
 fn nerf_intrinsics(f: &PoseFrame) -> Map<String, Value> {
     let (w, h) = (f64::from(f.width), f64::from(f.height));
     let mut m = Map::new();
-    if f.model == "equirectangular" {
+    if f.lens.model == "equirectangular" {
         for (key, v) in [
             ("fl_x", w / 2.0),
             ("fl_y", h),
@@ -338,7 +356,7 @@ fn nerf(frames: &[PoseFrame], path: &Path) -> Result<Value, ProductError> {
     let mut top = Map::new();
     top.insert("camera_model".into(), json!("OPENCV"));
     if let Some(first) = frames.first() {
-        let lens = |f: &PoseFrame| (f.model.clone(), f.distortion.clone());
+        let lens = |f: &PoseFrame| (f.lens.model.clone(), f.lens.distortion.clone());
         if let Some(other) = frames.iter().find(|f| lens(f) != lens(first)) {
             let why = format!("has another lens than camera `{}`", first.camera);
             return Err(cannot_hold(path, other, "one transforms.json", &why));

@@ -3,8 +3,10 @@
 //!
 //! A record holds `settings` ([`RecordSettings`]), `image`, `files` (the image, then its AOV
 //! files), `digests` (each file's size and FNV-1a as written), `width`, `height`, `K`, the
-//! camera's poses (see [`CameraPose`]), `objects` (the object ids of each `[[objects]]`
-//! entry) and, from Python, `view` (the view's name).
+//! camera's poses (see [`CameraPose`]), its lens (`model` and, as the model has them,
+//! `distortion`, `max_angle`, `orthographic_height`, `aperture_radius`, `focus_distance`, as
+//! `--poses` writes them), `objects` (the object ids of each `[[objects]]` entry) and, from
+//! Python, `view` (the view's name).
 //!
 //! An image is done ([`finished`]) when its record's settings are exactly those it would be
 //! rendered with now and every file the record lists is a regular file of the size and
@@ -18,6 +20,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::poses::LensFields;
 use super::{ProductError, RecordSettings};
 use crate::fnv::FileDigest;
 use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
@@ -52,6 +55,9 @@ pub struct Record {
     pub camera_to_world_opengl: Option<Mat4Rows>,
     /// World to camera, OpenCV axes.
     pub world_to_camera: Option<Mat4Rows>,
+    /// The camera's lens: `model` and its coefficients, as `--poses` writes them.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub lens: Option<LensFields>,
     /// Each `[[objects]]` entry and its object ids.
     pub objects: Vec<ObjectEntry>,
     /// The view's name (Python's batches).
@@ -131,6 +137,7 @@ impl Record {
             camera_to_world: pose.map(|p| p.camera_to_world),
             camera_to_world_opengl: pose.map(|p| p.camera_to_world_opengl),
             world_to_camera: pose.map(|p| p.world_to_camera),
+            lens: pose.as_ref().map(LensFields::of),
             objects,
             view: None,
         }
