@@ -18,7 +18,7 @@ use std::collections::HashMap;
 use std::fmt::Write;
 use std::path::{Component, Path};
 
-use super::poses::PoseFrame;
+use super::frames::PoseFrame;
 use super::ProductError;
 use crate::staged::{commit_all, StagedFile};
 
@@ -33,7 +33,7 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
          #   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
          #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
     );
-    super::poses::unskewed(frames, folder, "COLMAP's camera models")?;
+    super::frames::unskewed(frames, folder, "COLMAP's camera models")?;
     let mut ids: HashMap<String, usize> = HashMap::new();
     let mut lines = String::new();
     let root = shared_folder(frames);
@@ -86,7 +86,7 @@ pub fn files(frames: &[PoseFrame], folder: &Path) -> Result<[(String, String); 3
 /// and orthographic cameras.
 fn colmap_model(f: &PoseFrame, folder: &Path) -> Result<(&'static str, Vec<f64>), ProductError> {
     let d = f.lens.opencv_coefficients();
-    let cannot = |why: &str| super::poses::cannot_hold(folder, f, "COLMAP", why);
+    let cannot = |why: &str| super::frames::cannot_hold(folder, f, "COLMAP", why);
     Ok(match f.lens.model.as_str() {
         "pinhole" => ("PINHOLE", vec![]),
         "opencv" if d[8..].iter().any(|&c| c != 0.0) => {

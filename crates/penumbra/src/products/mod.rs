@@ -16,6 +16,7 @@
 pub mod aov_files;
 pub mod colmap;
 mod error;
+mod frames;
 pub mod manifest;
 mod npz;
 pub mod output_name;

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::poses::LensFields;
+use super::frames::LensFields;
 use super::{ProductError, RecordSettings};
 use crate::fnv::FileDigest;
 use crate::pose::{CameraPose, Mat3Rows, Mat4Rows};
