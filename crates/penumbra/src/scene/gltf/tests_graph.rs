@@ -1,6 +1,8 @@
 //! The node hierarchy and the messages of JSON that does not deserialize: the same error
-//! whether or not the file has scenes, at a JSON path rather than a line and column.
+//! whether or not the file has scenes, at a JSON path rather than a line and column; and what
+//! a node's transform does to an orthographic camera.
 
+use glam::{Mat4, Vec3};
 use serde_json::json;
 
 use super::tests::{read, read_bytes, triangle};
@@ -75,4 +77,33 @@ fn a_uri_with_control_characters_is_named_on_one_line() {
     let text = e.to_string();
     assert!(!text.chars().any(char::is_control), "{text:?}");
     assert!(text.contains(r"no\tsuch\nfile\u{1b}[31m.bin"), "{text}");
+}
+
+#[test]
+fn an_orthographic_camera_sees_twice_its_ymag_scaled_with_its_node() {
+    let mut v = triangle();
+    v["cameras"] = json!([
+        {"type": "orthographic", "name": "plan", "orthographic": {"xmag": 3, "ymag": 2, "znear": 0, "zfar": 9}},
+        {"type": "orthographic", "name": "flat", "orthographic": {"xmag": 3, "ymag": 0, "znear": 0, "zfar": 9}},
+        {"type": "perspective", "name": "cam", "perspective": {"yfov": 0.5, "znear": 0.1}},
+    ]);
+    v["nodes"] = json!([
+        {"mesh": 0},
+        {"translation": [0, 5, 0], "scale": [1, 1.5, 1], "camera": 0},
+        {"camera": 1},
+        {"camera": 2},
+    ]);
+    v["scenes"] = json!([{"nodes": [0, 1, 2, 3]}]);
+    let model = read(&v).unwrap();
+    // 2·ymag, scaled with the node's (and the placing object's) up axis; one with a ymag of 0
+    // is left out, with a warning; a perspective camera has none.
+    let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["plan", "cam"]);
+    let plan = &model.cameras[0];
+    assert_eq!(plan.orthographic_height(Mat4::IDENTITY), Some(6.0));
+    let twice = Mat4::from_scale(Vec3::splat(2.0));
+    assert_eq!(plan.orthographic_height(twice), Some(12.0));
+    assert_eq!(model.cameras[1].orthographic_height(Mat4::IDENTITY), None);
+    let warned = model.warnings.iter().any(|w| w.contains("ymag of 0"));
+    assert!(warned, "{:?}", model.warnings);
 }
