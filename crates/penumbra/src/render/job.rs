@@ -97,7 +97,7 @@ impl Job<'_> {
 
     /// The camera rays of a lens other than the plain pinhole: each film point's ray by the
     /// lens model, its direction written to `dirs` (zero where the model sees nothing: never
-    /// traced, a miss of alpha 0) and its hit to `hits`. Rays from the eye are traced as
+    /// traced, a miss) and its hit to `hits`. Rays from the eye are traced as
     /// packets; rays from an aperture or an orthographic film one by one.
     fn trace_lens(
         &self,
