@@ -86,3 +86,12 @@ def test_fisheye_lenses_project_back_onto_their_pixels():
     projected, _ = cv2.fisheye.projectPoints(points.reshape(-1, 1, 3), rvec, tvec, K, np.array(k))
     error = np.abs(projected.reshape(-1, 2) - pixels).max()
     assert error < 1e-3, f"a hit projects {error} px from its pixel centre"
+
+
+def test_a_lens_camera_renders_by_name_and_is_not_passed_off_as_a_pinhole():
+    # penumbra.Camera holds the fov's pinhole: a lens model is rendered by its name.
+    scene = room({"model": "equirectangular", "camera_to_world": pose().tolist()})
+    image = scene.render()
+    assert image.shape == (H, W, 3) and image.max() > 0
+    with pytest.raises(ValueError, match="lens model"):
+        scene.camera()
