@@ -27,8 +27,9 @@ pub struct FilmCamera {
     width: f32,
     height: f32,
     /// K⁻¹ on this film as `(1/fx, 1/fy, cx + ½, cy + ½, skew)` (film points, whose pixel
-    /// centres lie at +½): a given K, or for a distorted lens without K the pinhole K of the
-    /// field of view. `None` for the field of view's pinhole.
+    /// centres lie at +½): a given K, or for a distorted lens or an aperture without K the
+    /// pinhole K of the field of view. `None` for the plain fov pinhole and the models
+    /// without K (panorama, orthographic).
     k: Option<[f64; 5]>,
     lens: Lens,
     aperture: Option<Aperture>,
@@ -46,7 +47,9 @@ impl FilmCamera {
                 let k = k.on_film(width, height);
                 Some([1.0 / k.fx, 1.0 / k.fy, k.cx + 0.5, k.cy + 0.5, k.skew])
             }
-            (None, Lens::OpenCv(_) | Lens::Fisheye(_)) => {
+            // Every perspective camera but the plain fov pinhole works through K.
+            (None, Lens::Pinhole) if camera.aperture().is_none() => None,
+            (None, Lens::Pinhole | Lens::OpenCv(_) | Lens::Fisheye(_)) => {
                 let f = 0.5 * f64::from(height) / f64::from(half_height);
                 let (w, h) = (f64::from(width), f64::from(height));
                 Some([1.0 / f, 1.0 / f, 0.5 * w, 0.5 * h, 0.0])
@@ -186,14 +189,7 @@ impl FilmCamera {
         let k = self.k.unwrap_or_default();
         match self.lens {
             Lens::Pinhole => {
-                let p = match self.k {
-                    Some(k) => unproject(k, x, y),
-                    None => {
-                        let sx = (2.0 * x / self.width - 1.0) * self.aspect * self.half_height;
-                        let sy = (2.0 * y / self.height - 1.0) * self.half_height;
-                        DVec2::new(f64::from(sx), f64::from(sy))
-                    }
-                };
+                let p = unproject(k, x, y);
                 Some(DVec3::new(p.x, p.y, 1.0))
             }
             Lens::OpenCv(d) => {
