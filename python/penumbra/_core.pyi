@@ -76,6 +76,7 @@ class CoreScene:
         seed: Optional[int] = None,
         width: Optional[int] = None,
         height: Optional[int] = None,
+        alpha: Optional[bool] = None,
         region: Optional[Tuple[int, int, int, int]] = None,
         threads: int = 0,
         progress: Optional[Callable[[int, int], Any]] = None,

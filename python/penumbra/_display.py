@@ -40,13 +40,13 @@ class Picture:
 def _shrink(a: np.ndarray, max_side: int) -> np.ndarray:
     """``a`` shrunk by the smallest whole factor that brings its longest side to
     ``max_side`` or below (each output pixel the mean of a block), or ``a`` itself."""
-    h, w, _ = a.shape
+    h, w, c = a.shape
     k = -(-max(h, w) // max_side)
     if k <= 1:
         return a
     ky, kx = min(k, h), min(k, w)
     h2, w2 = h // ky, w // kx
-    blocks = a[: h2 * ky, : w2 * kx].reshape(h2, ky, w2, kx, 3)
+    blocks = a[: h2 * ky, : w2 * kx].reshape(h2, ky, w2, kx, c)
     return np.ascontiguousarray(blocks.mean(axis=(1, 3), dtype=np.float64), dtype=np.float32)
 
 

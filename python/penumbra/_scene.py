@@ -128,7 +128,7 @@ class Scene:
     @property
     def settings(self) -> Dict[str, Any]:
         """The file's default render settings: ``width``, ``height``, ``spp``, ``sampler``,
-        ``light_samples`` (None: each light's own) and ``seed``."""
+        ``light_samples`` (None: each light's own), ``seed`` and ``alpha``."""
         return self._core.settings
 
     @property
@@ -261,10 +261,11 @@ class Scene:
         aovs: Union[str, Iterable[str]] = (),
         stats: Optional[Dict[str, Any]] = None,
         passes: Optional[Callable[[int, np.ndarray], Any]] = None,
+        alpha: Optional[bool] = None,
     ) -> Union[np.ndarray, Tuple[np.ndarray, Dict[str, np.ndarray]]]:
         """Render the scene and return a C-contiguous float32 array of shape
         (height, width, 3): linear RGB, row 0 at the top, the values the command line writes
-        to EXR and PFM files, bit for bit.
+        to EXR and PFM files, bit for bit; (height, width, 4) with ``alpha``.
 
         Every argument left as None keeps the scene file's setting:
 
@@ -275,6 +276,12 @@ class Scene:
         - ``light_samples``: N, for N×N samples of every area light.
         - ``seed``: the seed of jittered pixel and light samples.
         - ``width``, ``height``: the film size in pixels.
+        - ``alpha``: coverage alpha (the file's ``film.alpha``, the command line's
+          ``--alpha``, Blender's transparent film). The result is premultiplied RGBA: channel
+          3 is the fraction of each pixel's samples whose camera ray hit geometry, and what
+          camera rays miss (the background, a visible environment) adds nothing to the
+          colour; environments still light the scene. ``write_image`` writes it as the
+          command line does (PNG straight alpha, EXR premultiplied).
         - ``region``: ``(x0, x1, y0, y1)``, render only the pixels [x0, x1) × [y0, y1) of the
           film; the result has the region's size and its pixels equal the full image's.
         - ``threads``: worker threads of a pool of the render's own (0: one per core).
@@ -323,6 +330,8 @@ class Scene:
         seed = _args.optional_integer(call, "seed", seed, 0, _args.U64_MAX)
         width = _args.optional_integer(call, "width", width, 0, u32)
         height = _args.optional_integer(call, "height", height, 0, u32)
+        if alpha is not None and not isinstance(alpha, bool):
+            raise TypeError(f"{call}: alpha must be True or False, not {type(alpha).__name__}")
         if region is not None:
             corners = _args.sequence(call, "region (x0, x1, y0, y1)", region, 4)
             region = tuple(
@@ -366,6 +375,7 @@ class Scene:
                 seed=seed,
                 width=width,
                 height=height,
+                alpha=alpha,
                 region=region,
                 threads=threads,
                 progress=callback,

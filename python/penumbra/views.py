@@ -9,8 +9,8 @@ A view is a dict with these keys, all optional:
 - the camera: ``camera`` (a camera name of the scene, or a :class:`penumbra.Camera`), or
   ``position``, ``look_at``, ``up`` (default ``[0, 1, 0]``) and ``fov`` (degrees, default 45)
   of an explicit pinhole camera; neither means the scene's default camera;
-- ``spp``, ``sampler``, ``light_samples``, ``seed``, ``width``, ``height``: as in
-  :meth:`penumbra.Scene.render` (None keeps the scene file's setting);
+- ``spp``, ``sampler``, ``light_samples``, ``seed``, ``width``, ``height``, ``alpha``: as
+  in :meth:`penumbra.Scene.render` (None keeps the scene file's setting);
 - ``aovs``: AOV names, written beside the image as ``{stem}.aovs.npz``.
 
 >>> views = orbit(center=(0, 1, 0), radius=4, frames=4, height=1.5, fov=40)
@@ -48,10 +48,11 @@ VIEW_KEYS = (
     "seed",
     "width",
     "height",
+    "alpha",
     "aovs",
 )
 #: Keys passed on to :meth:`penumbra.Scene.render`.
-RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height")
+RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height", "alpha")
 #: Settings a batch's defaults (a jobs file's ``[defaults]``) may give every view.
 SETTING_KEYS = RENDER_KEYS + ("aovs",)
 #: The most frames :func:`orbit` makes (each is a view, with its image).
@@ -69,6 +70,9 @@ def setting_problem(key: str, value: Any) -> Union[str, None]:
     elif key == "seed":
         if not _is_int(value) or not 0 <= value < 2**64:
             return f"seed must be an integer from 0 to 2^64 - 1, not {value!r}"
+    elif key == "alpha":
+        if not isinstance(value, bool):
+            return f"alpha must be true or false, not {value!r}"
     elif key == "sampler":
         if not isinstance(value, str):
             return f"sampler must be a name such as \"rgss\", not {value!r}"

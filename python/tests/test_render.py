@@ -148,6 +148,7 @@ def test_scene_properties(cornell):
         "sampler": "rgss",
         "light_samples": None,  # the file's 5 is each light's own, not an override
         "seed": 0,
+        "alpha": False,
     }
     stats = cornell.stats
     assert stats["objects"] > 0 and stats["triangles"] >= 12 * 2 and stats["lights"] == 1

@@ -210,6 +210,12 @@ pub struct RenderArgs {
     /// one file per pass (out.depth.pfm, ..., out.object_id.exr).
     #[arg(long, value_name = "PASSES", value_parser = crate::aov::parse)]
     pub aov: Option<Passes>,
+    /// Coverage alpha (film.alpha; Blender's transparent film): write RGBA, alpha the
+    /// fraction of each pixel's samples that hit geometry, what camera rays miss (the
+    /// background, a visible environment) transparent. PNG gets straight alpha, EXR
+    /// premultiplied; JPEG and PFM cannot hold it.
+    #[arg(long)]
+    pub alpha: bool,
     /// Render in passes over the whole image (a preview of every second row, then 1, 2, 4,
     /// ... samples per pixel), each shown by --display-server; the final image is the same
     /// as without. Ctrl-C writes the last finished pass and exits with 130.

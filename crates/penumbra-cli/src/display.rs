@@ -12,8 +12,8 @@
 //!   width, height (`i32`), per channel an offset then (after all offsets) a stride (`i64`, in
 //!   floats), then the `f32` data: channel c of pixel p at `offset[c] + p·stride[c]`.
 //!
-//! The channels are R, G, B (the film's linear RGB) and, with `--aov`, the passes named as an
-//! EXR output names them (`depth.Z`, `normal.X`, …; ids as numbers, −1 for none),
+//! The channels are R, G, B (the film's linear RGB, premultiplied with `--alpha`), A with
+//! `--alpha`, and, with `--aov`, the passes named as an EXR output names them (`depth.Z`, `normal.X`, …; ids as numbers, −1 for none),
 //! interleaved pixel by pixel.
 //!
 //! # Never in the render's way
@@ -34,7 +34,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use penumbra::{AovPixel, PixelBounds, Rgb};
+use penumbra::{PixelBounds, Tile};
 
 use crate::aov::{self, Passes};
 
@@ -154,8 +154,10 @@ pub struct Preview {
     budget: Duration,
     address: String,
     name: String,
-    /// R, G, B, then the passes' channels.
+    /// R, G, B, A with alpha, then the passes' channels.
     channels: Vec<String>,
+    /// How many of `channels` the colour takes: R, G, B and A with alpha.
+    colors: usize,
     passes: Passes,
 }
 
@@ -256,36 +258,42 @@ impl Preview {
             address,
             name: String::new(),
             channels: Vec::new(),
+            colors: RGB.len(),
             passes: Passes(Vec::new()),
         })
     }
 
     /// Starts a new image in the viewer, named `name` (the output's name), of the film's size,
-    /// with the channels of `passes` beside R, G and B.
-    pub fn begin(&mut self, name: &str, width: u32, height: u32, passes: &Passes) {
+    /// with R, G and B, A when the render has `alpha`, and the channels of `passes`.
+    pub fn begin(&mut self, name: &str, (width, height): (u32, u32), alpha: bool, passes: &Passes) {
         self.name = name.to_owned();
         self.channels = RGB.iter().map(|c| c.to_string()).collect();
+        self.colors = RGB.len();
+        if alpha {
+            self.channels.push("A".to_owned());
+            self.colors += 1;
+        }
         self.channels.extend(aov::channel_names(passes));
         self.passes = passes.clone();
         self.send(create_image(name, width, height, &self.channels));
     }
 
-    /// Shows one finished tile (called from the render's workers); `aovs` is empty or holds
-    /// the pixels' AOVs.
-    pub fn tile(&self, bounds: &PixelBounds, pixels: &[Rgb], aovs: &[AovPixel]) {
-        let mut values = Vec::with_capacity(pixels.len() * self.channels.len());
-        for (i, c) in pixels.iter().enumerate() {
+    /// Shows one finished tile (called from the render's workers).
+    pub fn tile(&self, tile: &Tile) {
+        let mut values = Vec::with_capacity(tile.pixels.len() * self.channels.len());
+        for (i, c) in tile.pixels.iter().enumerate() {
             values.extend(c.to_array());
-            if let Some(px) = aovs.get(i) {
+            values.extend(tile.alpha.get(i));
+            if let Some(px) = tile.aovs.get(i) {
                 aov::push_values(&self.passes, px, &mut values);
             }
         }
         // Without AOVs (a progressive pass) only the colour channels are sent.
-        let channels = match aovs.is_empty() {
-            true => &self.channels[..RGB.len()],
+        let channels = match tile.aovs.is_empty() {
+            true => &self.channels[..self.colors],
             false => &self.channels[..],
         };
-        self.send(update_image(&self.name, channels, bounds, &values));
+        self.send(update_image(&self.name, channels, &tile.bounds, &values));
     }
 
     fn send(&self, packet: Vec<u8>) {

@@ -5,7 +5,8 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use penumbra::{
-    ModelFormat, PixelBounds, RenderSettings, Scene, SceneFile, SettingsError, View, World,
+    ImageError, ModelFormat, PixelBounds, RenderSettings, Scene, SceneFile, SettingsError, View,
+    World,
 };
 
 use crate::args::RenderArgs;
@@ -122,6 +123,11 @@ fn job(
         None => pattern.to_owned(),
     };
     let output = Output::new(name, args.format)?;
+    if settings.alpha && !output.format.has_alpha() {
+        let path = PathBuf::from(output.display());
+        let format = output.format.name();
+        return Err(invalid(ImageError::NoAlpha { path, format }));
+    }
     if args.aov.is_some() && output.target == Target::Stdout {
         return Err(invalid(
             "--aov: passes are written beside an image file, not to standard output (-o -)",

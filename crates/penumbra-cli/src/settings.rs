@@ -12,7 +12,7 @@ use crate::args::{CropWindow, RenderArgs};
 ///
 /// `--width`/`--height` (or `--resolution`), then `--quick` (a quarter of each side, as pbrt: `max(1, side / 4)`;
 /// center sampling with 1 spp unless `--spp` is given, 1 light sample per area light), then
-/// `--sampler`, `--spp`, `--light-samples` and `--seed`.
+/// `--sampler`, `--spp`, `--light-samples`, `--seed` and `--alpha`.
 pub fn patch(args: &RenderArgs, base: &RenderSettings, camera: Option<&str>) -> SettingsPatch {
     let (mut width, mut height) = match args.resolution {
         Some((w, h)) => (Some(w), Some(h)),
@@ -38,6 +38,7 @@ pub fn patch(args: &RenderArgs, base: &RenderSettings, camera: Option<&str>) -> 
         spp: args.spp,
         light_samples,
         seed: args.seed,
+        alpha: args.alpha.then_some(true),
         ..SettingsPatch::default()
     }
 }

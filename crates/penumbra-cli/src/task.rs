@@ -8,8 +8,8 @@ use std::sync::Mutex;
 use indicatif::{ProgressBar, ProgressStyle};
 use penumbra::products::RecordSettings;
 use penumbra::{
-    AovPixel, Film, OutputFormat, Pass, PixelBounds, RenderError, RenderOptions, RenderStats, Rgb,
-    Scene, SceneFile, StagedFile,
+    Film, OutputFormat, Pass, RenderError, RenderOptions, RenderStats, Scene, SceneFile,
+    StagedFile, Tile,
 };
 
 use crate::aov::{self, Passes};
@@ -43,12 +43,8 @@ pub fn run(
     job.output.make_folder()?;
     if let Some(p) = preview.as_mut() {
         let passes = args.aov.clone().unwrap_or(Passes(Vec::new()));
-        p.begin(
-            &job.output.display(),
-            job.settings.width,
-            job.settings.height,
-            &passes,
-        );
+        let size = (job.settings.width, job.settings.height);
+        p.begin(&job.output.display(), size, job.settings.alpha, &passes);
     }
     // With --progressive, the image of the last finished pass: what Ctrl-C writes.
     let last_pass: Mutex<Option<(u32, Film)>> = Mutex::new(None);
@@ -56,9 +52,9 @@ pub fn run(
         let mut last = last_pass.lock().unwrap_or_else(|e| e.into_inner());
         *last = Some((pass.samples, pass.film.clone()));
     };
-    let show = |tile: &PixelBounds, pixels: &[Rgb], aovs: &[AovPixel]| {
+    let show = |tile: &Tile| {
         if let Some(p) = preview.as_ref() {
-            p.tile(tile, pixels, aovs);
+            p.tile(tile);
         }
     };
     let options = RenderOptions {

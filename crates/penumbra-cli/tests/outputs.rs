@@ -228,3 +228,49 @@ fn an_image_that_cannot_be_written_is_named_not_its_temporary_file() {
     assert!(e.contains(&name) && !e.contains(".tmp-"), "{e}");
     assert_eq!(tree(dir.path()), ["s.toml"]);
 }
+
+#[test]
+fn alpha_is_written_as_rgba_and_refused_where_a_format_has_none() {
+    let dir = TempDir::new("out-alpha");
+    dir.write("s.toml", BASE_TOML);
+    let render = |args: &[&str]| {
+        let mut all = vec!["render", "s.toml", "-q"];
+        all.extend_from_slice(args);
+        run_in(dir.path(), all)
+    };
+    // The sky above the floor is transparent, the cube and floor opaque.
+    ok(render(&["--alpha", "-o", "a.png", "--meta"]));
+    let png = image::open(dir.join("a.png")).unwrap();
+    let rgba = png.as_rgba8().expect("an RGBA PNG");
+    let alphas: Vec<u8> = rgba.pixels().map(|p| p[3]).collect();
+    assert!(alphas.contains(&0) && alphas.contains(&255), "{alphas:?}");
+    assert!(rgba.pixels().all(|p| p[3] > 0 || p.0 == [0, 0, 0, 0]));
+    let record: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("a.meta.json")).unwrap()).unwrap();
+    assert_eq!(
+        record["settings"]["render"]["alpha"],
+        Value::Bool(true),
+        "{record}"
+    );
+    // The file's key, by --set, and the multi-layer EXR: A beside R, G, B.
+    ok(render(&[
+        "--set",
+        "film.alpha=true",
+        "--aov",
+        "depth",
+        "-o",
+        "a.exr",
+    ]));
+    let layer = exr::prelude::read_first_flat_layer_from_file(dir.join("a.exr")).unwrap();
+    let names: Vec<String> = (layer.layer_data.channel_data.list.iter())
+        .map(|c| c.name.to_string())
+        .collect();
+    assert_eq!(names, ["A", "B", "G", "R", "depth.Z"]);
+    // Formats without alpha are refused before anything is rendered.
+    let before = tree(dir.path());
+    for out in ["a.jpg", "a.pfm"] {
+        let e = error_line(&render(&["--alpha", "-o", out]), 2);
+        assert!(e.contains(out) && e.contains("no alpha channel"), "{e}");
+    }
+    assert_eq!(tree(dir.path()), before);
+}

@@ -80,7 +80,8 @@ pub(crate) fn render_error(e: RenderError) -> PyErr {
 }
 
 /// An image error as Python sees it: an unknown extension, a bad gamma or an image that cannot
-/// be encoded (too large for its format, non-finite values in a float format) is a
+/// be encoded (too large for its format, alpha for a format without it, non-finite values in
+/// a float format) is a
 /// `ValueError`, one beyond the memory available a `MemoryError`, a failed write an `OSError`,
 /// a cancelled one `KeyboardInterrupt`; its message names `call`.
 pub(crate) fn image_error(call: &str, e: ImageError) -> PyErr {
@@ -90,6 +91,7 @@ pub(crate) fn image_error(call: &str, e: ImageError) -> PyErr {
         | ImageError::Encode { .. }
         | ImageError::BadGamma(_)
         | ImageError::TooLarge { .. }
+        | ImageError::NoAlpha { .. }
         | ImageError::NonFinite { .. } => PyValueError::new_err(message),
         ImageError::OutOfMemory { .. } => PyMemoryError::new_err(message),
         ImageError::Write { .. } => PyOSError::new_err(message),

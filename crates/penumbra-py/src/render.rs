@@ -28,8 +28,9 @@ pub type CameraArgs = ([f32; 3], [f32; 3], [f32; 3], f32);
 
 /// The keyword arguments of a render call. Python has checked their types; `None` is the
 /// same as absent.
-const KEYWORDS: [&str; 13] = [
+const KEYWORDS: [&str; 14] = [
     "camera",
+    "alpha",
     "spp",
     "sampler",
     "light_samples",
@@ -123,6 +124,7 @@ impl<'py> Request<'py> {
                 spp: item("spp")?.map(|v| v.extract()).transpose()?,
                 light_samples: item("light_samples")?.map(|v| v.extract()).transpose()?,
                 seed: item("seed")?.map(|v| v.extract()).transpose()?,
+                alpha: item("alpha")?.map(|v| v.extract()).transpose()?,
                 ..SettingsPatch::default()
             },
             region: region.map(|(x0, x1, y0, y1)| PixelBounds { x0, x1, y0, y1 }),
@@ -264,12 +266,21 @@ fn floats(pixels: Vec<penumbra::Rgb>) -> Vec<f32> {
     arrays.into_flattened()
 }
 
-/// An (H, W, 3) float32 array of a film's pixels, row 0 at the top.
+/// An (H, W, 3) float32 array of a film's pixels, row 0 at the top; (H, W, 4) with its
+/// alpha (premultiplied RGBA).
 fn image_array(py: Python<'_>, film: Film) -> PyResult<Bound<'_, PyAny>> {
     let (w, h) = (film.width as usize, film.height as usize);
-    let data = floats(film.pixels);
-    let array = Array3::from_shape_vec((h, w, 3), data)
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let array = match &film.alpha {
+        None => Array3::from_shape_vec((h, w, 3), floats(film.pixels)).map_err(err)?,
+        Some(alpha) => {
+            let what = format!("the {w}x{h} result arrays");
+            let mut data = crate::errors::buffer("Scene.render", &what, w * h * 4)?;
+            let rgba = film.pixels.iter().zip(alpha);
+            data.extend(rgba.flat_map(|(p, &a)| p.extend(a).to_array()));
+            Array3::from_shape_vec((h, w, 4), data).map_err(err)?
+        }
+    };
     Ok(array.into_pyarray(py).into_any())
 }
 

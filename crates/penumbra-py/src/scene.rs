@@ -284,6 +284,7 @@ impl CoreScene {
         d.set_item("sampler", s.sampler.name())?;
         d.set_item("light_samples", s.light_samples)?;
         d.set_item("seed", s.seed)?;
+        d.set_item("alpha", s.alpha)?;
         Ok(d)
     }
 

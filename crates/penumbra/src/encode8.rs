@@ -1,5 +1,5 @@
-//! 8-bit encoding: [`encode_8bit`] for one value, and for a whole film the same codes without
-//! a `powf` per channel.
+//! 8-bit encoding: [`encode_8bit`] for one value, and for a whole film ([`film_codes`]) the
+//! same codes without a `powf` per channel.
 //!
 //! The code of a value is a non-decreasing step function of it, so it is the number of the 255
 //! step thresholds at or below the value: found once per film by bisection over the `f32`
@@ -11,6 +11,7 @@
 //! input move the exact result by many ulps of the output, and the linear segment of the sRGB
 //! curve is a single exact product.
 
+use crate::film::Film;
 use crate::math::Rgb;
 use crate::texture::linear_to_srgb;
 
@@ -132,6 +133,23 @@ pub(crate) fn encode_all(pixels: &[Rgb], gamma: Option<f32>) -> Vec<u8> {
     }
     let encoder = Encoder8::new(gamma);
     values.map(|c| encoder.encode(c)).collect()
+}
+
+/// The 8-bit codes of `film` as a PNG holds them, row by row: R, G, B per pixel; with alpha
+/// (premultiplied in the film), the colour divided by it (straight alpha, PNG's convention;
+/// 0 where nothing was covered), then A, linear (never gamma-encoded), rounded.
+pub fn film_codes(film: &Film, gamma: Option<f32>) -> Vec<u8> {
+    let Some(alpha) = &film.alpha else {
+        return encode_all(&film.pixels, gamma);
+    };
+    let straight: Vec<Rgb> = (film.pixels.iter().zip(alpha))
+        .map(|(&c, &a)| if a > 0.0 { c / a } else { Rgb::ZERO })
+        .collect();
+    let codes = encode_all(&straight, gamma);
+    let a8 = |a: f32| (a.clamp(0.0, 1.0) * 255.0).round() as u8;
+    (codes.chunks_exact(3).zip(alpha))
+        .flat_map(|(rgb, &a)| [rgb[0], rgb[1], rgb[2], a8(a)])
+        .collect()
 }
 
 #[cfg(test)]

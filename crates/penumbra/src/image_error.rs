@@ -44,6 +44,14 @@ pub enum ImageError {
         /// Its first non-finite channel.
         value: f32,
     },
+    /// A film with alpha for a format without an alpha channel (JPEG, PFM).
+    #[error("{}: {format} has no alpha channel; write the alpha to .png or .exr", path.display())]
+    NoAlpha {
+        /// The path, or "standard output".
+        path: PathBuf,
+        /// The format's name.
+        format: &'static str,
+    },
     /// The gamma of an 8-bit encoding is not a positive number with a finite inverse.
     #[error("gamma must be a positive finite number, not {0}")]
     BadGamma(f32),

@@ -46,6 +46,12 @@ impl OutputFormat {
         }
     }
 
+    /// Whether it stores an alpha channel: PNG (straight alpha) and EXR (premultiplied, as
+    /// OpenEXR says) do; JPEG and PFM do not.
+    pub fn has_alpha(self) -> bool {
+        matches!(self, OutputFormat::Png | OutputFormat::Exr)
+    }
+
     /// Its name in messages: "PNG", "JPEG", "EXR" or "PFM".
     pub fn name(self) -> &'static str {
         match self {

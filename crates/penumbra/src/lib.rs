@@ -99,7 +99,7 @@ pub use camera::{
     OpenCvDistortion, FRAMING_CAMERA, FRAMING_FOV_DEG,
 };
 pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
-pub use encode8::encode_8bit;
+pub use encode8::{encode_8bit, film_codes};
 pub use files::Files;
 pub use film::Film;
 pub use fnv::FileDigest;
@@ -124,7 +124,7 @@ pub use raycast::{
 pub use reach::{Outside, RULE};
 pub use render::{
     render, render_with_aovs, Aov, AovFilm, AovPixel, AovValues, Pass, PassSink, PixelBounds,
-    RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch,
+    RenderError, RenderOptions, RenderSettings, RenderStats, SettingsError, SettingsPatch, Tile,
     TileSink, View, MAX_LIGHT_SAMPLES, MAX_PIXELS, MAX_SPP, NO_ID,
 };
 pub use sampling::{Rng, Sampler};

@@ -1969,6 +1969,7 @@ fn output_files_encode_as_the_spec_says() {
         width: 2,
         height: 2,
         pixels: values.iter().map(|&c| Vec3::from(c)).collect(),
+        alpha: None,
     };
     let png = dir.join("out.png");
     for gamma in [None, Some(2.2f32)] {

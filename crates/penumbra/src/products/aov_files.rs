@@ -2,7 +2,7 @@
 //! passes), each pass's values as [`AovFilm::values`] gives them:
 //!
 //! - an EXR image: one multi-layer file instead of the colour-only one ([`stage_exr`]). The
-//!   colour is `R`, `G`, `B`; the passes are channels named as Blender and Mitsuba name them,
+//!   colour is `R`, `G`, `B` (premultiplied, with `A`, when the film has alpha); the passes are channels named as Blender and Mitsuba name them,
 //!   one layer per pass: `depth.Z`, `normal.X/Y/Z`, `albedo.R/G/B`, `position.X/Y/Z` (32-bit
 //!   floats) and `object_id`, `primitive_id` (32-bit unsigned integers, exact);
 //! - any other image (`out.png`, `.jpg`, `.pfm`): one file per pass beside it
@@ -73,6 +73,9 @@ pub fn stage_exr(
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         let v = film.pixels.iter().map(|p| p[c]).collect();
         channels.push(AnyChannel::new(name, FlatSamples::F32(v)));
+    }
+    if let Some(alpha) = &film.alpha {
+        channels.push(AnyChannel::new("A", FlatSamples::F32(alpha.clone())));
     }
     for &p in passes {
         match values(aovs, p)? {

@@ -72,6 +72,9 @@ pub struct RenderRecord {
     pub ambient: [f32; 3],
     /// Background radiance, linear RGB.
     pub background: [f32; 3],
+    /// Coverage alpha (absent from records written before it: false).
+    #[serde(default)]
+    pub alpha: bool,
 }
 
 /// The camera of [`RenderRecord`]: `"first"`, `{"named": NAME}` or `{"pinhole": {...}}`.
@@ -120,6 +123,7 @@ impl RenderRecord {
             light_model: settings.light_model.name().to_owned(),
             ambient: settings.ambient.to_array(),
             background: settings.background.to_array(),
+            alpha: settings.alpha,
         }
     }
 }

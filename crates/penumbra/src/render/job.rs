@@ -85,8 +85,11 @@ struct LensRays {
 impl Job<'_> {
     /// What a camera ray in direction `d` that hits nothing sees: the environments marked
     /// visible, summed, or the background when there is none (or no direction: the lens
-    /// sees nothing there).
+    /// sees nothing there); nothing with alpha, where a miss is transparent.
     fn miss(&self, d: Vec3) -> Rgb {
+        if self.settings.alpha {
+            return Rgb::ZERO;
+        }
         let Some((first, rest)) = self.sky.split_first().filter(|_| d != Vec3::ZERO) else {
             return self.settings.background;
         };
@@ -150,18 +153,19 @@ impl Job<'_> {
         }
     }
 
-    /// Adds to `sums` (one per pixel of `xs`, in order) the samples `samples` of the pixels
-    /// `xs` of row `y` of the full film, each pixel's in sample order (and appends their
-    /// AOVs to `aovs` when the render computes them), and returns the shadow rays they took;
-    /// `None` once the render is cancelled. A pixel's value is its sum over all its samples
-    /// divided by their number; summing the samples in passes gives the same sums.
+    /// Adds to `sums` (colours and counts of hits, one per pixel of `xs`, in order) the
+    /// samples `samples` of the pixels `xs` of row `y` of the full film, each pixel's in
+    /// sample order (and appends their AOVs to `aovs` when the render computes them), and
+    /// returns the shadow rays they took; `None` once the render is cancelled. A pixel's
+    /// value is its sum over all its samples divided by their number; summing the samples in
+    /// passes gives the same sums.
     pub(super) fn row(
         &self,
         y: u32,
         xs: Range<u32>,
         samples: Range<u32>,
         buffers: &mut Buffers,
-        sums: &mut [Rgb],
+        (colors, hits): (&mut [Rgb], &mut [f32]),
         aovs: &mut Vec<AovPixel>,
     ) -> Option<u64> {
         let spp = samples.len() as u32;
@@ -171,7 +175,8 @@ impl Job<'_> {
         while x0 < xs.end {
             let x1 = (x0 + per_batch).min(xs.end);
             let at = (x0 - xs.start) as usize..(x1 - xs.start) as usize;
-            shadow += self.pixels(y, x0..x1, samples.clone(), buffers, &mut sums[at], aovs)?;
+            let sums = (&mut colors[at.clone()], &mut hits[at]);
+            shadow += self.pixels(y, x0..x1, samples.clone(), buffers, sums, aovs)?;
             x0 = x1;
         }
         Some(shadow)
@@ -185,7 +190,7 @@ impl Job<'_> {
         xs: Range<u32>,
         samples: Range<u32>,
         buffers: &mut Buffers,
-        sums: &mut [Rgb],
+        (sums, hit_counts): (&mut [Rgb], &mut [f32]),
         aovs: &mut Vec<AovPixel>,
     ) -> Option<u64> {
         let settings = self.settings;
@@ -289,8 +294,10 @@ impl Job<'_> {
         for (pixel, x) in xs.enumerate() {
             let mut sum = sums[pixel];
             let mut albedo = Rgb::ZERO;
+            let mut count = 0;
             for (i, hit) in hits.iter().enumerate().skip(pixel * spp).take(spp) {
                 if hit.is_some() {
+                    count += 1;
                     if self.aovs.is_some() {
                         albedo += self.world.albedo(&self.world.surface(&found[next]));
                     }
@@ -303,6 +310,7 @@ impl Job<'_> {
                 }
             }
             sums[pixel] = sum;
+            hit_counts[pixel] += count as f32;
             if let Some(ctx) = &self.aovs {
                 let mut px = ctx.center(self.world, &self.camera, x, y);
                 px.albedo = albedo / spp as f32;

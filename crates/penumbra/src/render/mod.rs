@@ -9,6 +9,7 @@ mod job;
 mod passes;
 mod patch;
 mod settings;
+mod sums;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -26,7 +27,8 @@ use crate::sampling::fixed_offsets;
 use crate::world::World;
 use aov::AovContext;
 use job::{Buffers, Job};
-use passes::{load, plan, preview_row, Rows};
+use passes::{plan, Rows};
+use sums::{image, Sums, TileSums};
 
 pub use aov::{Aov, AovFilm, AovPixel, AovValues, NO_ID};
 pub use passes::{Pass, PassSink};
@@ -48,9 +50,21 @@ pub struct PixelBounds {
     pub y1: u32,
 }
 
-/// What receives finished tiles: their bounds, linear RGB pixels and AOVs (see
-/// [`RenderOptions::tiles`]).
-pub type TileSink<'a> = dyn Fn(&PixelBounds, &[Rgb], &[AovPixel]) + Sync + 'a;
+/// A finished tile of a render (see [`RenderOptions::tiles`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Tile<'a> {
+    /// Its bounds, in pixels of the full film.
+    pub bounds: PixelBounds,
+    /// Its linear RGB pixels, row by row (premultiplied with alpha).
+    pub pixels: &'a [Rgb],
+    /// Their coverage with [`RenderSettings::alpha`]; empty without.
+    pub alpha: &'a [f32],
+    /// Their AOVs; empty unless the render computes them.
+    pub aovs: &'a [AovPixel],
+}
+
+/// What receives finished tiles (see [`RenderOptions::tiles`]).
+pub type TileSink<'a> = dyn Fn(&Tile) + Sync + 'a;
 
 /// How to run a render: threads, region, cancellation and progress (what it shows is in the
 /// [`RenderSettings`]).
@@ -65,10 +79,8 @@ pub struct RenderOptions<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Called from worker threads after each tile with (pixels done, pixels in all).
     pub progress: Option<&'a (dyn Fn(u64, u64) + Sync)>,
-    /// Called from worker threads as each tile is finished, with its bounds (in film pixels),
-    /// its linear RGB pixels row by row and their AOVs (empty unless the render computes
-    /// them): what a live preview shows. Tiles finish in any order; the film gets the same
-    /// values.
+    /// Called from worker threads as each tile is finished, with its values (see [`Tile`]):
+    /// what a live preview shows. Tiles finish in any order; the film gets the same values.
     pub tiles: Option<&'a TileSink<'a>>,
     /// Progressive rendering: the samples of every pixel are taken in passes over the whole
     /// film (a preview of every second row, then 1, 2, 4, … samples in all, see [`Pass`])
@@ -186,15 +198,15 @@ pub fn render_with_aovs(
     Ok((film, aovs, stats))
 }
 
-/// Memory a pixel of the film takes while it renders: its colour, and its AOVs when asked
-/// for.
+/// Memory a pixel of the film takes while it renders: its colour and coverage, and its AOVs
+/// when asked for.
 fn bytes_per_pixel(with_aovs: bool) -> u64 {
     let aovs = if with_aovs {
         std::mem::size_of::<AovPixel>()
     } else {
         0
     };
-    (std::mem::size_of::<Rgb>() + aovs) as u64
+    (std::mem::size_of::<Rgb>() + std::mem::size_of::<f32>() + aovs) as u64
 }
 
 /// Refuses a `width × height` film (with its AOVs) that would not fit in the memory the
@@ -236,17 +248,12 @@ fn buffer<T: Copy + Send + Sync>(
     Ok(v)
 }
 
-/// The film's pixels and AOVs (empty unless asked for), filled in by the workers as their
-/// tiles finish.
-type Pixels = (Vec<Rgb>, Vec<AovPixel>);
-
-/// What one worker keeps from one tile to the next: its scratch buffers and the values of
-/// the tile it is working on.
+/// What one worker keeps from one tile to the next: its scratch buffers and the sums of the
+/// tile it is working on.
 #[derive(Default)]
 struct Worker {
     buffers: Buffers,
-    values: Vec<Rgb>,
-    aovs: Vec<AovPixel>,
+    sums: TileSums,
 }
 
 /// [`render`], with the AOVs of every pixel when `with_aovs` (else an empty vector).
@@ -282,9 +289,14 @@ fn render_impl(
         threads: options.threads,
         message: e,
     })?;
-    let pixels = buffer(len, Rgb::ZERO, (rw, rh), &pool)?;
-    let aov_len = if with_aovs { len } else { 0 };
-    let aov_pixels = buffer(aov_len, AovPixel::MISS, (rw, rh), &pool)?;
+    let colors = buffer(len, Rgb::ZERO, (rw, rh), &pool)?;
+    let hits = buffer(if settings.alpha { len } else { 0 }, 0.0, (rw, rh), &pool)?;
+    let aovs = buffer(
+        if with_aovs { len } else { 0 },
+        AovPixel::MISS,
+        (rw, rh),
+        &pool,
+    )?;
     let job = Job {
         camera: FilmCamera::new(&camera, width, height),
         integrator: Integrator::new(world, settings.shading_settings()),
@@ -318,7 +330,7 @@ fn render_impl(
     let start = Instant::now();
     let cancelled = || options.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     // The film holds each pixel's sum over the samples so far; it is divided at the end.
-    let film = Mutex::new((pixels, aov_pixels));
+    let film = Mutex::new(Sums { colors, hits, aovs });
     let passes = match (options.passes, with_aovs) {
         (Some(_), false) => plan(spp, rh),
         _ => vec![(Rows::All, 0..spp)],
@@ -340,34 +352,42 @@ fn render_impl(
                         return;
                     }
                     let tile = tile(i);
-                    let Worker {
-                        buffers,
-                        values,
-                        aovs,
-                    } = worker;
+                    let Worker { buffers, sums } = worker;
                     let carried = samples.start > 0 || rows == Rows::Odd;
-                    load(&film, region, &tile, carried, values);
-                    aovs.clear();
+                    sums.load(&film, region, &tile, carried);
                     let (tw, mut shadow) = ((tile.x1 - tile.x0) as usize, 0);
-                    for (y, sums) in (tile.y0..tile.y1).zip(values.chunks_mut(tw)) {
+                    let TileSums { colors, hits, aovs } = sums;
+                    for ((y, colors), hits) in (tile.y0..tile.y1)
+                        .zip(colors.chunks_mut(tw))
+                        .zip(hits.chunks_mut(tw))
+                    {
                         if !rows.has(y) {
                             continue;
                         }
                         let xs = tile.x0..tile.x1;
-                        match job.row(y, xs, samples.clone(), buffers, sums, aovs) {
+                        let row = (colors, hits);
+                        match job.row(y, xs, samples.clone(), buffers, row, aovs) {
                             Some(s) => shadow += s,
                             None => return,
                         }
                     }
                     shadow_rays.fetch_add(shadow, Ordering::Relaxed);
                     if divided {
-                        values.iter_mut().for_each(|v| *v /= spp as f32);
+                        sums.divide(spp as f32);
                     }
-                    store(&film, region, &tile, values, aovs);
+                    sums.store(&film, region, &tile);
                     if let Some(show) = options.tiles {
-                        let bounds = (tile.y0, tile.y1);
-                        let shown = preview(values, tw, bounds, rows == Rows::Even, count);
-                        show(&tile, &shown, aovs);
+                        let (bounds, first) = ((tile.y0, tile.y1), rows == Rows::Even);
+                        let alpha = match settings.alpha {
+                            true => image(&sums.hits, tw, bounds, first, count),
+                            false => Vec::new(),
+                        };
+                        show(&Tile {
+                            bounds: tile,
+                            pixels: &image(&sums.colors, tw, bounds, first, count),
+                            alpha: &alpha,
+                            aovs: &sums.aovs,
+                        });
                     }
                     let done_rows = (tile.y0..tile.y1).filter(|&y| rows.has(y)).count();
                     let n = (done_rows * tw) as u64 * samples.len() as u64;
@@ -381,13 +401,14 @@ fn render_impl(
             return Err(RenderError::Cancelled);
         }
         if let (Some(show), true) = (options.passes, index + 1 < passes.len()) {
-            let sums = &film.lock().unwrap_or_else(|e| e.into_inner()).0;
-            let bounds = (region.y0, region.y1);
-            let first = rows == Rows::Even;
+            let sums = film.lock().unwrap_or_else(|e| e.into_inner());
+            let (bounds, first) = ((region.y0, region.y1), rows == Rows::Even);
             let image = Film {
                 width: rw,
                 height: rh,
-                pixels: preview(sums, rw as usize, bounds, first, count),
+                pixels: image(&sums.colors, rw as usize, bounds, first, count),
+                alpha: (settings.alpha)
+                    .then(|| image(&sums.hits, rw as usize, bounds, first, count)),
             };
             show(&Pass {
                 index,
@@ -399,9 +420,14 @@ fn render_impl(
     if done.load(Ordering::Relaxed) != total {
         return Err(RenderError::Cancelled);
     }
-    let (mut pixels, aov_pixels) = film.into_inner().unwrap_or_else(|e| e.into_inner());
+    let Sums {
+        mut colors,
+        mut hits,
+        aovs,
+    } = film.into_inner().unwrap_or_else(|e| e.into_inner());
     if !divided {
-        pool.install(|| pixels.par_iter_mut().for_each(|v| *v /= spp as f32));
+        pool.install(|| colors.par_iter_mut().for_each(|v| *v /= spp as f32));
+        pool.install(|| hits.par_iter_mut().for_each(|v| *v /= spp as f32));
     }
     let stats = RenderStats {
         camera_rays: rw as u64 * rh as u64 * spp as u64,
@@ -412,53 +438,10 @@ fn render_impl(
     let film = Film {
         width: rw,
         height: rh,
-        pixels,
+        pixels: colors,
+        alpha: settings.alpha.then_some(hits),
     };
-    Ok((film, aov_pixels, stats))
-}
-
-/// The image of `sums` (rows `y0..y1` of `width` pixels) after `count` samples; with
-/// `preview`, after the even rows' first sample, each odd row showing its
-/// [`preview_row`].
-fn preview(
-    sums: &[Rgb],
-    width: usize,
-    (y0, y1): (u32, u32),
-    preview: bool,
-    count: f32,
-) -> Vec<Rgb> {
-    if !preview {
-        return sums.iter().map(|&v| v / count).collect();
-    }
-    (y0..y1)
-        .flat_map(|y| {
-            let from = (preview_row(y, (y0, y1)) - y0) as usize * width;
-            sums[from..from + width].iter().map(|&v| v / count)
-        })
-        .collect()
-}
-
-/// Copies the finished `tile`'s values (and AOVs, when computed) into the film of `region`.
-fn store(
-    film: &Mutex<Pixels>,
-    region: PixelBounds,
-    tile: &PixelBounds,
-    values: &[Rgb],
-    aovs: &[AovPixel],
-) {
-    let rw = (region.x1 - region.x0) as usize;
-    let tw = (tile.x1 - tile.x0) as usize;
-    let at =
-        |row: usize| ((tile.y0 - region.y0) as usize + row) * rw + (tile.x0 - region.x0) as usize;
-    // A worker that panicked while holding the lock left whole tiles: the film is still good.
-    let mut film = film.lock().unwrap_or_else(|e| e.into_inner());
-    let (pixels, aov_pixels) = &mut *film;
-    for (row, chunk) in values.chunks(tw).enumerate() {
-        pixels[at(row)..at(row) + tw].copy_from_slice(chunk);
-    }
-    for (row, chunk) in aovs.chunks(tw).enumerate() {
-        aov_pixels[at(row)..at(row) + tw].copy_from_slice(chunk);
-    }
+    Ok((film, aovs, stats))
 }
 
 #[cfg(test)]

@@ -8,10 +8,8 @@
 //! done twice.
 
 use std::ops::Range;
-use std::sync::Mutex;
 
-use super::{Film, PixelBounds, Pixels};
-use crate::math::Rgb;
+use super::Film;
 
 /// A finished pass of a progressive render (see [`RenderOptions::passes`]).
 #[derive(Clone, Copy, Debug)]
@@ -76,29 +74,6 @@ pub(super) fn preview_row(y: u32, (y0, y1): (u32, u32)) -> u32 {
         (true, _) => y,
         (false, true) => y - 1,
         (false, false) => (y + 1).min(y1 - 1),
-    }
-}
-
-/// Fills `values` with the sums so far of `tile`'s pixels (`from_film`), or zeros in the
-/// first pass.
-pub(super) fn load(
-    film: &Mutex<Pixels>,
-    region: PixelBounds,
-    tile: &PixelBounds,
-    from_film: bool,
-    values: &mut Vec<Rgb>,
-) {
-    let (tw, th) = ((tile.x1 - tile.x0) as usize, (tile.y1 - tile.y0) as usize);
-    values.clear();
-    if !from_film {
-        values.resize(tw * th, Rgb::ZERO);
-        return;
-    }
-    let rw = (region.x1 - region.x0) as usize;
-    let film = film.lock().unwrap_or_else(|e| e.into_inner());
-    for row in 0..th {
-        let at = ((tile.y0 - region.y0) as usize + row) * rw + (tile.x0 - region.x0) as usize;
-        values.extend_from_slice(&film.0[at..at + tw]);
     }
 }
 

@@ -46,6 +46,8 @@ pub struct SettingsPatch {
     pub ambient: Option<Rgb>,
     /// Radiance of camera rays that hit nothing.
     pub background: Option<Rgb>,
+    /// Coverage alpha (see [`RenderSettings::alpha`]).
+    pub alpha: Option<bool>,
 }
 
 impl SettingsPatch {
@@ -79,6 +81,7 @@ impl SettingsPatch {
         s.light_model = self.light_model.unwrap_or(s.light_model);
         s.ambient = self.ambient.unwrap_or(s.ambient);
         s.background = self.background.unwrap_or(s.background);
+        s.alpha = self.alpha.unwrap_or(s.alpha);
         s.check_values()?;
         Ok(s)
     }
@@ -184,6 +187,7 @@ mod tests {
             light_model: Some(LightModel::Physical),
             ambient: Some(Rgb::splat(0.5)),
             background: Some(Rgb::ONE),
+            alpha: Some(true),
         };
         let want = RenderSettings {
             view: View::Named("high".into()),
@@ -197,6 +201,7 @@ mod tests {
             light_model: LightModel::Physical,
             ambient: Rgb::splat(0.5),
             background: Rgb::ONE,
+            alpha: true,
         };
         assert_eq!(patch.apply(&base, None), Ok(want.clone()));
         // A patch of nothing keeps a base's light samples, views and colours.

@@ -62,6 +62,11 @@ pub struct RenderSettings {
     pub ambient: Rgb,
     /// Radiance of camera rays that hit nothing.
     pub background: Rgb,
+    /// Coverage alpha (Cycles' transparent film): the film gets the fraction of each pixel's
+    /// samples whose camera ray hits geometry ([`Film::alpha`](crate::Film::alpha)), and what
+    /// camera rays miss (the background, a visible environment) adds nothing to the colour,
+    /// which is then premultiplied by the alpha. Environments still light the scene.
+    pub alpha: bool,
 }
 
 impl Default for RenderSettings {
@@ -78,6 +83,7 @@ impl Default for RenderSettings {
             light_model: LightModel::Phong,
             ambient: Rgb::splat(0.1),
             background: Rgb::ZERO,
+            alpha: false,
         }
     }
 }

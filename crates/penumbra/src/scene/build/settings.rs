@@ -195,6 +195,7 @@ impl Builder<'_> {
             light_model: r.light_model.unwrap_or(defaults.light_model),
             ambient: r.ambient.map_or(defaults.ambient, |c| c.rgb()),
             background: r.background.map_or(defaults.background, |c| c.rgb()),
+            alpha: self.file.desc.film.alpha.unwrap_or(defaults.alpha),
         };
         Ok((settings, light_samples))
     }

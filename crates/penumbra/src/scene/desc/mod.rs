@@ -100,6 +100,8 @@ pub struct FilmDesc {
     pub output: Option<String>,
     /// Plain power-law encoding `c^(1/gamma)` instead of the sRGB curve.
     pub gamma: Option<Num>,
+    /// Coverage alpha: an RGBA image, what camera rays miss transparent (default false).
+    pub alpha: Option<bool>,
 }
 
 /// `[render]`.
