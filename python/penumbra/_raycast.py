@@ -31,6 +31,7 @@ from typing import Any, Dict, Sequence, Tuple
 import numpy as np
 
 from . import _args, _core
+from ._camera import Camera
 from ._tensor import Tensor, tensor
 
 #: The geometry and primitive id of a miss (Open3D's ``RaycastingScene.INVALID_ID``).
@@ -390,6 +391,22 @@ class RaycastingScene:
         n = _samples(nsamples, call)
         occ = self._core.compute_occupancy(p, _threads(nthreads, call), n)
         return tensor(occ.reshape(lead))
+
+    @staticmethod
+    def create_rays_camera(camera: Camera, width_px: int, height_px: int) -> Tensor:
+        """The exact rays of any :class:`penumbra.Camera` (each lens model of the scene
+        format), one per pixel center: (height_px, width_px, 6) float32 origin and unit
+        direction, as the renderer makes the rays of its one-ray AOVs, so ``t_hit`` is the
+        ``depth`` AOV. ``K`` counts pixels of this width and height. Where the lens model sees
+        nothing (beyond a distortion's valid radius or a fisheye's ``max_angle``) the row is
+        NaN, which ``cast_rays`` reports as a miss. A thin lens's rays leave its centre."""
+        call = "create_rays_camera"
+        if not isinstance(camera, Camera):
+            raise TypeError(f"{call}: camera must be a penumbra.Camera, "
+                            f"not {type(camera).__name__}")
+        w = _args.size(call, "width_px", width_px)
+        h = _args.size(call, "height_px", height_px)
+        return tensor(_core.camera_rays(camera._args(), w, h))
 
     @staticmethod
     def create_rays_pinhole(*args: Any, **kwargs: Any) -> Tensor:

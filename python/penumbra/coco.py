@@ -107,7 +107,7 @@ def amodal_areas(
     height = _args.size("amodal_areas", "height", height)
     if not isinstance(camera, Camera):
         camera = scene.camera(camera)
-    rays = _core.camera_rays(*camera._args(), width, height)
+    rays = _core.camera_rays(camera._args(), width, height)
     pixels = width * height
     hits = scene.raycasting_scene().list_intersections(rays.reshape(-1, 6))
     keys = np.asarray(hits["geometry_ids"], np.int64) * pixels + np.asarray(

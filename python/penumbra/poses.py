@@ -33,9 +33,7 @@ def camera_pose(camera: Camera, width: int, height: int) -> Dict[str, np.ndarray
         raise TypeError(f"camera_pose takes a penumbra.Camera, not {type(camera).__name__}")
     width = _args.size("camera_pose", "width", width)
     height = _args.size("camera_pose", "height", height)
-    k, c2w, gl, w2c = _core.camera_pose(
-        camera.position, camera.look_at, camera.up, camera.fov, width, height
-    )
+    k, c2w, gl, w2c = _core.camera_pose(camera._args(), width, height)
     return {
         "K": np.array(k),
         "camera_to_world": np.array(c2w),

@@ -6,7 +6,9 @@ the conventions of K and the poses):
 - ``settings``: ``penumbra`` (the version), ``scene_digest`` (:attr:`penumbra.Scene.scene_digest`,
   the command line's for the same file), ``camera`` (the scene camera's name; None for an
   explicit camera), ``frame`` (None: a view has no frame), ``render`` (the resolved render
-  settings by name: ``camera`` (``{"named": NAME}``, ``"first"`` or ``{"pinhole": {...}}``),
+  settings by name: ``camera`` (``{"named": NAME}``, ``"first"``, ``{"pinhole": {...}}`` or, for a
+  :class:`penumbra.Camera` with K, a lens model or an aperture, ``{"explicit": {...}}`` with
+  its ``K`` on the film and its ``lens``),
   ``width``, ``height``, ``sampler``, ``spp``, ``light_samples``, ``seed``, ``shading``,
   ``light_model``, ``ambient``, ``background``; every number to the bit), ``region``
   (None), ``aovs`` (the AOV names), ``gamma`` (the scene's ``film.gamma``; None: the sRGB curve)

@@ -73,7 +73,7 @@ def test_camera_rays_are_the_id_aovs_center_rays():
     scene = penumbra.load(SCENES / "cornell.toml")
     camera = scene.camera("left")
     _, aov = scene.render(camera="left", width=20, height=15, spp=1, aovs=["depth", "position"])
-    rays = penumbra._core.camera_rays(*camera._args(), 20, 15)
+    rays = penumbra._core.camera_rays(camera._args(), 20, 15)
     assert rays.shape == (15, 20, 6) and rays.dtype == np.float32
     hit = np.isfinite(aov["depth"])
     along = rays[..., :3] + aov["depth"][..., None] * rays[..., 3:]

@@ -17,7 +17,7 @@ W, H = 48, 36
 
 def centre_rays(scene: penumbra.Scene) -> np.ndarray:
     """The rays the one-ray AOVs take, through each pixel's centre: (H, W, 6)."""
-    return _core.camera_rays(*scene.camera(None)._args(), W, H)
+    return _core.camera_rays(scene.camera(None)._args(), W, H)
 
 
 @pytest.mark.parametrize("name", ["showcase.toml", "herd.toml"])

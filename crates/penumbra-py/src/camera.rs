@@ -1,47 +1,76 @@
-//! Explicit pinhole cameras from Python's (position, look_at, up, fov).
+//! Explicit cameras from Python: a `penumbra.Camera` arrives as its (position, look_at, up,
+//! fov) when it is a plain pinhole, else as its scene table (JSON text in a 1-tuple), built
+//! as a scene file's camera is on the film it is used with.
 
 use glam::Vec3;
-use penumbra::Camera;
+use penumbra::{camera_from_table, Camera, SceneError};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// The library's camera, or a `ValueError` saying why there is none.
-pub(crate) fn camera(
-    position: [f32; 3],
-    look_at: [f32; 3],
-    up: [f32; 3],
-    fov: f32,
-) -> PyResult<Camera> {
-    Camera::new(
-        Vec3::from(position),
-        Vec3::from(look_at),
-        Vec3::from(up),
-        fov,
-    )
-    .map_err(|e| PyValueError::new_err(e.to_string()))
+/// A camera as Python passes it: a pinhole's (position, look_at, up, fov), or a `[camera]`
+/// table as JSON (in a 1-tuple, apart from a camera's name).
+#[derive(Clone, Debug, FromPyObject)]
+pub enum CameraSpec {
+    /// A pinhole's position, look_at, up and vertical fov in degrees.
+    Pinhole([f32; 3], [f32; 3], [f32; 3], f32),
+    /// The keys of a `[camera]` table, as a JSON object.
+    Table((String,)),
 }
 
-/// Raises `ValueError` when the pinhole camera cannot exist (a degenerate frame, or the field
-/// of view outside (0, 180) degrees).
+impl CameraSpec {
+    /// The library's camera on a `width × height` film (a table's `K` counts its pixels), or
+    /// a `ValueError` saying why there is none: for a table, naming the key.
+    pub fn camera(&self, (width, height): (u32, u32)) -> PyResult<Camera> {
+        match self {
+            CameraSpec::Pinhole(position, look_at, up, fov) => Camera::new(
+                Vec3::from(*position),
+                Vec3::from(*look_at),
+                Vec3::from(*up),
+                *fov,
+            )
+            .map_err(|e| PyValueError::new_err(e.to_string())),
+            CameraSpec::Table((table,)) => {
+                camera_from_table(table, width, height).map_err(table_error)
+            }
+        }
+    }
+}
+
+/// A table's error as `KEY: message` (the key without its `camera.`), or the message alone
+/// for the table as a whole (a missing key).
+fn table_error(e: SceneError) -> PyErr {
+    match &e {
+        SceneError::Invalid {
+            location, message, ..
+        } => {
+            match location
+                .key
+                .as_deref()
+                .and_then(|k| k.strip_prefix("camera."))
+            {
+                Some(key) => PyValueError::new_err(format!("{key}: {message}")),
+                None => PyValueError::new_err(message.clone()),
+            }
+        }
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// Raises `ValueError` when the camera cannot exist: a degenerate frame, the field of view
+/// outside (0, 180) degrees, a bad key of a table.
 #[pyfunction]
-pub fn check_camera(position: [f32; 3], look_at: [f32; 3], up: [f32; 3], fov: f32) -> PyResult<()> {
-    camera(position, look_at, up, fov).map(|_| ())
+pub fn check_camera(camera: CameraSpec) -> PyResult<()> {
+    camera.camera((1, 1)).map(|_| ())
 }
 
-/// [`camera`], on a film of `width × height` pixels: `ValueError` for an empty one.
-fn film_camera(
-    position: [f32; 3],
-    look_at: [f32; 3],
-    up: [f32; 3],
-    fov: f32,
-    (width, height): (u32, u32),
-) -> PyResult<Camera> {
+/// `camera` on a film of `width × height` pixels: `ValueError` for an empty one.
+fn film_camera(camera: &CameraSpec, (width, height): (u32, u32)) -> PyResult<Camera> {
     if width == 0 || height == 0 {
         return Err(PyValueError::new_err(format!(
             "a {width}x{height} film has no pixels"
         )));
     }
-    camera(position, look_at, up, fov)
+    camera.camera((width, height))
 }
 
 /// The camera's intrinsics and poses on a `width × height` film (see `penumbra::CameraPose`
@@ -51,10 +80,7 @@ fn film_camera(
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 pub fn camera_pose(
-    position: [f32; 3],
-    look_at: [f32; 3],
-    up: [f32; 3],
-    fov: f32,
+    camera: CameraSpec,
     width: u32,
     height: u32,
 ) -> PyResult<(
@@ -63,7 +89,7 @@ pub fn camera_pose(
     penumbra::Mat4Rows,
     penumbra::Mat4Rows,
 )> {
-    let c = film_camera(position, look_at, up, fov, (width, height))?;
+    let c = film_camera(&camera, (width, height))?;
     let p = penumbra::CameraPose::new(&c, width, height, (0, 0));
     Ok((
         p.k,
@@ -75,20 +101,19 @@ pub fn camera_pose(
 
 /// The ray through each pixel's center, as the renderer makes the rays of its one-ray AOVs
 /// (`object_id`, `depth`, ...): a `(height, width, 6)` float32 array of origin and unit
-/// direction, row 0 at the top. Raises `ValueError` as [`camera_pose`] does.
+/// direction, row 0 at the top; NaN where the camera's lens model sees nothing (beyond a
+/// distortion's valid radius or a fisheye's `max_angle`). A thin lens's rays leave its
+/// centre. Raises `ValueError` as [`camera_pose`] does.
 #[pyfunction]
-pub fn camera_rays<'py>(
-    py: Python<'py>,
-    position: [f32; 3],
-    look_at: [f32; 3],
-    up: [f32; 3],
-    fov: f32,
+pub fn camera_rays(
+    py: Python<'_>,
+    camera: CameraSpec,
     width: u32,
     height: u32,
-) -> PyResult<Bound<'py, numpy::PyArray3<f32>>> {
+) -> PyResult<Bound<'_, numpy::PyArray3<f32>>> {
     use numpy::IntoPyArray;
-    let c = film_camera(position, look_at, up, fov, (width, height))?;
-    let pinhole = penumbra::FilmCamera::new(&c, width, height);
+    let c = film_camera(&camera, (width, height))?;
+    let film = penumbra::FilmCamera::new(&c, width, height);
     let (w, h) = (width as usize, height as usize);
     let rays = py.detach(|| {
         let no_memory = || crate::errors::no_memory("camera_rays", "the rays");
@@ -98,11 +123,13 @@ pub fn camera_rays<'py>(
             .map_err(|_| no_memory())?;
         for y in 0..h {
             for x in 0..w {
-                let ray = pinhole
-                    .ray(x as f32 + 0.5, y as f32 + 0.5)
-                    .expect("a pinhole sees every film point");
-                rows.extend(ray.origin.to_array());
-                rows.extend(ray.direction.to_array());
+                match film.ray(x as f32 + 0.5, y as f32 + 0.5) {
+                    Some(ray) => {
+                        rows.extend(ray.origin.to_array());
+                        rows.extend(ray.direction.to_array());
+                    }
+                    None => rows.extend([f32::NAN; 6]),
+                }
             }
         }
         numpy::ndarray::Array3::from_shape_vec((h, w, 6), rows)

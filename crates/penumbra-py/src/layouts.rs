@@ -12,14 +12,13 @@ use penumbra::CameraPose;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::camera::camera;
+use crate::camera::CameraSpec;
 use crate::errors::product_error;
 use crate::records::to_json;
-use crate::render::CameraArgs;
 
 /// One image of a poses file as Python gives it: its frame, its camera's (or view's) name,
 /// its file, its camera and its width and height.
-type FrameSpec = (Option<i64>, String, String, CameraArgs, u32, u32);
+type FrameSpec = (Option<i64>, String, String, CameraSpec, u32, u32);
 
 /// The frames (JSON text, a list of penumbra's layout's frames) of the images `specs`, as
 /// `penumbra render --poses` makes them. Raises `ValueError` for a camera that cannot exist.
@@ -27,8 +26,8 @@ type FrameSpec = (Option<i64>, String, String, CameraArgs, u32, u32);
 pub fn pose_frames(specs: Vec<FrameSpec>) -> PyResult<String> {
     let frames = specs
         .into_iter()
-        .map(|(frame, name, file, (position, look_at, up, fov), w, h)| {
-            let c = camera(position, look_at, up, fov)?;
+        .map(|(frame, name, file, camera, w, h)| {
+            let c = camera.camera((w, h))?;
             let pose = CameraPose::new(&c, w, h, (0, 0));
             Ok(PoseFrame::new(frame, &name, &file, &c, pose, (w, h)))
         })

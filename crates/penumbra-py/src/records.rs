@@ -52,10 +52,7 @@ pub(crate) fn make(
     })?;
     let request = Request::from_kwargs(kwargs)?;
     let settings_error = |e| render_error(RenderError::Settings(e));
-    let mut settings = request
-        .patch
-        .apply(&scene.settings, scene.file_samples)
-        .map_err(settings_error)?;
+    let mut settings = request.settings(&scene.settings, scene.file_samples)?;
     // No camera is the scene's first, by name, as the command line records it.
     if let (View::First, Some((name, _))) = (&settings.view, scene.world.cameras().first()) {
         settings.view = View::Named(name.clone());

@@ -16,7 +16,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::camera::camera;
+use crate::camera::CameraSpec;
 use crate::errors::{no_memory, render_error};
 
 /// How often the calling thread checks for signals and reports progress while a render runs.
@@ -59,6 +59,9 @@ pub struct Request<'py> {
     pub aovs: Vec<Aov>,
     /// A dict to fill with the render's counts and time, when given.
     pub stats: Option<Bound<'py, PyDict>>,
+    /// The camera's `[camera]` table (JSON), when the camera is given as one: built on the
+    /// film rendered.
+    pub table: Option<String>,
 }
 
 impl<'py> Request<'py> {
@@ -103,14 +106,20 @@ impl<'py> Request<'py> {
             ),
             None => None,
         };
+        let mut table = None;
         let view = match item("camera")? {
             None => None,
             Some(v) => Some(match v.extract::<String>() {
                 Ok(name) => View::Named(name),
-                Err(_) => {
-                    let (position, look_at, up, fov) = v.extract::<CameraArgs>()?;
-                    View::Camera(camera(position, look_at, up, fov)?)
-                }
+                Err(_) => match v.extract::<CameraSpec>()? {
+                    // A table's K counts the pixels of the film rendered: built once the
+                    // film is known (see `Request::settings`).
+                    CameraSpec::Table((json,)) => {
+                        table = Some(json);
+                        View::First
+                    }
+                    spec => View::Camera(spec.camera((1, 1))?),
+                },
             }),
         };
         let region: Option<(u32, u32, u32, u32)> =
@@ -138,7 +147,25 @@ impl<'py> Request<'py> {
             stats: item("stats")?
                 .map(|v| v.cast_into::<PyDict>())
                 .transpose()?,
+            table,
         })
+    }
+
+    /// The scene file's settings `base` (with its `render.samples`, `file_samples`) changed
+    /// as this request says, the camera of a table built on their film.
+    pub fn settings(
+        &self,
+        base: &RenderSettings,
+        file_samples: Option<u32>,
+    ) -> PyResult<RenderSettings> {
+        let mut settings = (self.patch)
+            .apply(base, file_samples)
+            .map_err(|e| render_error(RenderError::Settings(e)))?;
+        if let Some(table) = &self.table {
+            let spec = CameraSpec::Table((table.clone(),));
+            settings.view = View::Camera(spec.camera((settings.width, settings.height))?);
+        }
+        Ok(settings)
     }
 }
 
@@ -155,10 +182,7 @@ pub fn render_scene<'py>(
     file_samples: Option<u32>,
     r: Request<'py>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let settings = r
-        .patch
-        .apply(base, file_samples)
-        .map_err(|e| render_error(RenderError::Settings(e)))?;
+    let settings = r.settings(base, file_samples)?;
     let cancel = AtomicBool::new(false);
     let done = AtomicU64::new(0);
     let total = AtomicU64::new(0);

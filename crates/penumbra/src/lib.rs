@@ -130,10 +130,10 @@ pub use render::{
 pub use sampling::{Rng, Sampler};
 pub use scale::{MAX_COORDINATE, MAX_REACH, MIN_EXTENT};
 pub use scene::{
-    desc, inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, inspect_mtl, inspect_obj,
-    inspect_obj_bytes, inspect_obj_in, inspect_ply, inspect_ply_bytes, AssetKind, ErrorKind,
-    GltfInfo, Location, ModelFormat, ObjInfo, Override, OverrideError, PackError, Scene, SceneDesc,
-    SceneError, SceneFile, SceneFormat, ScenePack, MAX_SCENE_BYTES,
+    camera_from_table, desc, inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, inspect_mtl,
+    inspect_obj, inspect_obj_bytes, inspect_obj_in, inspect_ply, inspect_ply_bytes, AssetKind,
+    ErrorKind, GltfInfo, Location, ModelFormat, ObjInfo, Override, OverrideError, PackError, Scene,
+    SceneDesc, SceneError, SceneFile, SceneFormat, ScenePack, MAX_SCENE_BYTES,
 };
 pub use simd::{forced_simd_path, simd_path, supported_paths, SimdEnvError, SimdPath};
 pub use staged::{commit_all, leftovers, staged_for, StagedFile};

@@ -256,7 +256,8 @@ impl Camera {
     }
 
     /// True when the camera is all its pose and field of view: a pinhole without K or an
-    /// aperture (what `penumbra.Camera` holds, and what a view from the fov describes).
+    /// aperture (what a plain `penumbra.Camera(position, look_at, up, fov)` holds, and what a
+    /// view from the fov describes).
     pub fn sees_by_fov(&self) -> bool {
         self.intrinsics.is_none() && self.lens == Lens::Pinhole && self.aperture.is_none()
     }

@@ -19,6 +19,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::frames::LensFields;
+use crate::pose::{CameraPose, Mat3Rows};
 use crate::render::{RenderSettings, View};
 
 /// The settings of an image's record (its `settings` key): what `--resume` and Python's
@@ -77,7 +79,8 @@ pub struct RenderRecord {
     pub alpha: bool,
 }
 
-/// The camera of [`RenderRecord`]: `"first"`, `{"named": NAME}` or `{"pinhole": {...}}`.
+/// The camera of [`RenderRecord`]: `"first"`, `{"named": NAME}`, `{"pinhole": {...}}` or
+/// `{"explicit": {...}}`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum CameraRecord {
@@ -96,6 +99,23 @@ pub enum CameraRecord {
         /// Vertical field of view in degrees.
         fov: f32,
     },
+    /// An explicit camera with K, a lens model or an aperture: its pinhole keys (the fov
+    /// unused where K or the model sets the field of view), its K on the film and its lens.
+    Explicit {
+        /// The eye.
+        position: [f32; 3],
+        /// The point looked at.
+        look_at: [f32; 3],
+        /// The up direction.
+        up: [f32; 3],
+        /// Vertical field of view in degrees.
+        fov: f32,
+        /// K on the film, as `--poses` writes it.
+        #[serde(rename = "K")]
+        k: Mat3Rows,
+        /// The lens model and its coefficients, as `--poses` writes them.
+        lens: LensFields,
+    },
 }
 
 impl RenderRecord {
@@ -104,12 +124,23 @@ impl RenderRecord {
         let camera = match &settings.view {
             View::First => CameraRecord::First,
             View::Named(name) => CameraRecord::Named(name.clone()),
-            View::Camera(c) => CameraRecord::Pinhole {
+            View::Camera(c) if c.sees_by_fov() => CameraRecord::Pinhole {
                 position: c.position().to_array(),
                 look_at: c.look_at().to_array(),
                 up: c.up().to_array(),
                 fov: c.fov_y_deg(),
             },
+            View::Camera(c) => {
+                let pose = CameraPose::new(c, settings.width, settings.height, (0, 0));
+                CameraRecord::Explicit {
+                    position: c.position().to_array(),
+                    look_at: c.look_at().to_array(),
+                    up: c.up().to_array(),
+                    fov: c.fov_y_deg(),
+                    k: pose.k,
+                    lens: LensFields::of(&pose),
+                }
+            }
         };
         RenderRecord {
             camera,

@@ -3,6 +3,7 @@
 //! output, with every error located in the file.
 
 mod build;
+mod camera_table;
 pub mod desc;
 mod digest;
 mod error;
@@ -27,6 +28,7 @@ use crate::reach::Reach;
 use crate::render::RenderSettings;
 use crate::world::World;
 
+pub use camera_table::camera_from_table;
 pub use desc::SceneDesc;
 pub use error::{AssetKind, ErrorKind, KeyPath, Location, SceneError};
 pub use gltf::{inspect_gltf, inspect_gltf_bytes, inspect_gltf_in, GltfInfo};
