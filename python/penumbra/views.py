@@ -8,7 +8,11 @@ A view is a dict with these keys, all optional:
   any other ``view0000``, ``view0001``, ... by its index;
 - the camera: ``camera`` (a camera name of the scene, or a :class:`penumbra.Camera`), or
   ``position``, ``look_at``, ``up`` (default ``[0, 1, 0]``) and ``fov`` (degrees, default 45)
-  of an explicit pinhole camera; neither means the scene's default camera;
+  of an explicit pinhole camera, or the keys of any :class:`penumbra.Camera`:
+  ``camera_to_world`` (for ``position``/``look_at``/``up``), ``K`` (for ``fov``), ``model``,
+  ``distortion``, ``max_angle``, ``orthographic_height`` (the camera's ``height``; ``height``
+  is the film's), ``aperture_radius`` and ``focus_distance``; none means the scene's default
+  camera;
 - ``spp``, ``sampler``, ``light_samples``, ``seed``, ``width``, ``height``, ``alpha``: as
   in :meth:`penumbra.Scene.render` (None keeps the scene file's setting);
 - ``aovs``: AOV names, written beside the image as ``{stem}.aovs.npz``.
@@ -42,6 +46,14 @@ VIEW_KEYS = (
     "look_at",
     "up",
     "fov",
+    "camera_to_world",
+    "K",
+    "model",
+    "distortion",
+    "max_angle",
+    "orthographic_height",
+    "aperture_radius",
+    "focus_distance",
     "spp",
     "sampler",
     "light_samples",
@@ -50,6 +62,18 @@ VIEW_KEYS = (
     "height",
     "alpha",
     "aovs",
+)
+#: Keys of an explicit camera beyond a pinhole's, as :class:`penumbra.Camera` names them
+#: (but ``orthographic_height``, the camera's ``height``).
+LENS_KEYS = (
+    "camera_to_world",
+    "K",
+    "model",
+    "distortion",
+    "max_angle",
+    "orthographic_height",
+    "aperture_radius",
+    "focus_distance",
 )
 #: Keys passed on to :meth:`penumbra.Scene.render`.
 RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height", "alpha")
@@ -113,8 +137,8 @@ def view(
 ) -> Dict[str, Any]:
     """The normalized view of ``spec`` (a view dict, a camera name, or a
     :class:`penumbra.Camera`) at position ``index`` of its batch, with ``defaults`` for the
-    keys it leaves out. The result has every key of :data:`VIEW_KEYS` but the pose keys: the
-    camera is a name, a :class:`Camera` or None. Raises :class:`ViewError` (a ``ValueError``)
+    keys it leaves out. The result has every key of :data:`VIEW_KEYS` but the pose and lens
+    keys: the camera is a name, a :class:`Camera` or None. Raises :class:`ViewError` (a ``ValueError``)
     naming the view and key for a mistake."""
     if isinstance(spec, (str, Camera)):
         spec = {"camera": spec}
@@ -128,20 +152,16 @@ def view(
         )
     merged = {**{k: v for k, v in defaults.items() if v is not None}, **spec}
     camera = merged.get("camera")
-    if "position" in merged or "look_at" in merged:
+    lens = [k for k in LENS_KEYS if k in merged]
+    if any(k in merged for k in ("position", "look_at", "camera_to_world")):
         if camera is not None:
             raise ViewError(index, given, "give either camera or position/look_at, not both")
-        try:
-            camera = Camera(
-                position=merged["position"],
-                look_at=merged["look_at"],
-                up=merged.get("up", (0.0, 1.0, 0.0)),
-                fov=merged.get("fov", 45.0),
-            )
-        except KeyError as e:
-            raise ViewError(index, given, f"an explicit camera needs {e.args[0]!r}") from None
-        except (TypeError, ValueError) as e:
-            raise ViewError(index, given, str(e)) from None
+        camera = _explicit(merged, index, given)
+    elif lens:
+        raise ViewError(
+            index, given, f"{lens[0]} is a key of an explicit camera: give position and "
+            "look_at (or camera_to_world) with it"
+        )
     elif camera is not None and not isinstance(camera, (str, Camera)):
         raise ViewError(index, given, "camera must be a camera name or a penumbra.Camera")
     if given is not None and not isinstance(given, str):
@@ -159,6 +179,24 @@ def view(
     for key in RENDER_KEYS:
         out[key] = merged.get(key)
     return out
+
+
+def _explicit(merged: Mapping[str, Any], index: int, given: Optional[str]) -> Camera:
+    """The :class:`Camera` of a view's explicit camera keys (fov 45 for a pinhole without
+    K or fov)."""
+    keys = {k: merged[k] for k in ("position", "look_at", "up", "fov") + LENS_KEYS if k in merged}
+    if "camera_to_world" not in keys:
+        for needed in ("position", "look_at"):
+            if needed not in keys:
+                raise ViewError(index, given, f"an explicit camera needs {needed!r}")
+    if "orthographic_height" in keys:
+        keys["height"] = keys.pop("orthographic_height")
+    if not {"fov", "K"} & set(keys) and keys.get("model", "pinhole") in ("pinhole", "opencv"):
+        keys["fov"] = 45.0
+    try:
+        return Camera(**keys)
+    except (TypeError, ValueError) as e:
+        raise ViewError(index, given, str(e)) from None
 
 
 def views(

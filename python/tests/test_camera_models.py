@@ -159,6 +159,23 @@ def test_a_lens_cameras_record_and_pose_carry_its_lens(tmp_path):
     assert "pinhole" in plain["settings"]["render"]["camera"]
 
 
+def test_a_batch_view_takes_a_cameras_lens_keys():
+    from penumbra.views import ViewError, view
+
+    m = pose()
+    keys = {"camera_to_world": m.tolist(), "K": K.tolist(), "model": "opencv",
+            "distortion": DISTORTION}
+    camera = view({"name": "left", **keys})["camera"]
+    assert camera == penumbra.Camera(**keys)
+    ortho = view({"camera_to_world": m.tolist(), "model": "orthographic",
+                  "orthographic_height": 3.0, "height": 20})
+    assert ortho["camera"].table()["height"] == 3.0 and ortho["height"] == 20
+    with pytest.raises(ViewError, match="distortion is a key of an explicit camera"):
+        view({"camera": "front", "distortion": DISTORTION})
+    with pytest.raises(ViewError, match="Camera: distortion"):
+        view({**keys, "distortion": [0.1, 0.2, 0.3]})
+
+
 def test_a_lens_camera_renders_by_name_and_is_not_passed_off_as_a_pinhole():
     # Scene.camera gives the fov's pinhole: a lens model is rendered by its name.
     scene = room({"model": "equirectangular", "camera_to_world": pose().tolist()})
