@@ -115,7 +115,8 @@ class Scene:
     def camera_path(self, name: str) -> Optional[Dict[int, Camera]]:
         """The cameras of the camera ``name`` with keys or a path (``[[cameras.NAME.keys]]``,
         ``path = { type = "orbit", ... }``), by frame, first to last: the cameras the command
-        line renders for its frames. None for a still camera or a name the scene lacks."""
+        line renders for its frames. None for a still camera or a name the scene lacks; raises
+        ``ValueError`` for a path with K, a lens model or an aperture (render it by name)."""
         got = self._core.camera_path(name)
         if got is None:
             return None

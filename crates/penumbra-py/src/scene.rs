@@ -248,10 +248,24 @@ impl CoreScene {
     }
 
     /// A camera with keys or a path, frame by frame: its first frame and each frame's
-    /// (position, look_at, up, fov); `None` for a still camera or an unknown name.
+    /// (position, look_at, up, fov); `None` for a still camera or an unknown name. Raises
+    /// `ValueError` for a path seeing through K, a lens model or an aperture, as `camera`
+    /// does.
     #[allow(clippy::type_complexity)]
-    fn camera_path(&self, name: &str) -> Option<(i64, Vec<([f32; 3], [f32; 3], [f32; 3], f32)>)> {
-        let path = self.paths.iter().find(|(n, _)| n == name).map(|(_, p)| p)?;
+    fn camera_path(&self, name: &str) -> PyResult<Option<(i64, Vec<CameraArgs>)>> {
+        let Some(path) = self.paths.iter().find(|(n, _)| n == name).map(|(_, p)| p) else {
+            return Ok(None);
+        };
+        if path
+            .camera(*path.frames().start())
+            .is_some_and(|c| !c.sees_by_fov())
+        {
+            return Err(PyValueError::new_err(format!(
+                "camera {name:?} sees through an intrinsic matrix K, a lens model or an \
+                 aperture, which its frames as (position, look_at, up, fov) cannot hold: \
+                 render it by its name (render(camera=...))"
+            )));
+        }
         let cameras = path
             .frames()
             .filter_map(|f| path.camera(f))
@@ -260,7 +274,7 @@ impl CoreScene {
                 (p, l, u, c.fov_y_deg())
             })
             .collect();
-        Some((*path.frames().start(), cameras))
+        Ok(Some((*path.frames().start(), cameras)))
     }
 
     /// The names of the scene's cameras, in file order (the first is the default).

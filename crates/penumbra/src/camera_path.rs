@@ -33,7 +33,7 @@ use std::ops::RangeInclusive;
 use glam::DVec3;
 use thiserror::Error;
 
-use crate::camera::{Camera, CameraError};
+use crate::camera::{Camera, CameraError, Optics};
 
 /// The most frames a path may have: each is an image, and each is checked when the path is
 /// made (Python's `penumbra.views.orbit` takes as many).
@@ -78,7 +78,15 @@ pub struct Orbit {
 /// A camera that changes with the frame: made checked by [`CameraPath::keys`] or
 /// [`CameraPath::orbit`], so that every frame in [`CameraPath::frames`] has a camera.
 #[derive(Clone, Debug, PartialEq)]
-pub enum CameraPath {
+pub struct CameraPath {
+    motion: Motion,
+    /// What every frame's camera sees through, when not the pinhole of its fov.
+    optics: Option<Optics>,
+}
+
+/// How a path's cameras move.
+#[derive(Clone, Debug, PartialEq)]
+enum Motion {
     /// Keyframes in increasing frame order, at least one.
     Keys(Vec<CameraKey>),
     /// A turntable.
@@ -159,7 +167,7 @@ impl CameraPath {
         if count > MAX_PATH_FRAMES as i128 {
             return Err(PathError::Frames(count));
         }
-        CameraPath::Keys(keys).checked()
+        CameraPath::of(Motion::Keys(keys)).checked()
     }
 
     /// An orbit; every frame's camera is checked.
@@ -173,7 +181,23 @@ impl CameraPath {
         if axis(orbit.up).is_none() {
             return Err(PathError::Up(orbit.up));
         }
-        CameraPath::Orbit(orbit).checked()
+        CameraPath::of(Motion::Orbit(orbit)).checked()
+    }
+
+    fn of(motion: Motion) -> CameraPath {
+        CameraPath {
+            motion,
+            optics: None,
+        }
+    }
+
+    /// This path, every frame's camera seeing through `optics` (K, lens model, aperture: see
+    /// [`Camera::optics`]) instead of its field of view's pinhole.
+    pub fn with_optics(self, optics: Optics) -> CameraPath {
+        CameraPath {
+            optics: Some(optics),
+            ..self
+        }
     }
 
     /// The path, once the camera of each of its frames is known to exist.
@@ -181,9 +205,9 @@ impl CameraPath {
         for frame in self.frames() {
             self.make(frame).map_err(|source| PathError::Camera {
                 frame,
-                key: match &self {
-                    CameraPath::Keys(keys) => Some(keys.partition_point(|k| k.frame <= frame) - 1),
-                    CameraPath::Orbit(_) => None,
+                key: match &self.motion {
+                    Motion::Keys(keys) => Some(keys.partition_point(|k| k.frame <= frame) - 1),
+                    Motion::Orbit(_) => None,
                 },
                 source,
             })?;
@@ -193,12 +217,12 @@ impl CameraPath {
 
     /// The path's frames, first to last (both included).
     pub fn frames(&self) -> RangeInclusive<i64> {
-        match self {
-            CameraPath::Keys(keys) => {
+        match &self.motion {
+            Motion::Keys(keys) => {
                 let first = keys.first().map_or(0, |k| k.frame);
                 first..=keys.last().map_or(first - 1, |k| k.frame)
             }
-            CameraPath::Orbit(o) => 0..=o.frames - 1,
+            Motion::Orbit(o) => 0..=o.frames - 1,
         }
     }
 
@@ -211,16 +235,20 @@ impl CameraPath {
     }
 
     fn make(&self, frame: i64) -> Result<Camera, CameraError> {
-        let (position, look_at, up, fov) = match self {
-            CameraPath::Keys(keys) => between(keys, frame),
-            CameraPath::Orbit(o) => on_orbit(o, frame),
+        let (position, look_at, up, fov) = match &self.motion {
+            Motion::Keys(keys) => between(keys, frame),
+            Motion::Orbit(o) => on_orbit(o, frame),
         };
-        Camera::new(
+        let camera = Camera::new(
             position.as_vec3(),
             look_at.as_vec3(),
             up.as_vec3(),
             fov as f32,
-        )
+        )?;
+        Ok(match self.optics {
+            Some(optics) => camera.with_optics(optics),
+            None => camera,
+        })
     }
 }
 

@@ -96,7 +96,7 @@ pub use accel::prim::moller_trumbore::intersect_triangle;
 pub use accel::Bvh;
 pub use camera::{
     Aperture, Camera, CameraError, DistortionError, FilmCamera, FisheyeDistortion, Lens,
-    OpenCvDistortion, FRAMING_CAMERA, FRAMING_FOV_DEG,
+    OpenCvDistortion, Optics, FRAMING_CAMERA, FRAMING_FOV_DEG,
 };
 pub use camera_path::{CameraKey, CameraPath, Orbit, PathError, MAX_PATH_FRAMES};
 pub use encode8::{encode_8bit, film_codes};

@@ -68,6 +68,15 @@ pub struct Aperture {
     pub focus_distance: f32,
 }
 
+/// What a camera sees through, apart from where it stands (see [`Camera::optics`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Optics {
+    /// K and the vertical field of view it gives.
+    intrinsics: Option<(Intrinsics, f32)>,
+    lens: Lens,
+    aperture: Option<Aperture>,
+}
+
 /// A pinhole's intrinsic matrix K as OpenCV writes it, in pixels of a `width × height`
 /// image whose pixel centres lie at integer coordinates (docs/spec.md, "Poses and
 /// intrinsics"): `[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`. On a film of another size it is
@@ -253,6 +262,28 @@ impl Camera {
             focus_distance,
         });
         Ok(Camera { aperture, ..self })
+    }
+
+    /// What this camera sees through, apart from where it stands: its K (and the field of view
+    /// K gives), lens model and aperture, for [`Camera::with_optics`].
+    pub fn optics(&self) -> Optics {
+        Optics {
+            intrinsics: self.intrinsics.map(|k| (k, self.fov_y_deg)),
+            lens: self.lens,
+            aperture: self.aperture,
+        }
+    }
+
+    /// This camera seeing through `optics` (another camera's, checked there): what a camera
+    /// path with a lens gives each frame's pinhole.
+    pub fn with_optics(self, optics: Optics) -> Camera {
+        Camera {
+            fov_y_deg: optics.intrinsics.map_or(self.fov_y_deg, |(_, fov)| fov),
+            intrinsics: optics.intrinsics.map(|(k, _)| k),
+            lens: optics.lens,
+            aperture: optics.aperture,
+            ..self
+        }
     }
 
     /// True when the camera is all its pose and field of view: a pinhole without K or an

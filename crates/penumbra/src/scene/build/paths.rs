@@ -9,20 +9,31 @@ use crate::camera_path::{CameraKey, CameraPath, Orbit, PathError};
 use crate::scene::desc::{CameraKeyDesc, CameraPathDesc, Num, PathType, Vec3Desc};
 use crate::scene::error::{ErrorKind, KeyPath};
 
+/// The field of view of the pinholes a path with K or a model that sets the view moves: K or
+/// the model replaces it at every frame.
+const UNUSED_FOV: Num = Num(60.0);
+
 impl Builder<'_> {
     /// The path of the camera table at `table` with `keys`, the table's `up` and `fov` being
-    /// the keys' defaults.
+    /// the keys' defaults; without `needs_fov` (K or the model gives the view) no key takes a
+    /// fov.
     pub(super) fn key_path(
         &self,
         table: &KeyPath,
         keys: &[CameraKeyDesc],
         up: Option<Vec3Desc>,
         fov: Option<Num>,
+        needs_fov: bool,
     ) -> Result<CameraPath> {
         let mut checked = Vec::with_capacity(keys.len());
         for (i, k) in keys.iter().enumerate() {
             let at = table.key("keys").index(i);
-            let fov = k.fov.or(fov).ok_or_else(|| {
+            if !needs_fov && k.fov.is_some() {
+                let message = "this camera's K or model gives its view: its keys take no fov";
+                return Err(self.bad(&at.key("fov"), message));
+            }
+            let fov = k.fov.or(fov).or((!needs_fov).then_some(UNUSED_FOV));
+            let fov = fov.ok_or_else(|| {
                 self.err(
                     ErrorKind::MissingKey,
                     &at,
@@ -60,9 +71,11 @@ impl Builder<'_> {
         table: &KeyPath,
         path: &CameraPathDesc,
         up: Option<Vec3Desc>,
-        fov: Num,
+        fov: Option<Num>,
     ) -> Result<CameraPath> {
         let at = table.key("path");
+        // The deserializer required fov where the lens needs one.
+        let fov = fov.unwrap_or(UNUSED_FOV);
         if !(fov.0 > 0.0 && fov.0 < 180.0) {
             let message = format!("fov must be between 0 and 180 degrees, not {}", fov.0);
             return Err(self.bad(&table.key("fov"), message));

@@ -107,12 +107,24 @@ impl Builder<'_> {
         for (name, c, path) in named {
             let camera = match c {
                 CameraDesc::Still(c) => self.still_camera(&path, c)?,
-                CameraDesc::Keys { up, fov, keys } => {
-                    let moving = self.key_path(&path, keys, *up, *fov)?;
+                CameraDesc::Keys {
+                    up,
+                    fov,
+                    keys,
+                    optics,
+                } => {
+                    let moving = self.key_path(&path, keys, *up, *fov, optics.needs_fov())?;
+                    let moving = self.path_optics(&path, moving, optics)?;
                     self.first_camera(&path, name.clone(), moving)?
                 }
-                CameraDesc::Path { up, fov, path: p } => {
+                CameraDesc::Path {
+                    up,
+                    fov,
+                    path: p,
+                    optics,
+                } => {
                     let moving = self.kind_path(&path, p, *up, *fov)?;
+                    let moving = self.path_optics(&path, moving, optics)?;
                     self.first_camera(&path, name.clone(), moving)?
                 }
             };

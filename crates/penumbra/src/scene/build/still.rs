@@ -1,7 +1,7 @@
 //! A still camera of the file: its pose (`position`, `look_at` and `up`, or a
 //! `camera_to_world` matrix in OpenCV's axes, as `--poses` writes one), its lens (`fov`, or
 //! an intrinsic matrix `K` in pixels of the file's film), its model (`model` and its keys) and
-//! its aperture, checked at their keys.
+//! its aperture, checked at their keys; and a moving camera's lens, the same at every frame.
 
 use glam::{DMat3, DVec3, Vec3};
 
@@ -9,7 +9,10 @@ use super::{Builder, Result};
 use crate::camera::{
     Camera, CameraError, DistortionError, FisheyeDistortion, Intrinsics, Lens, OpenCvDistortion,
 };
-use crate::scene::desc::{LensDesc, Matrix, ModelDesc, Num, PoseDesc, StillCameraDesc};
+use crate::camera_path::CameraPath;
+use crate::scene::desc::{
+    ApertureDesc, LensDesc, Matrix, ModelDesc, Num, OpticsDesc, PoseDesc, StillCameraDesc,
+};
 use crate::scene::error::KeyPath;
 
 /// How far `camera_to_world`'s rotation may be from orthonormal, entry by entry of RᵀR − I:
@@ -58,18 +61,55 @@ impl Builder<'_> {
             | CameraError::BadAperture
             | CameraError::NoAperture => self.bad(&path.key("K"), e.to_string()),
         })?;
-        let camera = match &c.lens {
-            LensDesc::K(k) => {
+        let k = match &c.lens {
+            LensDesc::K(k) => Some(k),
+            LensDesc::Fov(_) | LensDesc::None => None,
+        };
+        self.see_through(path, camera, k, &c.model, c.aperture.as_ref())
+    }
+
+    /// A moving camera's `path` (of the table at `table`), every frame seeing through
+    /// `optics`, checked on the first frame's camera.
+    pub(super) fn path_optics(
+        &self,
+        table: &KeyPath,
+        path: CameraPath,
+        optics: &OpticsDesc,
+    ) -> Result<CameraPath> {
+        let plain = optics.k.is_none() && optics.model == ModelDesc::Pinhole;
+        if plain && optics.aperture.is_none() {
+            return Ok(path);
+        }
+        // A checked path has a camera at each of its frames.
+        let first = path
+            .camera(*path.frames().start())
+            .ok_or_else(|| self.bad(table, "the path has no first frame"))?;
+        let (k, model) = (optics.k.as_ref(), &optics.model);
+        let camera = self.see_through(table, first, k, model, optics.aperture.as_ref())?;
+        Ok(path.with_optics(camera.optics()))
+    }
+
+    /// `camera` (of the table at `path`) seeing through `k`, `model` and `aperture`.
+    fn see_through(
+        &self,
+        path: &KeyPath,
+        camera: Camera,
+        k: Option<&[[Num; 3]; 3]>,
+        model: &ModelDesc,
+        aperture: Option<&ApertureDesc>,
+    ) -> Result<Camera> {
+        let camera = match k {
+            Some(k) => {
                 let at = path.key("K");
                 let k = self.intrinsics(&at, k)?;
                 camera
                     .with_intrinsics(k)
                     .map_err(|e| self.bad(&at, e.to_string()))?
             }
-            LensDesc::Fov(_) | LensDesc::None => camera,
+            None => camera,
         };
-        let camera = self.model(path, camera, &c.model)?;
-        let Some(a) = &c.aperture else {
+        let camera = self.model(path, camera, model)?;
+        let Some(a) = aperture else {
             return Ok(camera);
         };
         let (radius, focus) = (a.radius.f32(), a.focus_distance.f32());

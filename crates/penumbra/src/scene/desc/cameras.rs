@@ -47,16 +47,40 @@ pub enum CameraDesc {
         fov: Option<Num>,
         /// The keys, as written.
         keys: Vec<CameraKeyDesc>,
+        /// What every frame sees through.
+        optics: OpticsDesc,
     },
     /// A path of a kind: `path = { type = "orbit", ... }`.
     Path {
         /// Up direction (default +y); an orbit's must be an axis.
         up: Option<Vec3Desc>,
-        /// Vertical field of view in degrees, in (0, 180).
-        fov: Num,
+        /// Vertical field of view in degrees, in (0, 180): required unless `K` or the
+        /// model sets the view.
+        fov: Option<Num>,
         /// The path.
         path: CameraPathDesc,
+        /// What every frame sees through.
+        optics: OpticsDesc,
     },
+}
+
+/// What a moving camera sees through at every frame: `K`, `model` and its keys, the
+/// aperture (a still camera's keys but its pose and fov).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OpticsDesc {
+    /// `K`, instead of the field of view.
+    pub k: Option<[[Num; 3]; 3]>,
+    /// Its lens model.
+    pub model: ModelDesc,
+    /// `aperture_radius` and `focus_distance`.
+    pub aperture: Option<ApertureDesc>,
+}
+
+impl OpticsDesc {
+    /// True when the frames need a field of view: a pinhole or OpenCV lens without K.
+    pub fn needs_fov(&self) -> bool {
+        self.k.is_none() && matches!(self.model, ModelDesc::Pinhole | ModelDesc::OpenCv { .. })
+    }
 }
 
 /// A still camera: where it stands, and what it sees.
@@ -212,19 +236,6 @@ struct CameraTable {
 }
 
 impl CameraTable {
-    /// The lens keys given, by name, for messages.
-    fn lens_keys(&self) -> Vec<&'static str> {
-        let given = [
-            ("model", self.model.is_some()),
-            ("distortion", self.distortion.is_some()),
-            ("max_angle", self.max_angle.is_some()),
-            ("height", self.height.is_some()),
-            ("aperture_radius", self.aperture_radius.is_some()),
-            ("focus_distance", self.focus_distance.is_some()),
-        ];
-        given.iter().filter(|g| g.1).map(|g| g.0).collect()
-    }
-
     /// `model` and its keys, each only on its model.
     fn model<E: serde::de::Error>(&mut self) -> Result<ModelDesc, E> {
         let model = self.model.unwrap_or(ModelName::Pinhole);
@@ -319,16 +330,14 @@ impl<'de> Deserialize<'de> for CameraDesc {
                     "a camera with {how} takes no position or look_at of its own (its {how} give them)"
                 )));
             }
-            if t.k.is_some() || t.camera_to_world.is_some() {
+            if t.camera_to_world.is_some() {
                 return Err(D::Error::custom(format!(
-                    "K and camera_to_world are a still camera's: a camera with {how} takes fov, \
-                     and its {how} give its positions"
+                    "camera_to_world is a still camera's: a camera with {how} takes its \
+                     positions from its {how}"
                 )));
             }
-            if let Some(key) = t.lens_keys().first() {
-                return Err(D::Error::custom(format!(
-                    "{key} is a still camera's: a camera with {how} is a pinhole of fov"
-                )));
+            if t.k.is_some() && t.fov.is_some() {
+                return Err(D::Error::custom("a camera takes fov or K, not both"));
             }
         }
         let model = t.model()?;
@@ -337,17 +346,33 @@ impl<'de> Deserialize<'de> for CameraDesc {
             model,
             ModelDesc::Pinhole | ModelDesc::OpenCv { .. } | ModelDesc::Fisheye { .. }
         );
+        let optics = |k| OpticsDesc {
+            k,
+            model: model.clone(),
+            aperture: aperture.clone(),
+        };
+        if moving.is_some() && matches!(model, ModelDesc::Fisheye { .. }) && t.k.is_none() {
+            return Err(D::Error::missing_field("K"));
+        }
         Ok(match (t.keys, t.path) {
             (Some(keys), _) => CameraDesc::Keys {
                 up: t.up,
                 fov: t.fov,
                 keys,
+                optics: optics(t.k),
             },
-            (None, Some(path)) => CameraDesc::Path {
-                up: t.up,
-                fov: t.fov.ok_or_else(|| D::Error::missing_field("fov"))?,
-                path,
-            },
+            (None, Some(path)) => {
+                let optics = optics(t.k);
+                if optics.needs_fov() && t.fov.is_none() {
+                    return Err(D::Error::missing_field("fov"));
+                }
+                CameraDesc::Path {
+                    up: t.up,
+                    fov: t.fov,
+                    path,
+                    optics,
+                }
+            }
             (None, None) => CameraDesc::Still(StillCameraDesc {
                 pose: match t.camera_to_world {
                     Some(_) if t.position.is_some() || t.look_at.is_some() || t.up.is_some() => {

@@ -41,8 +41,8 @@ mod values;
 use serde::Deserialize;
 
 pub use cameras::{
-    ApertureDesc, CameraDesc, CameraKeyDesc, CameraPathDesc, LensDesc, ModelDesc, PathType,
-    PoseDesc, StillCameraDesc,
+    ApertureDesc, CameraDesc, CameraKeyDesc, CameraPathDesc, LensDesc, ModelDesc, OpticsDesc,
+    PathType, PoseDesc, StillCameraDesc,
 };
 pub use lights::{
     AreaLightDesc, DirectionalLightDesc, EnvironmentLightDesc, LightDesc, LightType,
