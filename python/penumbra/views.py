@@ -38,31 +38,6 @@ from . import _args, _core
 from ._camera import Camera
 from ._pose_views import pose_views
 
-#: Keys a view may have.
-VIEW_KEYS = (
-    "name",
-    "camera",
-    "position",
-    "look_at",
-    "up",
-    "fov",
-    "camera_to_world",
-    "K",
-    "model",
-    "distortion",
-    "max_angle",
-    "orthographic_height",
-    "aperture_radius",
-    "focus_distance",
-    "spp",
-    "sampler",
-    "light_samples",
-    "seed",
-    "width",
-    "height",
-    "alpha",
-    "aovs",
-)
 #: Keys of an explicit camera beyond a pinhole's, as :class:`penumbra.Camera` names them
 #: (but ``orthographic_height``, the camera's ``height``).
 LENS_KEYS = (
@@ -77,6 +52,10 @@ LENS_KEYS = (
 )
 #: Keys passed on to :meth:`penumbra.Scene.render`.
 RENDER_KEYS = ("spp", "sampler", "light_samples", "seed", "width", "height", "alpha")
+#: Keys a view may have.
+VIEW_KEYS = (
+    ("name", "camera", "position", "look_at", "up", "fov") + LENS_KEYS + RENDER_KEYS + ("aovs",)
+)
 #: Settings a batch's defaults (a jobs file's ``[defaults]``) may give every view.
 SETTING_KEYS = RENDER_KEYS + ("aovs",)
 #: The most frames :func:`orbit` makes (each is a view, with its image).
