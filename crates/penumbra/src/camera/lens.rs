@@ -29,6 +29,9 @@ pub struct OpenCvDistortion {
     pub coefficients: [f64; 12],
     /// How many were given (4, 5, 8 or 12).
     given: usize,
+    /// Whether the radial factor has a denominator (k4, k5 or k6 not 0): without one,
+    /// [`OpenCvDistortion::radial`] skips its division, giving the same bits.
+    rational: bool,
     /// The radius (in normalized undistorted coordinates) where the model stops being
     /// invertible: its radial part stops growing or its denominator reaches 0. Infinite when
     /// it never does within 89.4° of the axis.
@@ -86,6 +89,7 @@ impl OpenCvDistortion {
         let mut model = OpenCvDistortion {
             coefficients: all,
             given: coefficients.len(),
+            rational: all[5..8].iter().any(|&k| k != 0.0),
             valid_radius: f64::INFINITY,
         };
         model.valid_radius = model.find_valid_radius();
@@ -108,8 +112,12 @@ impl OpenCvDistortion {
     fn radial(&self, r2: f64) -> (f64, f64, f64) {
         let [k1, k2, _, _, k3, k4, k5, k6, ..] = self.coefficients;
         let n = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-        let d = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
         let dn = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3);
+        if !self.rational {
+            // d = 1 and d′ = 0 exactly: R = n and R′ = n′ to the bit, without a division.
+            return (n, dn, 1.0);
+        }
+        let d = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
         let dd = k4 + r2 * (2.0 * k5 + r2 * 3.0 * k6);
         // One division: R = n/d and R′ = (n′ − R·d′)/d.
         let inv = 1.0 / d;
