@@ -443,3 +443,43 @@ fn lens_models_are_written_as_each_format_names_them() {
         "{line}"
     );
 }
+
+#[test]
+fn a_moving_camera_writes_its_lens_at_every_frame() {
+    let dir = TempDir::new("poses-moving-lens");
+    let camera =
+        "[cameras.turn]\nmodel = \"fisheye\"\nK = [[20, 0, 7.5], [0, 18, 5.5], [0, 0, 1]]\n\
+                  distortion = [0.01, -0.002, 0.0003, 0]\nmax_angle = 100\n\
+                  path = { type = \"orbit\", center = [0, 0, 0], radius = 5, frames = 3 }\n";
+    dir.write("turn.toml", BASE_TOML.replace(STILL, camera));
+    let args = [
+        "render",
+        "turn.toml",
+        "-q",
+        "--frames",
+        "all",
+        "-o",
+        "f{frame}.png",
+    ];
+    ok(run_in(
+        dir.path(),
+        [&args[..], &["--poses", "p.json"]].concat(),
+    ));
+    let frames = read_json(&dir.join("p.json"))["frames"].clone();
+    let frames = frames.as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    for f in frames {
+        assert_eq!(f["model"], "fisheye", "{f}");
+        assert_eq!(matrix(&f["K"])[0], [20.0, 0.0, 7.5], "{f}");
+    }
+    ok(run_in(
+        dir.path(),
+        [&args[..], &["--poses", "t.json", "--poses-format", "nerf"]].concat(),
+    ));
+    let t = read_json(&dir.join("t.json"));
+    assert_eq!(t["camera_model"], "OPENCV_FISHEYE");
+    assert_eq!(
+        (t["fl_x"].as_f64(), t["k1"].as_f64()),
+        (Some(20.0), Some(0.01))
+    );
+}
