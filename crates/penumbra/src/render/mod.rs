@@ -28,7 +28,7 @@ use crate::world::World;
 use aov::AovContext;
 use job::{Buffers, Job};
 use passes::{plan, Rows};
-use sums::{image, Sums, TileSums};
+use sums::{image, Sums};
 
 pub use aov::{Aov, AovFilm, AovPixel, AovValues, NO_ID};
 pub use passes::{Pass, PassSink};
@@ -253,7 +253,7 @@ fn buffer<T: Copy + Send + Sync>(
 #[derive(Default)]
 struct Worker {
     buffers: Buffers,
-    sums: TileSums,
+    sums: Sums,
 }
 
 /// [`render`], with the AOVs of every pixel when `with_aovs` (else an empty vector).
@@ -356,7 +356,7 @@ fn render_impl(
                     let carried = samples.start > 0 || rows == Rows::Odd;
                     sums.load(&film, region, &tile, carried);
                     let (tw, mut shadow) = ((tile.x1 - tile.x0) as usize, 0);
-                    let TileSums { colors, hits, aovs } = sums;
+                    let Sums { colors, hits, aovs } = sums;
                     for ((y, colors), hits) in (tile.y0..tile.y1)
                         .zip(colors.chunks_mut(tw))
                         .zip(hits.chunks_mut(tw))

@@ -6,18 +6,11 @@ use std::sync::Mutex;
 use super::{AovPixel, PixelBounds};
 use crate::math::Rgb;
 
-/// The sums of a region of the film: its colours, its hit counts (empty unless the render
-/// computes alpha) and its AOVs (empty unless asked for), row-major.
-pub(super) struct Sums {
-    pub(super) colors: Vec<Rgb>,
-    pub(super) hits: Vec<f32>,
-    pub(super) aovs: Vec<AovPixel>,
-}
-
-/// The sums of one tile as a worker adds to them: colours and hit counts (always counted,
-/// kept only with alpha) row by row, and the AOVs of the rows done.
+/// Sums, row-major: of a region of the film (its hit counts empty unless the render computes
+/// alpha, its AOVs unless asked for), or of one tile as a worker adds to them (hit counts
+/// always counted, kept in the film only with alpha; the AOVs of the rows done).
 #[derive(Default)]
-pub(super) struct TileSums {
+pub(super) struct Sums {
     pub(super) colors: Vec<Rgb>,
     pub(super) hits: Vec<f32>,
     pub(super) aovs: Vec<AovPixel>,
@@ -31,7 +24,7 @@ fn row_at(region: PixelBounds, tile: &PixelBounds, row: usize) -> std::ops::Rang
     at..at + tw
 }
 
-impl TileSums {
+impl Sums {
     /// Fills the tile's colours and hit counts with their sums so far in `film`
     /// (`from_film`), or zeros in the first pass; clears its AOVs.
     pub(super) fn load(
